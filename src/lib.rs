@@ -1,0 +1,30 @@
+//! Tessera: a Radiance-compatible renderer (`tpict`) and batch toolkit.
+//!
+//! The pipeline, in the order a render runs through it:
+//! - [`radopt`]: Radiance's own option language (`-ab 2 -vp x y z -i+`, `@file`), shared by
+//!   `tpict`, view files and job manifests.
+//! - [`view`]: view types, the view frame and the pixel ↔ ray mapping.
+//! - [`scene`]: the scene language (lexer → primitives → scene), inline commands, `xform`,
+//!   `genbox`.
+//! - [`geometry`]: one file per surface kind, plus the BVH wrapper (obvhs).
+//! - [`material`]: one file per material family.
+//! - [`light`]: light sources and direct lighting.
+//! - [`render`]: the ray tracer, per-pixel sampling and the pixel loop.
+//! - [`image`]: pictures in memory and the `hdr`, `exr` and `png` formats.
+//! - [`tpict`]: the rpict-compatible driver behind the `tpict` binary.
+
+pub mod color;
+pub mod geometry;
+pub mod image;
+pub mod light;
+pub mod material;
+pub mod radopt;
+pub mod render;
+pub mod scene;
+pub mod tpict;
+pub mod view;
+
+/// Radiance's intersection tolerance (`FTINY` in a double build).
+pub const FTINY: f64 = 1e-6;
+/// Radiance's "infinite" distance (`FHUGE`).
+pub const FHUGE: f64 = 1e10;

@@ -1,0 +1,1 @@
+//! radopt (under construction)

@@ -1,0 +1,3 @@
+//! scene (under construction)
+pub mod primitive;
+pub use primitive::{Location, Primitive};

@@ -1,0 +1,1 @@
+//! tpict (under construction)
