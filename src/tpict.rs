@@ -1,1 +1,382 @@
-//! tpict (under construction)
+//! The `tpict` driver: rpict's command line in, Radiance pictures out.
+
+use crate::image::{output, write_picture, Header, Image};
+use crate::light::LightSet;
+use crate::radopt::{defaults_text, parse_rpict_args, Command, RpictOptions};
+use crate::render::{render_region, FrameSetup, RenderProgress, Tracer};
+use crate::scene::{read_scene_files, ReadOptions, Scene};
+use crate::view::{normaspect, parse_view_line, View};
+use anyhow::{anyhow, bail, Context, Result};
+use std::io::{BufRead, IsTerminal, Write};
+use std::path::Path;
+use std::sync::atomic::Ordering;
+use std::sync::Mutex;
+use std::time::{Duration, Instant};
+
+/// Version string printed by `-version` and written as `SOFTWARE=`.
+pub const SOFTWARE: &str = concat!("Tessera tpict ", env!("CARGO_PKG_VERSION"));
+
+/// Where messages go (stderr, or the `-e` file).
+pub struct Log {
+    sink: Mutex<Box<dyn Write + Send>>,
+    warnings: bool,
+}
+
+impl Log {
+    /// Messages to stderr.
+    pub fn stderr() -> Log {
+        Log {
+            sink: Mutex::new(Box::new(std::io::stderr())),
+            warnings: true,
+        }
+    }
+
+    /// Print one message line.
+    pub fn say(&self, msg: &str) {
+        if let Ok(mut s) = self.sink.lock() {
+            let _ = writeln!(s, "{msg}");
+            let _ = s.flush();
+        }
+    }
+
+    /// Print a warning unless `-w-`.
+    pub fn warn(&self, msg: &str) {
+        if self.warnings {
+            self.say(&format!("tpict: warning - {msg}"));
+        }
+    }
+}
+
+/// Run tpict with `args` (without the program name); returns the exit status.
+pub fn run(args: &[String]) -> i32 {
+    let log = Log::stderr();
+    match run_inner(args, log) {
+        Ok(()) => 0,
+        Err((log, e)) => {
+            log.say(&format!("tpict: error: {e:#}"));
+            1
+        }
+    }
+}
+
+fn run_inner(args: &[String], mut log: Log) -> std::result::Result<(), (Log, anyhow::Error)> {
+    let cmd = match parse_rpict_args(args) {
+        Ok(c) => c,
+        Err(e) => return Err((log, anyhow!(e))),
+    };
+    let opts = match cmd {
+        Command::PrintDefaults(o) => {
+            print!("{}", defaults_text(&o));
+            return Ok(());
+        }
+        Command::PrintVersion => {
+            println!("{SOFTWARE} (Radiance 6.0a rpict compatible)");
+            return Ok(());
+        }
+        Command::Render(o) => o,
+    };
+    log.warnings = opts.warnings;
+    if let Some(ef) = &opts.error_file {
+        match std::fs::OpenOptions::new().create(true).append(true).open(ef) {
+            Ok(mut f) => {
+                let _ = writeln!(f, "*** PID {}: tpict {}", std::process::id(), args.join(" "));
+                log.sink = Mutex::new(Box::new(f));
+            }
+            Err(e) => {
+                return Err((log, anyhow!("cannot open error file {ef}: {e}")));
+            }
+        }
+    }
+    match render_command(args, &opts, &log) {
+        Ok(()) => Ok(()),
+        Err(e) => Err((log, e)),
+    }
+}
+
+/// Number of render threads: `-n`, else `SLURM_CPUS_PER_TASK`, else all cores.
+pub fn thread_count(opt: Option<usize>) -> usize {
+    if let Some(n) = opt {
+        return n.max(1);
+    }
+    if let Ok(v) = std::env::var("SLURM_CPUS_PER_TASK") {
+        if let Ok(n) = v.trim().parse::<usize>() {
+            if n > 0 {
+                return n;
+            }
+        }
+    }
+    std::thread::available_parallelism()
+        .map(|n| n.get())
+        .unwrap_or(1)
+}
+
+/// Load and build the scene named by the options.
+pub fn load_scene(opts: &RpictOptions, log: &Log) -> Result<(Scene, LightSet)> {
+    let mut ro = ReadOptions::from_env();
+    ro.allow_commands |= opts.allow_commands;
+    let files = if opts.scene_files.is_empty() {
+        if opts.sequence_start.is_some() {
+            bail!("no scene files given (with -S, views come from standard input, so the scene cannot)");
+        }
+        vec!["-".to_string()]
+    } else {
+        opts.scene_files.clone()
+    };
+    let prims = read_scene_files(&files, &ro)?;
+    let scene = Scene::build(&prims)?;
+    let lights = LightSet::collect(&scene, opts.params.dr);
+    for w in &lights.warnings {
+        log.warn(w);
+    }
+    if lights.sources.is_empty() {
+        log.warn("no light sources found");
+    }
+    Ok((scene, lights))
+}
+
+fn render_command(args: &[String], opts: &RpictOptions, log: &Log) -> Result<()> {
+    if opts.params.ab > 0 {
+        bail!(
+            "-ab {}: indirect lighting (the irradiance cache) is not implemented yet; \
+             use -ab 0 with a constant ambient -av",
+            opts.params.ab
+        );
+    }
+    if opts.pm != 0.0 || opts.pd != 0.0 {
+        bail!("-pm (motion blur) and -pd (depth of field) are not supported yet; use -pm 0 -pd 0");
+    }
+    let (scene, lights) = load_scene(opts, log)?;
+    let threads = thread_count(opts.threads);
+    let pool = rayon::ThreadPoolBuilder::new()
+        .num_threads(threads)
+        .build()
+        .context("cannot start render threads")?;
+    let command_line = format!("tpict {}", args.join(" "));
+    match opts.sequence_start {
+        None => {
+            if let Some(o) = &opts.output {
+                if Path::new(o).exists() {
+                    bail!("cannot open output file \"{o}\": File exists");
+                }
+            }
+            let img = pool.install(|| render_view(&scene, &lights, opts, &opts.view, 0, log))?;
+            let mut img = img;
+            img.header.commands.push(command_line);
+            match &opts.output {
+                Some(o) => {
+                    let path = Path::new(o);
+                    write_new_picture(path, &img)?;
+                }
+                None => write_picture(None, &img)?,
+            }
+        }
+        Some(start) => {
+            let stdin = std::io::stdin();
+            let mut frame = start;
+            let mut base = opts.view.clone();
+            for line in stdin.lock().lines() {
+                let line = line.context("reading views from standard input")?;
+                let Some(view) = parse_view_line(&line, &base)? else {
+                    continue;
+                };
+                base = view.clone();
+                let n = frame;
+                frame += 1;
+                if opts.report_interval > 0.0 {
+                    log.say(&format!("FRAME {n}: {}", view.to_radiance_string()));
+                }
+                match &opts.output {
+                    Some(pattern) => {
+                        let name = frame_name(pattern, n)?;
+                        let path = Path::new(&name);
+                        if path.exists() {
+                            continue;
+                        }
+                        let mut img =
+                            pool.install(|| render_view(&scene, &lights, opts, &view, n, log))?;
+                        img.header.commands.push(command_line.clone());
+                        img.header.frame = Some(n);
+                        match write_new_picture(path, &img) {
+                            Ok(()) => {}
+                            Err(e) if path.exists() => {
+                                log.warn(&format!("frame {n}: {name} appeared meanwhile ({e}); skipped"));
+                            }
+                            Err(e) => return Err(e),
+                        }
+                    }
+                    None => {
+                        let mut img =
+                            pool.install(|| render_view(&scene, &lights, opts, &view, n, log))?;
+                        img.header.commands.push(command_line.clone());
+                        img.header.frame = Some(n);
+                        write_picture(None, &img)?;
+                    }
+                }
+            }
+        }
+    }
+    Ok(())
+}
+
+/// Write a picture to a path that must not exist yet (never clobbers).
+fn write_new_picture(path: &Path, img: &Image) -> Result<()> {
+    use crate::image::PictureFormat;
+    match PictureFormat::from_path(path) {
+        PictureFormat::Hdr => output::write_atomic_noclobber(path, |f| {
+            let mut w = std::io::BufWriter::new(f);
+            crate::image::hdr::write_hdr(&mut w, img)?;
+            w.flush()
+        })
+        .with_context(|| format!("cannot write {}", path.display())),
+        _ => {
+            if path.exists() {
+                bail!("cannot open output file \"{}\": File exists", path.display());
+            }
+            write_picture(Some(path), img).map_err(|e| anyhow!(e))
+        }
+    }
+}
+
+/// Expand a printf-style frame pattern (`%d`, `%03d`, `%%`).
+pub fn frame_name(pattern: &str, n: u32) -> Result<String> {
+    let mut out = String::new();
+    let mut chars = pattern.chars().peekable();
+    let mut used = false;
+    while let Some(c) = chars.next() {
+        if c != '%' {
+            out.push(c);
+            continue;
+        }
+        if chars.peek() == Some(&'%') {
+            chars.next();
+            out.push('%');
+            continue;
+        }
+        let mut spec = String::new();
+        while let Some(&d) = chars.peek() {
+            if d.is_ascii_digit() {
+                spec.push(d);
+                chars.next();
+            } else {
+                break;
+            }
+        }
+        match chars.next() {
+            Some('d') | Some('i') => {
+                let zero = spec.starts_with('0');
+                let width: usize = spec.parse().unwrap_or(0);
+                if zero {
+                    out.push_str(&format!("{n:0width$}"));
+                } else {
+                    out.push_str(&format!("{n:width$}"));
+                }
+                used = true;
+            }
+            other => bail!(
+                "output pattern '{pattern}': unsupported conversion '%{spec}{}'",
+                other.map(String::from).unwrap_or_default()
+            ),
+        }
+    }
+    if !used {
+        bail!("output pattern '{pattern}' needs a %d for the frame number with -S");
+    }
+    Ok(out)
+}
+
+/// Render one view at the options' resolution into a picture with its header.
+pub fn render_view(
+    scene: &Scene,
+    lights: &LightSet,
+    opts: &RpictOptions,
+    view: &View,
+    frame: u32,
+    log: &Log,
+) -> Result<Image> {
+    let vf = view.frame().map_err(|e| anyhow!("bad view: {e}"))?;
+    let mut pa = opts.pa;
+    let (mut x, mut y) = (opts.x, opts.y);
+    normaspect(vf.aspect(), &mut pa, &mut x, &mut y);
+    if x == 0 || y == 0 {
+        bail!("resolution {x}x{y} is empty");
+    }
+    let tracer = Tracer::new(scene, &opts.params, lights);
+    let fs = FrameSetup {
+        view: &vf,
+        xres: x,
+        yres: y,
+        pj: opts.pj,
+        ps: opts.ps,
+        pt: opts.pt,
+        frame,
+        irradiance: opts.params.i,
+    };
+    let progress = RenderProgress::default();
+    let start = Instant::now();
+    let bar = if std::io::stderr().is_terminal() && opts.report_interval <= 0.0 {
+        let b = indicatif::ProgressBar::new(100);
+        b.set_style(
+            indicatif::ProgressStyle::with_template("{bar:40} {percent:>3}% {elapsed} ETA {eta}")
+                .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar()),
+        );
+        Some(b)
+    } else {
+        None
+    };
+    let pixels = std::thread::scope(|s| {
+        let done = std::sync::atomic::AtomicBool::new(false);
+        let reporter = s.spawn(|| {
+            let mut last = Instant::now();
+            while !done.load(Ordering::Relaxed) {
+                std::thread::sleep(Duration::from_millis(100));
+                let total = progress.rows_total.load(Ordering::Relaxed).max(1);
+                let pct = 100.0 * progress.rows_done.load(Ordering::Relaxed) as f64 / total as f64;
+                if let Some(b) = &bar {
+                    b.set_position(pct as u64);
+                }
+                if opts.report_interval > 0.0
+                    && last.elapsed().as_secs_f64() >= opts.report_interval
+                {
+                    last = Instant::now();
+                    log.say(&report_line(&progress, pct, start));
+                }
+            }
+        });
+        let px = render_region(&tracer, &fs, 0, 0, x, y, &progress);
+        done.store(true, Ordering::Relaxed);
+        let _ = reporter.join();
+        px
+    });
+    if let Some(b) = bar {
+        b.finish_and_clear();
+    }
+    if opts.report_interval > 0.0 {
+        log.say(&report_line(&progress, 100.0, start));
+    }
+    let mut img = Image::new(x, y);
+    img.pixels = pixels;
+    img.header = Header {
+        software: Some(SOFTWARE.to_string()),
+        view: Some(view.to_radiance_string()),
+        pixaspect: if (0.995..=1.005).contains(&pa) {
+            None
+        } else {
+            Some(pa)
+        },
+        exposure: 1.0,
+        format: "32-bit_rle_rgbe".to_string(),
+        ..Header::default()
+    };
+    Ok(img)
+}
+
+fn report_line(p: &RenderProgress, pct: f64, start: Instant) -> String {
+    let hours = start.elapsed().as_secs_f64() / 3600.0;
+    format!(
+        "tpict: {} rays, {:.2}% after {:.3}r hours (PID {})",
+        p.rays.load(Ordering::Relaxed),
+        pct,
+        hours,
+        std::process::id()
+    )
+}

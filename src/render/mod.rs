@@ -1,1 +1,9 @@
-//! render (under construction)
+//! The renderer: rays, per-pixel deterministic sampling, the tracer and the pixel loop.
+
+pub mod picture;
+pub mod ray;
+pub mod sampler;
+pub mod trace;
+
+pub use picture::{render_region, FrameSetup, RenderProgress};
+pub use trace::Tracer;

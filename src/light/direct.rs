@@ -1,0 +1,93 @@
+//! Direct lighting at a shading point: source samples ordered by their unoccluded potential,
+//! shadow rays traced adaptively (`-dt`, `-dc`), untested samples scaled by visibility
+//! estimated from the samples tested at this same point (deterministic per pixel, unlike
+//! Radiance's run-long per-source statistics).
+
+use super::source::SourceSample;
+use crate::color::{bright, Color};
+use crate::render::ray::Hit;
+use crate::render::sampler::Sampler;
+use crate::render::trace::Tracer;
+use glam::DVec3;
+
+/// Shadow rays always traced before the adaptive test may stop (Radiance's MINSHADCNT).
+const MIN_SHADOW_TESTS: usize = 2;
+
+/// Direct light reflected toward the viewer: `coef(l, ω)` is the material's coefficient for
+/// light arriving from unit direction `l` over solid angle `ω`.
+pub fn direct(
+    tr: &Tracer,
+    weight: f64,
+    hit: &Hit,
+    coef: &dyn Fn(DVec3, f64) -> Color,
+    rng: &mut Sampler,
+) -> Color {
+    let lights = tr.lights;
+    if lights.sources.is_empty() {
+        return Color::ZERO;
+    }
+    let p = hit.point;
+    let params = tr.params;
+    let mut samples: Vec<SourceSample> = Vec::new();
+    for si in 0..lights.sources.len() {
+        lights.sample(tr.scene, si, p, weight, params.ds, params.dj, rng, &mut samples);
+    }
+    // Potentials.
+    let mut cands: Vec<(f64, Color, usize)> = Vec::with_capacity(samples.len());
+    for (k, s) in samples.iter().enumerate() {
+        let c = coef(s.dir, s.omega) * s.radiance;
+        let b = bright(c);
+        if b > 0.0 && b.is_finite() {
+            cands.push((b, c, k));
+        }
+    }
+    if cands.is_empty() {
+        return Color::ZERO;
+    }
+    cands.sort_by(|a, b| b.0.total_cmp(&a.0).then(a.2.cmp(&b.2)));
+    let n = cands.len();
+    let nshadcheck = ((n as f64).powf(params.dc).ceil() as usize).max(1);
+    let thresh = if params.dt > 0.0 {
+        params.dt / weight.max(1e-6)
+    } else {
+        0.0
+    };
+    let mut result = Color::ZERO;
+    let mut tested = 0usize;
+    // Per-source visibility statistics from this point's tests.
+    let mut stats: Vec<(f64, u32)> = vec![(0.0, 0); lights.sources.len()];
+    let mut untested_from = n;
+    for i in 0..n {
+        if thresh > 0.0 && tested >= MIN_SHADOW_TESTS {
+            let ahead: f64 = cands[i..(i + nshadcheck).min(n)].iter().map(|c| c.0).sum();
+            if ahead < thresh * bright(result) {
+                untested_from = i;
+                break;
+            }
+        }
+        let (_, c, k) = cands[i];
+        let s = &samples[k];
+        let t = tr.shadow(p, s.dir, s.dist, s.src, rng);
+        tested += 1;
+        let st = &mut stats[s.src];
+        st.0 += bright(t).clamp(0.0, 1.0);
+        st.1 += 1;
+        result += c * t;
+    }
+    if untested_from < n {
+        let (all_vis, all_n) = stats
+            .iter()
+            .fold((0.0, 0u32), |acc, s| (acc.0 + s.0, acc.1 + s.1));
+        let global = if all_n > 0 {
+            all_vis / all_n as f64
+        } else {
+            0.5
+        };
+        for &(_, c, k) in &cands[untested_from..] {
+            let st = stats[samples[k].src];
+            let vis = if st.1 > 0 { st.0 / st.1 as f64 } else { global };
+            result += c * vis;
+        }
+    }
+    result
+}

@@ -1,0 +1,603 @@
+//! Light-source records and their sampling.
+
+use crate::color::Color;
+use crate::geometry::cone::ConeKind;
+use crate::geometry::Surface;
+use crate::material::emitter::{Emitter, EmitterKind};
+use crate::material::normal::any_perpendicular;
+use crate::material::{reflect, Material};
+use crate::render::sampler::Sampler;
+use crate::scene::Scene;
+use crate::FTINY;
+use glam::DVec3;
+use std::f64::consts::PI;
+
+/// Shape of a source, as used for sampling.
+#[derive(Clone, Debug)]
+pub enum SourceShape {
+    /// A planar polygon, sampled over its bounding rectangle in the plane
+    /// (`center + u·[u0,u1] + v·[v0,v1]`); samples outside the polygon are dropped.
+    Polygon {
+        /// Unit front normal.
+        normal: DVec3,
+        /// Rectangle origin.
+        corner: DVec3,
+        /// Rectangle edge vectors.
+        eu: DVec3,
+        /// Rectangle edge vectors.
+        ev: DVec3,
+    },
+    /// A disk or annulus.
+    Ring {
+        /// Centre.
+        center: DVec3,
+        /// Unit front normal.
+        normal: DVec3,
+        /// Inner radius.
+        r0: f64,
+        /// Outer radius.
+        r1: f64,
+    },
+    /// A sphere (sampled by the cone of directions it subtends).
+    Sphere {
+        /// Centre.
+        center: DVec3,
+        /// Radius.
+        radius: f64,
+    },
+    /// An open cylinder (sampled over its area).
+    Cylinder {
+        /// Axis start.
+        p0: DVec3,
+        /// Axis end.
+        p1: DVec3,
+        /// Radius.
+        radius: f64,
+    },
+    /// A distant source.
+    Distant {
+        /// Unit direction toward the source.
+        dir: DVec3,
+        /// Half angular diameter in radians.
+        half_angle: f64,
+        /// Solid angle.
+        solid_angle: f64,
+    },
+}
+
+/// A mirror that relays a source (virtual source).
+#[derive(Clone, Debug)]
+pub struct Relay {
+    /// Mirror object.
+    pub obj: usize,
+    /// Unit front normal of the mirror plane.
+    pub normal: DVec3,
+    /// Plane offset: `normal · x = offset` on the mirror.
+    pub offset: f64,
+    /// Mirror reflectance.
+    pub color: Color,
+    /// Index of the source it reflects.
+    pub real: usize,
+}
+
+/// A light source.
+#[derive(Clone, Debug)]
+pub struct Source {
+    /// The emitting object (None for distant sources).
+    pub obj: Option<usize>,
+    /// Index of the distant source (for distant ones).
+    pub distant: Option<usize>,
+    /// Sampling shape.
+    pub shape: SourceShape,
+    /// The emitting material.
+    pub emitter: Emitter,
+    /// Centre (relative frame), for proximity and spot tests.
+    pub center: DVec3,
+    /// Set for virtual sources (reflections of `real` in a mirror).
+    pub relay: Option<Relay>,
+}
+
+/// One sample of a source seen from a shading point.
+#[derive(Clone, Copy, Debug)]
+pub struct SourceSample {
+    /// Index of the source.
+    pub src: usize,
+    /// Unit direction from the shading point toward the sample.
+    pub dir: DVec3,
+    /// Distance to the sample point (`f64::INFINITY` for distant sources).
+    pub dist: f64,
+    /// Solid angle the sample stands for.
+    pub omega: f64,
+    /// Radiance arriving from the sample if unoccluded (includes mirror reflectance).
+    pub radiance: Color,
+}
+
+/// All sources of a scene.
+#[derive(Clone, Debug, Default)]
+pub struct LightSet {
+    /// Real sources first, then virtual ones.
+    pub sources: Vec<Source>,
+    /// Warnings produced while collecting sources.
+    pub warnings: Vec<String>,
+}
+
+/// Map the unit square to the unit disk, area-preserving (Shirley & Chiu 1997).
+pub fn square_to_disk(a: f64, b: f64) -> (f64, f64) {
+    let (x, y) = (2.0 * a - 1.0, 2.0 * b - 1.0);
+    if x == 0.0 && y == 0.0 {
+        return (0.0, 0.0);
+    }
+    let (r, phi) = if x * x > y * y {
+        (x, (PI / 4.0) * (y / x))
+    } else {
+        (y, PI / 2.0 - (PI / 4.0) * (x / y))
+    };
+    (r * phi.cos(), r * phi.sin())
+}
+
+/// Per-axis partition counts for a source of angular sizes (a, b) radians, limited to 64 in all.
+fn partitions(a: f64, b: f64, ds: f64, weight: f64) -> (usize, usize) {
+    if ds <= 0.0 {
+        return (1, 1);
+    }
+    let thr = ds / (2.0 * weight.max(1e-3));
+    let mut na = (a / thr).ceil().max(1.0);
+    let mut nb = (b / thr).ceil().max(1.0);
+    if na * nb > 64.0 {
+        let s = (64.0 / (na * nb)).sqrt();
+        na = (na * s).floor().max(1.0);
+        nb = (nb * s).floor().max(1.0);
+    }
+    (na as usize, nb as usize)
+}
+
+/// Position within stratum `i` of `n`, with jitter fraction `dj`.
+#[inline]
+fn strat(i: usize, n: usize, dj: f64, rng: &mut Sampler) -> f64 {
+    let j = if dj > 0.0 { dj * (rng.next() - 0.5) } else { 0.0 };
+    ((i as f64 + 0.5 + j) / n as f64).clamp(0.0, 1.0 - 1e-12)
+}
+
+impl LightSet {
+    /// Collect the sources of a scene; `relays` is the number of virtual-source generations
+    /// (`-dr`; one generation is modelled).
+    pub fn collect(scene: &Scene, relays: i32) -> LightSet {
+        let mut set = LightSet::default();
+        for (i, o) in scene.objects.iter().enumerate() {
+            let Some(m) = o.material else { continue };
+            let Material::Emitter(e) = scene.material(m) else {
+                continue;
+            };
+            if !e.is_source() {
+                continue;
+            }
+            let shape = match &o.surface {
+                Surface::Polygon(p) => {
+                    if p.area <= 0.0 {
+                        continue;
+                    }
+                    let n = p.normal;
+                    let eu0 = p
+                        .verts
+                        .windows(2)
+                        .map(|w| w[1] - w[0])
+                        .find(|d| d.length_squared() > FTINY * FTINY)
+                        .unwrap_or_else(|| any_perpendicular(n));
+                    let u = (eu0 - eu0.dot(n) * n).normalize();
+                    let v = n.cross(u);
+                    let (mut u0, mut u1, mut v0, mut v1) = (f64::MAX, f64::MIN, f64::MAX, f64::MIN);
+                    for q in &p.verts {
+                        let d = *q - p.centroid;
+                        u0 = u0.min(d.dot(u));
+                        u1 = u1.max(d.dot(u));
+                        v0 = v0.min(d.dot(v));
+                        v1 = v1.max(d.dot(v));
+                    }
+                    SourceShape::Polygon {
+                        normal: n,
+                        corner: p.centroid + u * u0 + v * v0,
+                        eu: u * (u1 - u0),
+                        ev: v * (v1 - v0),
+                    }
+                }
+                Surface::Ring(r) => SourceShape::Ring {
+                    center: r.center,
+                    normal: r.normal,
+                    r0: r.r0,
+                    r1: r.r1,
+                },
+                Surface::Sphere(s) => SourceShape::Sphere {
+                    center: s.center,
+                    radius: s.radius,
+                },
+                Surface::Cone(c) if c.kind == ConeKind::Cylinder => SourceShape::Cylinder {
+                    p0: c.p0,
+                    p1: c.p1,
+                    radius: c.r0,
+                },
+                Surface::Cone(_) => {
+                    set.warnings.push(format!(
+                        "{}: cones, cups and tubes cannot be light sources; '{}' only glows when seen",
+                        o.loc, o.name
+                    ));
+                    continue;
+                }
+            };
+            let center = shape_center(&shape);
+            set.sources.push(Source {
+                obj: Some(i),
+                distant: None,
+                shape,
+                emitter: e.clone(),
+                center,
+                relay: None,
+            });
+        }
+        for (i, d) in scene.distant.iter().enumerate() {
+            let Some(m) = d.material else { continue };
+            let Material::Emitter(e) = scene.material(m) else {
+                continue;
+            };
+            if !e.is_source() {
+                continue;
+            }
+            set.sources.push(Source {
+                obj: None,
+                distant: Some(i),
+                shape: SourceShape::Distant {
+                    dir: d.source.dir,
+                    half_angle: (d.source.angle_deg * 0.5).to_radians(),
+                    solid_angle: d.source.solid_angle,
+                },
+                emitter: e.clone(),
+                center: DVec3::ZERO,
+                relay: None,
+            });
+        }
+        if relays > 0 {
+            set.add_virtual(scene);
+            if relays > 1 {
+                set.warnings.push(format!(
+                    "-dr {relays}: only one generation of virtual sources is modelled"
+                ));
+            }
+        }
+        set
+    }
+
+    fn add_virtual(&mut self, scene: &Scene) {
+        let nreal = self.sources.len();
+        for (mi, o) in scene.objects.iter().enumerate() {
+            let Some(m) = o.material else { continue };
+            let Material::Mirror(mirror) = scene.material(m) else {
+                continue;
+            };
+            let (normal, point) = match &o.surface {
+                Surface::Polygon(p) if p.area > 0.0 => (p.normal, p.centroid),
+                Surface::Ring(r) => (r.normal, r.center),
+                _ => {
+                    self.warnings.push(format!(
+                        "{}: mirror '{}' is not flat and relays no light sources",
+                        o.loc, o.name
+                    ));
+                    continue;
+                }
+            };
+            let offset = normal.dot(point);
+            for si in 0..nreal {
+                let s = &self.sources[si];
+                if s.obj == Some(mi) {
+                    continue;
+                }
+                // Only sources in front of the mirror are reflected.
+                let in_front = match s.shape {
+                    SourceShape::Distant { dir, .. } => dir.dot(normal) > FTINY,
+                    _ => normal.dot(s.center) - offset > FTINY,
+                };
+                if !in_front {
+                    continue;
+                }
+                let center = s.center - 2.0 * (normal.dot(s.center) - offset) * normal;
+                let mut e = s.emitter.clone();
+                e.radiance *= mirror.color;
+                self.sources.push(Source {
+                    obj: s.obj,
+                    distant: s.distant,
+                    shape: s.shape.clone(),
+                    emitter: e,
+                    center,
+                    relay: Some(Relay {
+                        obj: mi,
+                        normal,
+                        offset,
+                        color: mirror.color,
+                        real: si,
+                    }),
+                });
+            }
+        }
+    }
+
+    /// Append the samples of source `si` seen from point `p` (relative frame) to `out`.
+    /// `scene` is used to drop polygon samples outside the polygon.
+    #[allow(clippy::too_many_arguments)]
+    pub fn sample(
+        &self,
+        scene: &Scene,
+        si: usize,
+        p: DVec3,
+        weight: f64,
+        ds: f64,
+        dj: f64,
+        rng: &mut Sampler,
+        out: &mut Vec<SourceSample>,
+    ) {
+        let src = &self.sources[si];
+        // Virtual sources: sample the real source from the mirrored point, then mirror back.
+        let (q, relay) = match &src.relay {
+            Some(r) => {
+                let h = r.normal.dot(p) - r.offset;
+                if h <= FTINY {
+                    return;
+                }
+                (p - 2.0 * h * r.normal, Some(r))
+            }
+            None => (p, None),
+        };
+        if let EmitterKind::Glow { maxrad } = src.emitter.kind {
+            let c = match &src.relay {
+                Some(_) => src.center,
+                None => src.center,
+            };
+            if (p - c).length() > maxrad {
+                return;
+            }
+        }
+        let start = out.len();
+        let mut push = |dir: DVec3, dist: f64, omega: f64, at: DVec3| {
+            if !(omega > 0.0) || !dir.is_finite() {
+                return;
+            }
+            let spot = src.emitter.spot_factor(at, q);
+            if spot <= 0.0 {
+                return;
+            }
+            out.push(SourceSample {
+                src: si,
+                dir,
+                dist,
+                omega,
+                radiance: src.emitter.radiance * spot,
+            });
+        };
+        match &src.shape {
+            SourceShape::Polygon {
+                normal,
+                corner,
+                eu,
+                ev,
+            } => {
+                let c = *corner + (*eu + *ev) * 0.5;
+                let d = (c - q).length().max(FTINY);
+                let (nu, nv) = partitions(eu.length() / d, ev.length() / d, ds, weight);
+                let cell = eu.cross(*ev).length() / (nu * nv) as f64;
+                let obj = src.obj.map(|i| &scene.objects[i].surface);
+                for i in 0..nu {
+                    for j in 0..nv {
+                        let s = *corner + *eu * strat(i, nu, dj, rng) + *ev * strat(j, nv, dj, rng);
+                        let w = s - q;
+                        let dist = w.length();
+                        if dist <= FTINY {
+                            continue;
+                        }
+                        let dir = w / dist;
+                        let cos_s = -dir.dot(*normal);
+                        if cos_s <= FTINY {
+                            continue;
+                        }
+                        // Keep only aim points that lie on the polygon.
+                        if let Some(surf) = obj {
+                            match surf.intersect(q, dir, dist * (1.0 + 1e-9) + FTINY) {
+                                Some(t) if (t - dist).abs() <= 1e-7 * dist + FTINY => {}
+                                _ => continue,
+                            }
+                        }
+                        push(dir, dist, cell * cos_s / (dist * dist), s);
+                    }
+                }
+            }
+            SourceShape::Ring {
+                center,
+                normal,
+                r0,
+                r1,
+            } => {
+                let d = (*center - q).length().max(FTINY);
+                let (nr, nphi) = partitions(2.0 * r1 / d, 2.0 * r1 / d, ds, weight);
+                let u = any_perpendicular(*normal);
+                let v = normal.cross(u);
+                let cell = PI * (r1 * r1 - r0 * r0) / (nr * nphi) as f64;
+                for i in 0..nr {
+                    for j in 0..nphi {
+                        let a = strat(i, nr, dj, rng);
+                        let b = strat(j, nphi, dj, rng);
+                        let r = (r0 * r0 + a * (r1 * r1 - r0 * r0)).sqrt();
+                        let phi = 2.0 * PI * b;
+                        let s = *center + u * (r * phi.cos()) + v * (r * phi.sin());
+                        let w = s - q;
+                        let dist = w.length();
+                        if dist <= FTINY {
+                            continue;
+                        }
+                        let dir = w / dist;
+                        let cos_s = -dir.dot(*normal);
+                        if cos_s <= FTINY {
+                            continue;
+                        }
+                        push(dir, dist, cell * cos_s / (dist * dist), s);
+                    }
+                }
+            }
+            SourceShape::Sphere { center, radius } => {
+                let w = *center - q;
+                let d = w.length();
+                if d <= *radius * (1.0 + 1e-9) {
+                    return;
+                }
+                let axis = w / d;
+                let sin_max = radius / d;
+                let cos_max = (1.0 - sin_max * sin_max).max(0.0).sqrt();
+                let ang = 2.0 * sin_max.asin();
+                let (na, nb) = partitions(ang, ang, ds, weight);
+                let total = 2.0 * PI * (1.0 - cos_max);
+                let omega = total / (na * nb) as f64;
+                for i in 0..na {
+                    for j in 0..nb {
+                        let dir = cone_dir(axis, cos_max, strat(i, na, dj, rng), strat(j, nb, dj, rng));
+                        let dist = sphere_dist(q, dir, *center, *radius).unwrap_or(d);
+                        push(dir, dist, omega, q + dir * dist);
+                    }
+                }
+            }
+            SourceShape::Cylinder { p0, p1, radius } => {
+                let axis = *p1 - *p0;
+                let len = axis.length();
+                let c = (*p0 + *p1) * 0.5;
+                let d = (c - q).length().max(FTINY);
+                let (na, nb) = partitions(len / d, 2.0 * radius / d, ds, weight);
+                let nb = (2 * nb).max(2);
+                let a = axis / len;
+                let u = any_perpendicular(a);
+                let v = a.cross(u);
+                let cell = 2.0 * PI * radius * len / (na * nb) as f64;
+                for i in 0..na {
+                    for j in 0..nb {
+                        let t = strat(i, na, dj, rng);
+                        let phi = 2.0 * PI * strat(j, nb, dj, rng);
+                        let nrm = u * phi.cos() + v * phi.sin();
+                        let s = *p0 + axis * t + nrm * *radius;
+                        let w = s - q;
+                        let dist = w.length();
+                        if dist <= FTINY {
+                            continue;
+                        }
+                        let dir = w / dist;
+                        let cos_s = -dir.dot(nrm);
+                        if cos_s <= FTINY {
+                            continue;
+                        }
+                        push(dir, dist, cell * cos_s / (dist * dist), s);
+                    }
+                }
+            }
+            SourceShape::Distant {
+                dir,
+                half_angle,
+                solid_angle,
+            } => {
+                let (na, nb) = partitions(2.0 * half_angle, 2.0 * half_angle, ds, weight);
+                let cos_max = half_angle.cos();
+                let omega = solid_angle / (na * nb) as f64;
+                for i in 0..na {
+                    for j in 0..nb {
+                        let d = if *half_angle <= 0.0 {
+                            *dir
+                        } else {
+                            cone_dir(*dir, cos_max, strat(i, na, dj, rng), strat(j, nb, dj, rng))
+                        };
+                        push(d, f64::INFINITY, omega, q + d * 1e10);
+                    }
+                }
+            }
+        }
+        if let Some(r) = relay {
+            for s in &mut out[start..] {
+                s.dir = reflect(s.dir, r.normal);
+            }
+        }
+    }
+}
+
+/// Centre of a source shape.
+fn shape_center(s: &SourceShape) -> DVec3 {
+    match s {
+        SourceShape::Polygon { corner, eu, ev, .. } => *corner + (*eu + *ev) * 0.5,
+        SourceShape::Ring { center, .. } | SourceShape::Sphere { center, .. } => *center,
+        SourceShape::Cylinder { p0, p1, .. } => (*p0 + *p1) * 0.5,
+        SourceShape::Distant { .. } => DVec3::ZERO,
+    }
+}
+
+/// A direction inside the cone around `axis` with `cos θ >= cos_max`, uniform in solid angle
+/// for uniform (a, b).
+pub fn cone_dir(axis: DVec3, cos_max: f64, a: f64, b: f64) -> DVec3 {
+    let (x, y) = square_to_disk(a, b);
+    let r2 = x * x + y * y;
+    let cos_t = 1.0 - r2 * (1.0 - cos_max);
+    let sin_t = (1.0 - cos_t * cos_t).max(0.0).sqrt();
+    let (cphi, sphi) = if r2 > 0.0 {
+        let r = r2.sqrt();
+        (x / r, y / r)
+    } else {
+        (1.0, 0.0)
+    };
+    let u = any_perpendicular(axis);
+    let v = axis.cross(u);
+    (axis * cos_t + u * (sin_t * cphi) + v * (sin_t * sphi)).normalize()
+}
+
+/// Distance from `q` along `dir` to the sphere, if it is hit.
+fn sphere_dist(q: DVec3, dir: DVec3, c: DVec3, r: f64) -> Option<f64> {
+    let oc = q - c;
+    let b = oc.dot(dir);
+    let cc = oc.dot(oc) - r * r;
+    let disc = b * b - cc;
+    if disc < 0.0 {
+        return None;
+    }
+    let t = -b - disc.sqrt();
+    (t > 0.0).then_some(t)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn square_to_disk_is_area_preserving() {
+        // Uniform grid on the square maps to points whose radius² is uniform.
+        let n = 200;
+        let mut sum_r2 = 0.0;
+        for i in 0..n {
+            for j in 0..n {
+                let (x, y) = square_to_disk((i as f64 + 0.5) / n as f64, (j as f64 + 0.5) / n as f64);
+                assert!(x * x + y * y <= 1.0 + 1e-12);
+                sum_r2 += x * x + y * y;
+            }
+        }
+        let mean = sum_r2 / (n * n) as f64;
+        assert!((mean - 0.5).abs() < 1e-3, "{mean}");
+    }
+
+    #[test]
+    fn cone_dir_stays_in_cone() {
+        let axis = DVec3::new(1.0, 2.0, 3.0).normalize();
+        let cos_max = 0.9;
+        for i in 0..50 {
+            for j in 0..50 {
+                let d = cone_dir(axis, cos_max, i as f64 / 50.0, j as f64 / 50.0);
+                assert!((d.length() - 1.0).abs() < 1e-12);
+                assert!(d.dot(axis) >= cos_max - 1e-9);
+            }
+        }
+    }
+
+    #[test]
+    fn partitions_limited() {
+        assert_eq!(partitions(1.0, 1.0, 0.0, 1.0), (1, 1));
+        let (a, b) = partitions(10.0, 10.0, 0.25, 1.0);
+        assert!(a * b <= 64 && a * b >= 49);
+        let (a, b) = partitions(0.01, 0.01, 0.25, 1.0);
+        assert_eq!((a, b), (1, 1));
+    }
+}

@@ -1,0 +1,48 @@
+//! `mirror`: pure specular reflection that also projects light sources (virtual sources).
+
+use super::{expect_args, reflect, MatId, MaterialLookup};
+use crate::color::Color;
+use crate::render::ray::{Hit, Ray, RayKind};
+use crate::render::sampler::Sampler;
+use crate::render::trace::Tracer;
+use glam::DVec3;
+
+/// A mirror: reflectance per channel and an optional alternate material.
+#[derive(Clone, Debug)]
+pub struct Mirror {
+    /// Reflectance.
+    pub color: Color,
+    /// Material used for every ray except those relaying virtual sources.
+    pub alternate: Option<MatId>,
+    /// True when the alternate is named `void`: the mirror is then invisible to those rays.
+    pub alternate_void: bool,
+}
+
+impl Mirror {
+    /// Parse `mirror` (0 or 1 string, 3 reals).
+    pub fn parse(sargs: &[String], rargs: &[f64], lookup: &dyn MaterialLookup) -> Result<Mirror, String> {
+        expect_args("mirror", sargs, rargs, 0..=1, &[3])?;
+        let (alternate, alternate_void) = match sargs.first() {
+            Some(name) => {
+                let id = lookup.material(name)?;
+                (id, id.is_none())
+            }
+            None => (None, false),
+        };
+        Ok(Mirror {
+            color: DVec3::new(rargs[0], rargs[1], rargs[2]),
+            alternate,
+            alternate_void,
+        })
+    }
+
+    /// Shade a hit on the mirror itself (no alternate): one reflected ray.
+    pub fn shade(&self, tr: &Tracer, ray: &Ray, hit: &Hit, rng: &mut Sampler) -> Color {
+        let n = if hit.back { -hit.normal } else { hit.normal };
+        let dir = reflect(ray.dir, n);
+        match tr.spawn(ray, hit, dir, RayKind::Reflected, self.color) {
+            Some(r) => self.color * tr.trace(&r, rng),
+            None => Color::ZERO,
+        }
+    }
+}

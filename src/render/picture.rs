@@ -1,0 +1,293 @@
+//! The pixel loop: pixel jitter (`-pj`), adaptive image sampling (`-ps`, `-pt`) on a global
+//! cell grid, and threads. Every pixel sample is seeded by its global pixel position and the
+//! frame number alone, and cells lie on a grid fixed by the full image, so any region renders
+//! to exactly the same pixels whatever the thread count or tiling.
+
+use super::ray::Ray;
+use super::sampler::Sampler;
+use super::trace::Tracer;
+use crate::color::{sanitize, Color};
+use crate::material::Material;
+use crate::view::ViewFrame;
+use glam::DVec3;
+use rayon::prelude::*;
+use std::sync::atomic::{AtomicU64, AtomicUsize, Ordering};
+
+/// What a picture render needs besides the tracer.
+pub struct FrameSetup<'a> {
+    /// The view.
+    pub view: &'a ViewFrame,
+    /// Full picture width.
+    pub xres: usize,
+    /// Full picture height.
+    pub yres: usize,
+    /// Pixel jitter fraction (`-pj`).
+    pub pj: f64,
+    /// Sample spacing (`-ps`); 1 traces every pixel.
+    pub ps: usize,
+    /// Relative difference that forces subdivision (`-pt`).
+    pub pt: f64,
+    /// Frame number (seeds the random numbers).
+    pub frame: u32,
+    /// Irradiance output (`-i`).
+    pub irradiance: bool,
+}
+
+/// Counters updated while rendering.
+#[derive(Debug, Default)]
+pub struct RenderProgress {
+    /// Rays traced so far.
+    pub rays: AtomicU64,
+    /// Cell rows (or pixel rows with `-ps 1`) finished.
+    pub rows_done: AtomicUsize,
+    /// Cell rows in all.
+    pub rows_total: AtomicUsize,
+}
+
+/// A traced sample: colour and distance of the first hit (for the depth test).
+#[derive(Clone, Copy, Debug)]
+struct Sample {
+    color: Color,
+    dist: f64,
+}
+
+fn sample_pixel(tr: &Tracer, fs: &FrameSetup, px: usize, py_top: usize, rays: &mut u64) -> Sample {
+    let mut rng = Sampler::for_pixel(fs.frame, px as u32, py_top as u32, 0);
+    let yb = fs.yres - 1 - py_top;
+    let (r1, r2) = rng.next2();
+    let x = (px as f64 + 0.5 + fs.pj * (0.5 - r1)) / fs.xres as f64;
+    let y = (yb as f64 + 0.5 + fs.pj * (0.5 - r2)) / fs.yres as f64;
+    let Some((org, dir, tmax)) = fs.view.ray(x, y) else {
+        return Sample {
+            color: Color::ZERO,
+            dist: 0.0,
+        };
+    };
+    let ray = Ray::primary(org - tr.scene.origin, dir, tmax);
+    let dist = tr.intersect(&ray).map(|h| h.t).unwrap_or(f64::INFINITY);
+    let color = if fs.irradiance {
+        irradiance(tr, &ray, &mut rng)
+    } else {
+        tr.trace(&ray, &mut rng)
+    };
+    *rays += rng.rays;
+    Sample {
+        color: sanitize(color),
+        dist,
+    }
+}
+
+/// `-i`: irradiance at the first non-emitting surface, as if it were white and Lambertian.
+fn irradiance(tr: &Tracer, ray: &Ray, rng: &mut Sampler) -> Color {
+    let Some(hit) = tr.intersect(ray) else {
+        return tr.trace(ray, rng);
+    };
+    if let Some(m) = hit.material {
+        if matches!(
+            tr.scene.material(m),
+            Material::Emitter(_) | Material::Antimatter(_)
+        ) {
+            return tr.trace(ray, rng);
+        }
+    } else {
+        return tr.trace(ray, rng);
+    }
+    let n = if hit.back { -hit.normal } else { hit.normal };
+    let coef = move |l: DVec3, omega: f64| -> Color {
+        let c = n.dot(l);
+        if c > 0.0 {
+            Color::splat(c * omega / std::f64::consts::PI)
+        } else {
+            Color::ZERO
+        }
+    };
+    let l = tr.direct(ray, &hit, n, &coef, rng) + tr.ambient(ray, &hit, Color::ONE, n, rng);
+    l * std::f64::consts::PI
+}
+
+fn bigdiff(a: &Sample, b: &Sample, pt: f64) -> bool {
+    for c in 0..3 {
+        let (x, y) = (a.color[c], b.color[c]);
+        if (x - y).abs() > pt * 0.5 * (x + y) + 1e-12 {
+            return true;
+        }
+    }
+    let (da, db) = (a.dist, b.dist);
+    if da.is_finite() != db.is_finite() {
+        return true;
+    }
+    da.is_finite() && (da - db).abs() > pt * 0.5 * (da + db)
+}
+
+/// Render the pixels of the region `[x0, x1) × [y0, y1)` of the full picture (y counted from
+/// the top), returned row by row from the top. Uses the current rayon pool.
+pub fn render_region(
+    tr: &Tracer,
+    fs: &FrameSetup,
+    x0: usize,
+    y0: usize,
+    x1: usize,
+    y1: usize,
+    progress: &RenderProgress,
+) -> Vec<[f32; 3]> {
+    let w = x1.saturating_sub(x0);
+    let h = y1.saturating_sub(y0);
+    let mut out = vec![[0f32; 3]; w * h];
+    if w == 0 || h == 0 {
+        return out;
+    }
+    let ps = fs.ps.max(1);
+    if ps == 1 {
+        progress.rows_total.store(h, Ordering::Relaxed);
+        out.par_chunks_mut(w).enumerate().for_each(|(row, line)| {
+            let mut rays = 0;
+            for (i, px) in line.iter_mut().enumerate() {
+                let s = sample_pixel(tr, fs, x0 + i, y0 + row, &mut rays);
+                *px = to_f32(s.color);
+            }
+            progress.rays.fetch_add(rays, Ordering::Relaxed);
+            progress.rows_done.fetch_add(1, Ordering::Relaxed);
+        });
+        return out;
+    }
+    // Cells of the global grid: pixels [cx*ps, (cx+1)*ps) × [cy*ps, (cy+1)*ps).
+    let cy0 = y0 / ps;
+    let cy1 = y1.div_ceil(ps);
+    let cx0 = x0 / ps;
+    let cx1 = x1.div_ceil(ps);
+    progress.rows_total.store(cy1 - cy0, Ordering::Relaxed);
+    let bands: Vec<Vec<(usize, usize, [f32; 3])>> = (cy0..cy1)
+        .into_par_iter()
+        .map(|cy| {
+            let mut rays = 0;
+            let mut pix = Vec::new();
+            for cx in cx0..cx1 {
+                render_cell(tr, fs, cx, cy, ps, &mut rays, &mut |x, y, c| {
+                    if x >= x0 && x < x1 && y >= y0 && y < y1 {
+                        pix.push((x, y, to_f32(c)));
+                    }
+                });
+            }
+            progress.rays.fetch_add(rays, Ordering::Relaxed);
+            progress.rows_done.fetch_add(1, Ordering::Relaxed);
+            pix
+        })
+        .collect();
+    for band in bands {
+        for (x, y, c) in band {
+            out[(y - y0) * w + (x - x0)] = c;
+        }
+    }
+    out
+}
+
+fn to_f32(c: Color) -> [f32; 3] {
+    let c = sanitize(c);
+    [c.x as f32, c.y as f32, c.z as f32]
+}
+
+/// Adaptive sampling of one grid cell; emits each pixel the cell owns exactly once.
+fn render_cell(
+    tr: &Tracer,
+    fs: &FrameSetup,
+    cx: usize,
+    cy: usize,
+    ps: usize,
+    rays: &mut u64,
+    emit: &mut dyn FnMut(usize, usize, Color),
+) {
+    let xa = cx * ps;
+    let ya = cy * ps;
+    if xa >= fs.xres || ya >= fs.yres {
+        return;
+    }
+    // Owned pixels: [xa, xe) × [ya, ye); corner samples at xa/xb and ya/yb.
+    let xe = (xa + ps).min(fs.xres);
+    let ye = (ya + ps).min(fs.yres);
+    let xb = (xa + ps).min(fs.xres - 1);
+    let yb = (ya + ps).min(fs.yres - 1);
+    let gw = xb - xa + 1;
+    let gh = yb - ya + 1;
+    let mut grid: Vec<Option<Sample>> = vec![None; gw * gh];
+    let mut get = |x: usize, y: usize, grid: &mut Vec<Option<Sample>>, rays: &mut u64| -> Sample {
+        let k = (y - ya) * gw + (x - xa);
+        if let Some(s) = grid[k] {
+            return s;
+        }
+        let s = sample_pixel(tr, fs, x, y, rays);
+        grid[k] = Some(s);
+        s
+    };
+    let mut values: Vec<Option<Color>> = vec![None; gw * gh];
+    // Recursive subdivision with an explicit stack.
+    let mut stack = vec![(xa, xb, ya, yb)];
+    while let Some((x0, x1, y0, y1)) = stack.pop() {
+        let c00 = get(x0, y0, &mut grid, rays);
+        let c10 = get(x1, y0, &mut grid, rays);
+        let c01 = get(x0, y1, &mut grid, rays);
+        let c11 = get(x1, y1, &mut grid, rays);
+        let small = x1 - x0 <= 1 && y1 - y0 <= 1;
+        let corners = [c00, c10, c01, c11];
+        let differ = !small
+            && (0..4).any(|i| (i + 1..4).any(|j| bigdiff(&corners[i], &corners[j], fs.pt)));
+        if small || !differ {
+            for y in y0..=y1 {
+                for x in x0..=x1 {
+                    let k = (y - ya) * gw + (x - xa);
+                    if values[k].is_some() {
+                        continue;
+                    }
+                    if let Some(s) = grid[k] {
+                        values[k] = Some(s.color);
+                        continue;
+                    }
+                    let fx = if x1 > x0 {
+                        (x - x0) as f64 / (x1 - x0) as f64
+                    } else {
+                        0.0
+                    };
+                    let fy = if y1 > y0 {
+                        (y - y0) as f64 / (y1 - y0) as f64
+                    } else {
+                        0.0
+                    };
+                    let c = c00.color * ((1.0 - fx) * (1.0 - fy))
+                        + c10.color * (fx * (1.0 - fy))
+                        + c01.color * ((1.0 - fx) * fy)
+                        + c11.color * (fx * fy);
+                    values[k] = Some(c);
+                }
+            }
+            continue;
+        }
+        let xm = (x0 + x1) / 2;
+        let ym = (y0 + y1) / 2;
+        let xs: Vec<(usize, usize)> = if x1 - x0 >= 2 {
+            vec![(x0, xm), (xm, x1)]
+        } else {
+            vec![(x0, x1)]
+        };
+        let ys: Vec<(usize, usize)> = if y1 - y0 >= 2 {
+            vec![(y0, ym), (ym, y1)]
+        } else {
+            vec![(y0, y1)]
+        };
+        for &(a, b) in &xs {
+            for &(c, d) in &ys {
+                stack.push((a, b, c, d));
+            }
+        }
+    }
+    // Sampled pixels keep their own sample; the others take the first interpolation that
+    // reached them (the stack order is fixed, so this is deterministic).
+    for y in ya..ye {
+        for x in xa..xe {
+            let k = (y - ya) * gw + (x - xa);
+            let c = match grid[k] {
+                Some(s) => s.color,
+                None => values[k].unwrap_or(Color::ZERO),
+            };
+            emit(x, y, c);
+        }
+    }
+}

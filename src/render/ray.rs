@@ -1,0 +1,99 @@
+//! Rays and hits.
+
+use crate::material::MatId;
+use glam::DVec3;
+
+/// What a ray is for. Radiance's `crtype` bits, reduced to what the shading rules need.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum RayKind {
+    /// From the eye.
+    Primary,
+    /// Pure specular reflection (mirror direction).
+    Reflected,
+    /// Pure specular transmission (straight through or refracted).
+    Transmitted,
+    /// A sample of a rough specular reflection lobe (sources are invisible to it).
+    SpecReflected,
+    /// A sample of a rough specular transmission lobe (sources are invisible to it).
+    SpecTransmitted,
+    /// An indirect (ambient) sample (sources are invisible to it).
+    Ambient,
+    /// A shadow ray toward a light source.
+    Shadow,
+}
+
+/// Up to this many antimatter volumes may contain a ray at once.
+pub const MAX_ANTIMATTER: usize = 4;
+
+/// A ray in the scene's relative frame.
+#[derive(Clone, Copy, Debug)]
+pub struct Ray {
+    /// Origin (relative to the scene origin).
+    pub org: DVec3,
+    /// Unit direction.
+    pub dir: DVec3,
+    /// Maximum distance (aft clipping plane), `f64::INFINITY` for none.
+    pub tmax: f64,
+    /// Kind of this ray.
+    pub kind: RayKind,
+    /// True when this ray or an ancestor is an ambient or specular-sample ray: light sources
+    /// are then not seen (direct lighting counts them).
+    pub sources_hidden: bool,
+    /// Product of the coefficients along the path (Radiance's `rweight`).
+    pub weight: f64,
+    /// Number of reflections/transmissions so far.
+    pub depth: u32,
+    /// Ambient bounce level.
+    pub amb_level: u32,
+    /// Factor a survivor of Russian roulette must multiply its result by.
+    pub gain: f64,
+    /// Antimatter materials whose volumes contain the ray origin.
+    pub antimatter: [Option<MatId>; MAX_ANTIMATTER],
+}
+
+impl Ray {
+    /// A primary ray.
+    pub fn primary(org: DVec3, dir: DVec3, tmax: f64) -> Ray {
+        Ray {
+            org,
+            dir,
+            tmax,
+            kind: RayKind::Primary,
+            sources_hidden: false,
+            weight: 1.0,
+            depth: 0,
+            amb_level: 0,
+            gain: 1.0,
+            antimatter: [None; MAX_ANTIMATTER],
+        }
+    }
+
+    /// A shadow ray (unlimited length).
+    pub fn shadow(org: DVec3, dir: DVec3) -> Ray {
+        Ray {
+            kind: RayKind::Shadow,
+            ..Ray::primary(org, dir, f64::INFINITY)
+        }
+    }
+}
+
+/// A ray–surface hit.
+#[derive(Clone, Copy, Debug)]
+pub struct Hit {
+    /// Index of the object in [`crate::scene::Scene::objects`].
+    pub obj: usize,
+    /// Distance from the ray origin.
+    pub t: f64,
+    /// Hit point (relative frame).
+    pub point: DVec3,
+    /// Unit front-side surface normal (not flipped toward the ray).
+    pub normal: DVec3,
+    /// True when the ray hit the back side (`dir · normal > 0`).
+    pub back: bool,
+    /// True for planar surfaces.
+    pub flat: bool,
+    /// Material used to shade this hit (may differ from the object's for antimatter exits).
+    pub material: Option<MatId>,
+    /// Antimatter state after this hit (for continuing rays).
+    pub antimatter: [Option<MatId>; MAX_ANTIMATTER],
+}

@@ -1,0 +1,465 @@
+//! The ray tracer: intersection (with antimatter and coincident-surface rules), material
+//! dispatch, spawned rays with Radiance's depth and weight limits, shadow rays, ambient.
+
+use super::ray::{Hit, Ray, RayKind, MAX_ANTIMATTER};
+use super::sampler::Sampler;
+use crate::color::{sanitize, Color};
+use crate::light::direct::direct;
+use crate::light::source::LightSet;
+use crate::material::emitter::EmitterKind;
+use crate::material::{MatId, Material};
+use crate::radopt::RenderParams;
+use crate::scene::Scene;
+use crate::FTINY;
+use glam::DVec3;
+
+/// Everything a ray needs to be traced.
+pub struct Tracer<'a> {
+    /// The scene.
+    pub scene: &'a Scene,
+    /// Rendering parameters.
+    pub params: &'a RenderParams,
+    /// Light sources (real and virtual).
+    pub lights: &'a LightSet,
+}
+
+/// Largest colour component (Radiance's `intens`).
+#[inline]
+fn intens(c: Color) -> f64 {
+    c.max_element()
+}
+
+impl<'a> Tracer<'a> {
+    /// A tracer over a scene.
+    pub fn new(scene: &'a Scene, params: &'a RenderParams, lights: &'a LightSet) -> Tracer<'a> {
+        Tracer {
+            scene,
+            params,
+            lights,
+        }
+    }
+
+    fn is_transparent(&self, m: Option<MatId>) -> bool {
+        match m {
+            None => true,
+            Some(id) => match self.scene.material(id) {
+                Material::Normal(n) => n.trans > 0.0,
+                Material::Glass(_) | Material::Dielectric(_) | Material::Antimatter(_) => true,
+                Material::Emitter(e) => matches!(e.kind, EmitterKind::Illum { .. }),
+                Material::Mirror(_) => false,
+            },
+        }
+    }
+
+    /// Radiance's rule for coincident surfaces: a material beats none, opaque beats
+    /// transparent, front-facing beats back-facing, else the later-defined material wins.
+    fn prefer(&self, a: usize, b: usize, org: DVec3, dir: DVec3, tmax: f64) -> bool {
+        let objs = &self.scene.objects;
+        let (ma, mb) = (objs[a].material, objs[b].material);
+        if ma.is_some() != mb.is_some() {
+            return ma.is_some();
+        }
+        let (ta, tb) = (self.is_transparent(ma), self.is_transparent(mb));
+        if ta != tb {
+            return !ta;
+        }
+        let facing = |i: usize| -> bool {
+            let s = &objs[i].surface;
+            match s.intersect(org, dir, tmax) {
+                Some(t) => s.hit_geom(org, dir, t).normal.dot(dir) < 0.0,
+                None => false,
+            }
+        };
+        let (fa, fb) = (facing(a), facing(b));
+        if fa != fb {
+            return fa;
+        }
+        let order = |m: Option<MatId>| m.map(|i| self.scene.materials[i].order).unwrap_or(0);
+        order(ma) > order(mb) || (order(ma) == order(mb) && a > b)
+    }
+
+    fn cuts(&self, am: &[Option<MatId>; MAX_ANTIMATTER], m: Option<MatId>) -> bool {
+        let Some(m) = m else { return false };
+        am.iter().flatten().any(|&a| match self.scene.material(a) {
+            Material::Antimatter(list) => list.contains(&Some(m)),
+            _ => false,
+        })
+    }
+
+    /// Closest hit along a ray, honouring antimatter volumes.
+    pub fn intersect(&self, ray: &Ray) -> Option<Hit> {
+        let scene = self.scene;
+        let mut org = ray.org;
+        let dir = ray.dir;
+        let mut travelled = 0.0;
+        let mut am = ray.antimatter;
+        for _ in 0..256 {
+            let tmax = ray.tmax - travelled;
+            if tmax <= FTINY {
+                return None;
+            }
+            let (i, t) = scene.bvh.closest(
+                org,
+                dir,
+                tmax,
+                |i| scene.objects[i].surface.intersect(org, dir, tmax),
+                |a, b| self.prefer(a, b, org, dir, tmax),
+            )?;
+            let obj = &scene.objects[i];
+            let g = obj.surface.hit_geom(org, dir, t);
+            let back = g.normal.dot(dir) > 0.0;
+            let mut hit = Hit {
+                obj: i,
+                t: travelled + t,
+                point: g.point,
+                normal: g.normal,
+                back,
+                flat: obj.surface.is_flat(),
+                material: obj.material,
+                antimatter: am,
+            };
+            let advance = |org: &mut DVec3, travelled: &mut f64| {
+                *org = g.point;
+                *travelled += t;
+            };
+            if self.cuts(&am, obj.material) {
+                advance(&mut org, &mut travelled);
+                continue;
+            }
+            if let Some(m) = obj.material {
+                if let Material::Antimatter(list) = scene.material(m) {
+                    if !back {
+                        // Entering the volume.
+                        if let Some(slot) = am.iter_mut().find(|s| s.is_none()) {
+                            *slot = Some(m);
+                        }
+                        advance(&mut org, &mut travelled);
+                        continue;
+                    }
+                    // Leaving: if the exit point lies inside a cut object, the exit face is
+                    // shaded with the first listed modifier.
+                    let was_inside = am.contains(&Some(m));
+                    if let Some(slot) = am.iter_mut().find(|s| **s == Some(m)) {
+                        *slot = None;
+                    }
+                    if was_inside {
+                        let mut probe = *ray;
+                        probe.org = g.point;
+                        probe.tmax = f64::INFINITY;
+                        probe.antimatter = am;
+                        if let Some(next) = self.intersect(&probe) {
+                            if next.back && next.material.is_some() && list.contains(&next.material)
+                            {
+                                hit.material = list.first().copied().flatten();
+                                hit.normal = -g.normal;
+                                hit.back = false;
+                                hit.antimatter = am;
+                                return Some(hit);
+                            }
+                        }
+                    }
+                    advance(&mut org, &mut travelled);
+                    continue;
+                }
+            }
+            hit.antimatter = am;
+            return Some(hit);
+        }
+        None
+    }
+
+    /// Radiance arriving along a ray.
+    pub fn trace(&self, ray: &Ray, rng: &mut Sampler) -> Color {
+        rng.rays += 1;
+        let c = match self.intersect(ray) {
+            Some(hit) => self.shade(ray, &hit, hit.material, rng),
+            None => self.escaped(ray),
+        };
+        sanitize(c * ray.gain)
+    }
+
+    /// A ray that left the scene: distant sources and glows.
+    fn escaped(&self, ray: &Ray) -> Color {
+        if ray.tmax.is_finite() {
+            return Color::ZERO;
+        }
+        let mut fallback = None;
+        for d in &self.scene.distant {
+            if !d.source.hit_by(ray.dir) {
+                continue;
+            }
+            let Some(m) = d.material else { continue };
+            match self.scene.material(m) {
+                Material::Emitter(e) => {
+                    let glowish = matches!(
+                        e.kind,
+                        EmitterKind::Glow { .. } | EmitterKind::Illum { .. }
+                    );
+                    let v = self.emitter_value(ray, e, f64::INFINITY);
+                    if glowish {
+                        fallback.get_or_insert(v);
+                    } else {
+                        return v;
+                    }
+                }
+                _ => continue,
+            }
+        }
+        fallback.unwrap_or(Color::ZERO)
+    }
+
+    fn emitter_value(&self, ray: &Ray, e: &crate::material::emitter::Emitter, dist: f64) -> Color {
+        let visible = match e.kind {
+            EmitterKind::Glow { maxrad } => {
+                if ray.sources_hidden {
+                    if maxrad > 0.0 {
+                        dist > maxrad
+                    } else {
+                        maxrad == 0.0
+                    }
+                } else {
+                    true
+                }
+            }
+            _ => !ray.sources_hidden,
+        };
+        if !visible || (!self.params.dv && ray.kind != RayKind::Shadow && e.is_source()) {
+            return Color::ZERO;
+        }
+        e.radiance
+    }
+
+    /// Shade a hit with material `m`.
+    pub fn shade(&self, ray: &Ray, hit: &Hit, m: Option<MatId>, rng: &mut Sampler) -> Color {
+        let Some(id) = m else {
+            return self.pass_through(ray, hit, rng);
+        };
+        match self.scene.material(id) {
+            Material::Normal(n) => n.shade(self, ray, hit, rng),
+            Material::Glass(g) => g.shade(self, ray, hit, rng),
+            Material::Dielectric(d) => d.shade(self, ray, hit, rng),
+            Material::Mirror(mi) => {
+                if mi.alternate_void {
+                    self.pass_through(ray, hit, rng)
+                } else if let Some(alt) = mi.alternate {
+                    self.shade(ray, hit, Some(alt), rng)
+                } else {
+                    mi.shade(self, ray, hit, rng)
+                }
+            }
+            Material::Emitter(e) => match e.kind {
+                EmitterKind::Illum { alternate } => match alternate {
+                    Some(alt) => self.shade(ray, hit, Some(alt), rng),
+                    None => self.pass_through(ray, hit, rng),
+                },
+                _ => {
+                    // Flat sources emit from their front side only.
+                    if hit.back && hit.flat {
+                        return Color::ZERO;
+                    }
+                    let spot = e.spot_factor(hit.point, ray.org);
+                    self.emitter_value(ray, e, hit.t) * spot
+                }
+            },
+            Material::Antimatter(_) => self.pass_through(ray, hit, rng),
+        }
+    }
+
+    /// Continue a ray unchanged beyond a hit (invisible surfaces, back faces with `-bv-`).
+    pub fn pass_through(&self, ray: &Ray, hit: &Hit, rng: &mut Sampler) -> Color {
+        let mut r = *ray;
+        r.org = hit.point;
+        r.tmax = ray.tmax - hit.t;
+        r.antimatter = hit.antimatter;
+        r.gain = 1.0;
+        if r.tmax <= FTINY {
+            return Color::ZERO;
+        }
+        // Not a reflection, but bound endless chains of invisible surfaces all the same.
+        r.depth += 1;
+        if r.depth > 1000 {
+            return Color::ZERO;
+        }
+        self.trace(&r, rng)
+    }
+
+    /// A child ray from `hit` in direction `dir` carrying coefficient `coef`, or None when
+    /// Radiance's limits (`-lr`, `-lw`) stop it. Russian roulette applies when `-lr <= 0`.
+    pub fn spawn(
+        &self,
+        parent: &Ray,
+        hit: &Hit,
+        dir: DVec3,
+        kind: RayKind,
+        coef: Color,
+    ) -> Option<Ray> {
+        let weight = parent.weight * intens(coef);
+        let depth = parent.depth + 1;
+        let lr = self.params.lr;
+        let lw = self.params.lw;
+        let mut gain = 1.0;
+        if lr > 0 {
+            if depth as i64 > lr as i64 || weight < lw {
+                return None;
+            }
+        } else {
+            if lr < 0 && depth as i64 > (-lr) as i64 {
+                return None;
+            }
+            if weight < lw {
+                // Deterministic roulette from the direction bits keeps this per-pixel exact.
+                let bits = dir.x.to_bits() ^ dir.y.to_bits().rotate_left(21) ^ dir.z.to_bits().rotate_left(42);
+                let u = (bits.wrapping_mul(0x9E37_79B9_7F4A_7C15) >> 11) as f64 / (1u64 << 53) as f64;
+                if weight <= 0.0 || u >= weight / lw {
+                    return None;
+                }
+                gain = lw / weight;
+            }
+        }
+        Some(Ray {
+            org: hit.point,
+            dir,
+            tmax: f64::INFINITY,
+            kind,
+            sources_hidden: parent.sources_hidden
+                || matches!(
+                    kind,
+                    RayKind::SpecReflected | RayKind::SpecTransmitted | RayKind::Ambient
+                ),
+            weight: weight * gain,
+            depth,
+            amb_level: parent.amb_level,
+            gain,
+            antimatter: hit.antimatter,
+        })
+    }
+
+    /// Direct light at a hit for a material coefficient function.
+    pub fn direct(
+        &self,
+        ray: &Ray,
+        hit: &Hit,
+        _normal: DVec3,
+        coef: &dyn Fn(DVec3, f64) -> Color,
+        rng: &mut Sampler,
+    ) -> Color {
+        direct(self, ray.weight, hit, coef, rng)
+    }
+
+    /// Indirect (ambient) light reflected with coefficient `refl` about `normal`.
+    /// Until the irradiance cache lands this is the constant `-av` radiance.
+    pub fn ambient(
+        &self,
+        _ray: &Ray,
+        _hit: &Hit,
+        refl: Color,
+        _normal: DVec3,
+        _rng: &mut Sampler,
+    ) -> Color {
+        let av = self.params.av;
+        refl * DVec3::new(av[0], av[1], av[2])
+    }
+
+    /// Transmission of a shadow ray from `org` in direction `dir` toward source `si` at
+    /// distance `dist` (infinite for distant sources).
+    pub fn shadow(&self, org: DVec3, dir: DVec3, dist: f64, si: usize, rng: &mut Sampler) -> Color {
+        let src = &self.lights.sources[si];
+        if let Some(relay) = &src.relay {
+            // First leg: to the mirror.
+            let mut ray = Ray::shadow(org, dir);
+            let mut t = Color::ONE;
+            for _ in 0..64 {
+                rng.rays += 1;
+                let Some(hit) = self.intersect(&ray) else {
+                    return Color::ZERO;
+                };
+                if hit.obj == relay.obj {
+                    if hit.back || hit.t > dist {
+                        return Color::ZERO;
+                    }
+                    let rdir = crate::material::reflect(dir, relay.normal);
+                    let rest = if dist.is_finite() {
+                        dist - hit.t
+                    } else {
+                        dist
+                    };
+                    let real = self.shadow_real(hit.point, rdir, rest, relay.real, hit.antimatter, rng);
+                    return t * relay.color * real;
+                }
+                let tr = self.shadow_transmission(&hit, dir);
+                if tr.max_element() <= 0.0 {
+                    return Color::ZERO;
+                }
+                t *= tr;
+                ray.org = hit.point;
+                ray.antimatter = hit.antimatter;
+            }
+            return Color::ZERO;
+        }
+        self.shadow_real(org, dir, dist, si, [None; MAX_ANTIMATTER], rng)
+    }
+
+    fn shadow_real(
+        &self,
+        org: DVec3,
+        dir: DVec3,
+        _dist: f64,
+        si: usize,
+        am: [Option<MatId>; MAX_ANTIMATTER],
+        rng: &mut Sampler,
+    ) -> Color {
+        let src = &self.lights.sources[si];
+        let mut ray = Ray::shadow(org, dir);
+        ray.antimatter = am;
+        let mut t = Color::ONE;
+        for _ in 0..64 {
+            rng.rays += 1;
+            match self.intersect(&ray) {
+                None => {
+                    return if src.distant.is_some() {
+                        t
+                    } else {
+                        Color::ZERO
+                    }
+                }
+                Some(hit) => {
+                    if src.obj == Some(hit.obj) {
+                        return if hit.back && hit.flat { Color::ZERO } else { t };
+                    }
+                    let tr = self.shadow_transmission(&hit, dir);
+                    if tr.max_element() <= 0.0 {
+                        return Color::ZERO;
+                    }
+                    t *= tr;
+                    ray.org = hit.point;
+                    ray.antimatter = hit.antimatter;
+                }
+            }
+        }
+        Color::ZERO
+    }
+
+    /// What a shadow ray keeps when it crosses a (non-target) hit.
+    fn shadow_transmission(&self, hit: &Hit, dir: DVec3) -> Color {
+        let Some(m) = hit.material else {
+            return Color::ONE;
+        };
+        match self.scene.material(m) {
+            Material::Normal(n) => n.shadow_transmission(hit, dir),
+            Material::Glass(g) => g.shadow_transmission(hit, dir),
+            Material::Antimatter(_) => Color::ONE,
+            Material::Mirror(mi) if mi.alternate_void => Color::ONE,
+            Material::Mirror(mi) => match mi.alternate {
+                Some(alt) => self.shadow_transmission(
+                    &Hit {
+                        material: Some(alt),
+                        ..*hit
+                    },
+                    dir,
+                ),
+                None => Color::ZERO,
+            },
+            _ => Color::ZERO,
+        }
+    }
+}
