@@ -73,7 +73,7 @@ fn run_inner(args: &[String], mut log: Log) -> std::result::Result<(), (Log, any
             println!("{SOFTWARE} (Radiance 6.0a rpict compatible)");
             return Ok(());
         }
-        Command::Render(o) => o,
+        Command::Render(o) => *o,
     };
     log.warnings = opts.warnings;
     if let Some(ef) = &opts.error_file {
@@ -323,8 +323,8 @@ pub fn render_view(
     } else {
         None
     };
+    let done = std::sync::atomic::AtomicBool::new(false);
     let pixels = std::thread::scope(|s| {
-        let done = std::sync::atomic::AtomicBool::new(false);
         let reporter = s.spawn(|| {
             let mut last = Instant::now();
             while !done.load(Ordering::Relaxed) {

@@ -209,7 +209,7 @@ fn render_cell(
     let gw = xb - xa + 1;
     let gh = yb - ya + 1;
     let mut grid: Vec<Option<Sample>> = vec![None; gw * gh];
-    let mut get = |x: usize, y: usize, grid: &mut Vec<Option<Sample>>, rays: &mut u64| -> Sample {
+    let get = |x: usize, y: usize, grid: &mut Vec<Option<Sample>>, rays: &mut u64| -> Sample {
         let k = (y - ya) * gw + (x - xa);
         if let Some(s) = grid[k] {
             return s;

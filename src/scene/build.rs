@@ -57,7 +57,6 @@ pub struct MaterialDef {
 }
 
 /// A scene ready for rendering.
-#[derive(Debug)]
 pub struct Scene {
     /// Scene origin: every coordinate in geometry is relative to it.
     pub origin: DVec3,
@@ -99,7 +98,7 @@ impl MaterialLookup for Modifiers {
 impl Scene {
     /// Build a scene from primitives in definition order.
     pub fn build(prims: &[Primitive]) -> Result<Scene, SceneError> {
-        let err = |p: &Primitive, msg: String| SceneError::at(&p.loc, msg);
+        let err = |p: &Primitive, msg: String| SceneError::syntax(p.loc.clone(), msg);
         // Pass 1: bounds of finite geometry, to choose the origin. Surfaces are parsed once
         // with a zero origin for bounds, then re-parsed relative to the chosen origin.
         let mut lo = DVec3::splat(f64::INFINITY);

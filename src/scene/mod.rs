@@ -1,3 +1,14 @@
-//! scene (under construction)
+//! The scene language: lexer → primitives (with inline commands, `xform`, `genbox`) → [`Scene`].
 pub mod primitive;
 pub use primitive::{Location, Primitive};
+pub mod error;
+pub mod genbox;
+pub mod lexer;
+pub mod reader;
+pub mod transform;
+pub mod xform;
+pub use error::SceneError;
+pub use reader::{parse_scene_text, read_scene_files, ReadOptions};
+pub use transform::{parse_transform, Transform};
+pub mod build;
+pub use build::Scene;

@@ -14,7 +14,10 @@ pub struct Location {
 
 impl Location {
     pub fn new(file: impl Into<Arc<str>>, line: u32) -> Self {
-        Location { file: file.into(), line }
+        Location {
+            file: file.into(),
+            line,
+        }
     }
 }
 

@@ -1,0 +1,403 @@
+//! Bounding volume hierarchy over the scene's finite surfaces (an obvhs `CwBvh`).
+//!
+//! The BVH works in `f32`, the surfaces in `f64`. To make the `f32` box tests conservative:
+//! - every box is padded by `pad = 4e-6 · S + 4·FTINY` (S = largest coordinate magnitude of
+//!   the scene bounds) and rounded outward to `f32`;
+//! - the ray origin handed to obvhs is first moved (in `f64`) to just before the entry point
+//!   of the padded scene box, so its magnitude is at most about S whatever the caller's
+//!   origin, and obvhs's internal `tmin = 1e-4` can never cull a box holding a hit at
+//!   `t > FTINY`;
+//! - pruning distances are rounded up and slackened, and the true closest hit is kept in
+//!   `f64`.
+//!
+//! Tie rule of [`Bvh::closest`] (independent of the order candidates are visited in, as long
+//! as `prefer` is consistent, i.e. a strict weak order): let `tmin` be the smallest hit
+//! distance. Every hit with `t <= tmin + FTINY` is eligible, and the winner among the eligible
+//! hits is the one that no other beats, where `a` beats `b` when `prefer(a, b) && !prefer(b,
+//! a)`, and when neither (or both) prefer, the smaller `(t, index)` wins. At most
+//! [`WINDOW`] eligible hits are kept; beyond that (more than 16 surfaces within `FTINY`) the
+//! farthest ones are dropped.
+
+use glam::{DVec3, Vec3A};
+use obvhs::aabb::Aabb;
+use obvhs::cwbvh::builder::build_cwbvh;
+use obvhs::cwbvh::CwBvh;
+use obvhs::ray::{Ray, RayHit};
+use obvhs::{Boundable, BvhBuildParams};
+
+use crate::FTINY;
+
+/// Relative box padding (times the largest coordinate magnitude).
+const PAD_REL: f64 = 4e-6;
+/// Absolute box padding (covers the polygon edge tolerance).
+const PAD_ABS: f64 = 4.0 * FTINY;
+/// How far before the scene-box entry the `f32` ray starts (obvhs culls boxes exiting before
+/// `t = 1e-4`).
+const MARGIN: f64 = 1e-3;
+/// Largest magnitude allowed for a coordinate (keeps `f32` conversions finite).
+const COORD_LIMIT: f64 = 1e30;
+/// Capacity of the coincident-hit window of [`Bvh::closest`].
+pub const WINDOW: usize = 16;
+
+/// A box as an obvhs primitive.
+struct BoxPrim(Aabb);
+
+impl Boundable for BoxPrim {
+    fn aabb(&self) -> Aabb {
+        self.0
+    }
+}
+
+/// Round an `f64` to the nearest `f32` that is `>= x`.
+fn f32_up(x: f64) -> f32 {
+    let f = x as f32;
+    if (f as f64) < x {
+        f.next_up()
+    } else {
+        f
+    }
+}
+
+/// Round an `f64` to the nearest `f32` that is `<= x`.
+fn f32_down(x: f64) -> f32 {
+    let f = x as f32;
+    if (f as f64) > x {
+        f.next_down()
+    } else {
+        f
+    }
+}
+
+/// Bounding volume hierarchy over the scene's finite surfaces (obvhs CwBvh, f32 boxes rounded
+/// OUTWARD and padded so that f32 rounding of the ray origin can never make a box test miss a
+/// true f64 hit).
+pub struct Bvh {
+    /// The wide BVH (None when there is no usable box).
+    cw: Option<CwBvh>,
+    /// Caller index of each box given to obvhs (boxes with non-finite bounds are left out).
+    ids: Vec<u32>,
+    /// Padded scene bounds (f64).
+    lo: DVec3,
+    hi: DVec3,
+    /// Padding applied to every box.
+    pad: f64,
+    /// Number of input boxes.
+    count: usize,
+}
+
+/// Hits within `FTINY` of the closest one (fixed capacity, no allocation).
+struct Window {
+    buf: [(usize, f64); WINDOW],
+    len: usize,
+    tmin: f64,
+}
+
+impl Window {
+    fn new() -> Self {
+        Window {
+            buf: [(0, 0.0); WINDOW],
+            len: 0,
+            tmin: f64::INFINITY,
+        }
+    }
+
+    /// Add a hit; returns true when it lowered the closest distance.
+    fn push(&mut self, i: usize, t: f64) -> bool {
+        if t > self.tmin + FTINY {
+            return false;
+        }
+        let lowered = t < self.tmin;
+        if lowered {
+            self.tmin = t;
+            let lim = t + FTINY;
+            let mut k = 0;
+            for j in 0..self.len {
+                if self.buf[j].1 <= lim {
+                    self.buf[k] = self.buf[j];
+                    k += 1;
+                }
+            }
+            self.len = k;
+        }
+        if self.len < WINDOW {
+            self.buf[self.len] = (i, t);
+            self.len += 1;
+        } else {
+            // Overflow: replace the farthest entry if the new one is nearer.
+            let mut far = 0;
+            for j in 1..WINDOW {
+                if self.buf[j].1 > self.buf[far].1 {
+                    far = j;
+                }
+            }
+            if t < self.buf[far].1 {
+                self.buf[far] = (i, t);
+            }
+        }
+        lowered
+    }
+
+    /// The winner under the documented rule.
+    fn select(&self, prefer: &impl Fn(usize, usize) -> bool) -> Option<(usize, f64)> {
+        let mut it = self.buf[..self.len].iter().copied();
+        let mut w = it.next()?;
+        for c in it {
+            if beats(c, w, prefer) {
+                w = c;
+            }
+        }
+        Some(w)
+    }
+}
+
+/// True when hit `c` beats hit `w` (see the module documentation).
+fn beats(c: (usize, f64), w: (usize, f64), prefer: &impl Fn(usize, usize) -> bool) -> bool {
+    let pc = prefer(c.0, w.0);
+    let pw = prefer(w.0, c.0);
+    if pc != pw {
+        return pc;
+    }
+    (c.1, c.0) < (w.1, w.0)
+}
+
+/// Reference implementation of [`Bvh::closest`]'s selection over an explicit list of hits
+/// `(index, t)` (hits outside `(FTINY, tmax)` are ignored). Useful for brute-force checks.
+pub fn select_closest(
+    hits: impl IntoIterator<Item = (usize, f64)>,
+    tmax: f64,
+    prefer: impl Fn(usize, usize) -> bool,
+) -> Option<(usize, f64)> {
+    let mut win = Window::new();
+    for (i, t) in hits {
+        if t > FTINY && t < tmax {
+            win.push(i, t);
+        }
+    }
+    win.select(&prefer)
+}
+
+impl Bvh {
+    /// Build from f64 bounds (relative frame). Empty input is fine (every query misses).
+    /// Boxes with non-finite coordinates are never candidates; `min > max` is reordered.
+    pub fn build(bounds: &[(DVec3, DVec3)]) -> Bvh {
+        let mut s: f64 = 0.0;
+        let mut boxes: Vec<(DVec3, DVec3)> = Vec::with_capacity(bounds.len());
+        let mut ids = Vec::with_capacity(bounds.len());
+        for (i, &(a, b)) in bounds.iter().enumerate() {
+            if !(a.is_finite() && b.is_finite()) || i > u32::MAX as usize {
+                continue;
+            }
+            let lo = a.min(b).clamp(DVec3::splat(-COORD_LIMIT), DVec3::splat(COORD_LIMIT));
+            let hi = a.max(b).clamp(DVec3::splat(-COORD_LIMIT), DVec3::splat(COORD_LIMIT));
+            s = s.max(lo.abs().max_element()).max(hi.abs().max_element());
+            boxes.push((lo, hi));
+            ids.push(i as u32);
+        }
+        let pad = PAD_REL * s + PAD_ABS;
+        let mut tlo = DVec3::splat(f64::INFINITY);
+        let mut thi = DVec3::splat(f64::NEG_INFINITY);
+        let prims: Vec<BoxPrim> = boxes
+            .iter()
+            .map(|&(lo, hi)| {
+                let lo = lo - DVec3::splat(pad);
+                let hi = hi + DVec3::splat(pad);
+                tlo = tlo.min(lo);
+                thi = thi.max(hi);
+                BoxPrim(Aabb::new(
+                    Vec3A::new(f32_down(lo.x), f32_down(lo.y), f32_down(lo.z)),
+                    Vec3A::new(f32_up(hi.x), f32_up(hi.y), f32_up(hi.z)),
+                ))
+            })
+            .collect();
+        let cw = if prims.is_empty() {
+            None
+        } else {
+            let mut dt = std::time::Duration::default();
+            Some(build_cwbvh(&prims, BvhBuildParams::medium_build(), &mut dt))
+        };
+        Bvh {
+            cw,
+            ids,
+            lo: tlo,
+            hi: thi,
+            pad,
+            count: bounds.len(),
+        }
+    }
+
+    /// Number of boxes the BVH was built from.
+    pub fn len(&self) -> usize {
+        self.count
+    }
+
+    /// True when built from no boxes.
+    pub fn is_empty(&self) -> bool {
+        self.count == 0
+    }
+
+    /// The padding added to every box.
+    pub fn pad(&self) -> f64 {
+        self.pad
+    }
+
+    /// The f32 ray for a query, and the shift `s` such that f32 distance = f64 distance − s.
+    fn setup(&self, org: DVec3, dir: DVec3, tmax: f64) -> Option<(Ray, f64)> {
+        self.cw.as_ref()?;
+        if !(org.is_finite() && dir.is_finite()) || dir == DVec3::ZERO || !(tmax > FTINY) {
+            return None;
+        }
+        let mut t_in: f64 = 0.0;
+        let mut t_out = tmax;
+        for i in 0..3 {
+            if dir[i] == 0.0 {
+                if org[i] < self.lo[i] || org[i] > self.hi[i] {
+                    return None;
+                }
+            } else {
+                let inv = 1.0 / dir[i];
+                let ta = (self.lo[i] - org[i]) * inv;
+                let tb = (self.hi[i] - org[i]) * inv;
+                let (ta, tb) = if ta <= tb { (ta, tb) } else { (tb, ta) };
+                t_in = t_in.max(ta);
+                t_out = t_out.min(tb);
+            }
+        }
+        if !(t_in <= t_out) {
+            return None;
+        }
+        let shift = t_in - MARGIN;
+        let o = org + dir * shift;
+        let tmax32 = f32_up((t_out - shift) * (1.0 + 1e-6) + 2.0 * self.pad);
+        let ray = Ray::new(
+            Vec3A::new(o.x as f32, o.y as f32, o.z as f32),
+            Vec3A::new(dir.x as f32, dir.y as f32, dir.z as f32),
+            0.0,
+            tmax32,
+        );
+        Some((ray, shift))
+    }
+
+    /// Closest hit: calls `intersect(i)` -> Option<f64 t> for candidate surfaces i in f64 and
+    /// keeps the closest t in (FTINY, tmax).
+    ///
+    /// When a candidate's t is within FTINY of the closest, `prefer(new, old)` decides
+    /// (true = take new); the caller implements Radiance's coincident-surface rules there. See
+    /// the module documentation for the exact, visiting-order-independent rule (and
+    /// [`select_closest`] for a reference implementation). Returns (index, t). The f32 tmax is
+    /// used for pruning conservatively (rounded up) and the true best is kept in f64.
+    pub fn closest(
+        &self,
+        org: DVec3,
+        dir: DVec3,
+        tmax: f64,
+        mut intersect: impl FnMut(usize) -> Option<f64>,
+        prefer: impl Fn(usize, usize) -> bool,
+    ) -> Option<(usize, f64)> {
+        let cw = self.cw.as_ref()?;
+        let (ray, shift) = self.setup(org, dir, tmax)?;
+        let mut win = Window::new();
+        let mut hit = RayHit::none();
+        let pad2 = 2.0 * self.pad;
+        cw.ray_traverse(ray, &mut hit, |_r, id| {
+            let Some(&slot) = cw.primitive_indices.get(id) else {
+                return f32::INFINITY;
+            };
+            let Some(&i) = self.ids.get(slot as usize) else {
+                return f32::INFINITY;
+            };
+            let i = i as usize;
+            match intersect(i) {
+                Some(t) if t > FTINY && t < tmax => {
+                    if win.push(i, t) {
+                        f32_up((t + FTINY - shift) * (1.0 + 1e-6) + pad2)
+                    } else {
+                        f32::INFINITY
+                    }
+                }
+                _ => f32::INFINITY,
+            }
+        });
+        win.select(&prefer)
+    }
+
+    /// Every candidate whose box the ray touches (for tests/diagnostics), in any order.
+    pub fn candidates(&self, org: DVec3, dir: DVec3, tmax: f64, mut f: impl FnMut(usize)) {
+        let Some(cw) = self.cw.as_ref() else {
+            return;
+        };
+        let Some((ray, _)) = self.setup(org, dir, tmax) else {
+            return;
+        };
+        cw.ray_traverse_anyhit(ray, |_r, id| {
+            if let Some(&slot) = cw.primitive_indices.get(id) {
+                if let Some(&i) = self.ids.get(slot as usize) {
+                    f(i as usize);
+                }
+            }
+        });
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn rounding_helpers() {
+        let x = 0.1f64;
+        assert!(f32_up(x) as f64 >= x && f32_down(x) as f64 <= x);
+        assert_eq!(f32_up(1.0), 1.0);
+        assert_eq!(f32_down(1.0), 1.0);
+        assert!(f32_up(-0.1) as f64 >= -0.1 && f32_down(-0.1) as f64 <= -0.1);
+    }
+
+    #[test]
+    fn empty_and_bad_input() {
+        let b = Bvh::build(&[]);
+        assert!(b.is_empty());
+        assert!(b
+            .closest(DVec3::ZERO, DVec3::X, 1e10, |_| Some(1.0), |_, _| false)
+            .is_none());
+        let b = Bvh::build(&[(DVec3::splat(f64::NAN), DVec3::ONE)]);
+        assert_eq!(b.len(), 1);
+        let mut n = 0;
+        b.candidates(DVec3::ZERO, DVec3::X, 1e10, |_| n += 1);
+        assert_eq!(n, 0);
+    }
+
+    #[test]
+    fn window_rules() {
+        // Closest wins when nothing is preferred.
+        assert_eq!(
+            select_closest([(0, 2.0), (1, 1.0)], 10.0, |_, _| false),
+            Some((1, 1.0))
+        );
+        // Within FTINY, prefer decides.
+        let t = 1.0 + 0.5 * FTINY;
+        assert_eq!(
+            select_closest([(0, 1.0), (1, t)], 10.0, |a, _| a == 1),
+            Some((1, t))
+        );
+        assert_eq!(
+            select_closest([(1, t), (0, 1.0)], 10.0, |a, _| a == 1),
+            Some((1, t))
+        );
+        // Outside the window the preferred one loses.
+        assert_eq!(
+            select_closest([(1, 1.0 + 3.0 * FTINY), (0, 1.0)], 10.0, |a, _| a == 1),
+            Some((0, 1.0))
+        );
+        // Eviction when a nearer hit arrives later.
+        assert_eq!(
+            select_closest(
+                [(1, 1.0 + 0.9 * FTINY), (2, 1.0 + 0.5 * FTINY), (3, 1.0 - 0.2 * FTINY)],
+                10.0,
+                |a, b| a < b
+            ),
+            Some((2, 1.0 + 0.5 * FTINY))
+        );
+        // Range limits.
+        assert_eq!(select_closest([(0, 0.5 * FTINY)], 10.0, |_, _| false), None);
+        assert_eq!(select_closest([(0, 10.0)], 10.0, |_, _| false), None);
+    }
+}

@@ -1,0 +1,321 @@
+//! Planar polygons (`x1 y1 z1 x2 y2 z2 ...`, at least 3 vertices, CCW seen from the front).
+//!
+//! The normal is the sum of the fan cross products from vertex 0 (area-weighted, so concave
+//! polygons and seam-joined holes work), a duplicated closing vertex is dropped and the plane
+//! offset is the average over all vertices. The inside test is an even–odd crossing test in
+//! the 2-D projection that drops the dominant normal axis; points within `FTINY` of an edge
+//! count as inside, so adjacent polygons leave no cracks.
+
+use glam::DVec3;
+
+use crate::scene::Primitive;
+use crate::FTINY;
+
+/// Relative tolerance for the non-planar-vertex warning (Radiance's `VERTEPS`).
+const VERTEPS: f64 = 1e-5;
+
+/// Per-edge data of the 2-D projection.
+#[derive(Clone, Copy, Debug)]
+struct Edge2 {
+    /// Start vertex.
+    a: [f64; 2],
+    /// End minus start.
+    e: [f64; 2],
+    /// Squared length.
+    len2: f64,
+    /// Length.
+    len: f64,
+}
+
+/// A planar polygon, stored in the relative frame.
+#[derive(Clone, Debug)]
+pub struct Polygon {
+    /// Vertices (relative frame), without a duplicated closing vertex.
+    pub verts: Vec<DVec3>,
+    /// Unit normal, or the zero vector when the area is zero (then it is never hit).
+    pub normal: DVec3,
+    /// Plane offset: the plane is `normal · x = offset` (average over the vertices).
+    pub offset: f64,
+    /// Area (of the even–odd region, holes excluded).
+    pub area: f64,
+    /// Area-weighted centroid (vertex average when the area is zero).
+    pub centroid: DVec3,
+    /// Index of the first kept coordinate of the 2-D projection.
+    iu: usize,
+    /// Index of the second kept coordinate of the 2-D projection.
+    iv: usize,
+    /// Edges in the projection.
+    edges: Vec<Edge2>,
+    /// 2-D bounding box of the projection, grown by `FTINY`.
+    lo2: [f64; 2],
+    hi2: [f64; 2],
+    /// 3-D bounds.
+    lo: DVec3,
+    hi: DVec3,
+}
+
+impl Polygon {
+    /// Build from a `polygon` primitive. Fewer than 9 or a non-multiple of 3 real arguments
+    /// is an error. Returns a warning for zero area or non-planar vertices.
+    pub fn from_primitive(
+        p: &Primitive,
+        origin: DVec3,
+    ) -> Result<(Polygon, Option<String>), String> {
+        let r = &p.rargs;
+        if r.len() < 9 || r.len() % 3 != 0 {
+            return Err(format!("bad # arguments for polygon \"{}\"", p.name));
+        }
+        let verts: Vec<DVec3> = r
+            .chunks_exact(3)
+            .map(|c| DVec3::new(c[0], c[1], c[2]) - origin)
+            .collect();
+        let (poly, warn) = Polygon::new(verts)?;
+        Ok((poly, warn.map(|w| format!("{w} for polygon \"{}\"", p.name))))
+    }
+
+    /// Build from vertices already in the relative frame. Returns a warning text ("zero
+    /// area", "non-planar vertex") when appropriate.
+    pub fn new(mut verts: Vec<DVec3>) -> Result<(Polygon, Option<String>), String> {
+        if verts.len() < 3 {
+            return Err("fewer than 3 vertices".to_string());
+        }
+        if verts.iter().any(|v| !v.is_finite()) {
+            return Err("non-finite vertex".to_string());
+        }
+        if verts.len() > 3 && verts[0].distance(verts[verts.len() - 1]) <= FTINY {
+            verts.pop();
+        }
+        let n = verts.len();
+        let v0 = verts[0];
+        let mut sum = DVec3::ZERO;
+        for i in 1..n - 1 {
+            sum += (verts[i] - v0).cross(verts[i + 1] - v0);
+        }
+        let mut lo = DVec3::splat(f64::INFINITY);
+        let mut hi = DVec3::splat(f64::NEG_INFINITY);
+        let mut size: f64 = 0.0;
+        for v in &verts {
+            lo = lo.min(*v);
+            hi = hi.max(*v);
+            size = size.max(v.distance(v0));
+        }
+        let slen = sum.length();
+        let mut warn = None;
+        let (normal, area) = if slen > 0.0 && slen > 1e-12 * size * size {
+            (sum / slen, 0.5 * slen)
+        } else {
+            warn = Some("zero area".to_string());
+            (DVec3::ZERO, 0.0)
+        };
+        let vavg = verts.iter().copied().sum::<DVec3>() / n as f64;
+        let offset = verts.iter().map(|v| normal.dot(*v)).sum::<f64>() / n as f64;
+        // Area-weighted centroid: signed weights along the normal so holes subtract.
+        let centroid = if area > 0.0 {
+            let mut acc = DVec3::ZERO;
+            let mut wsum = 0.0;
+            for i in 1..n - 1 {
+                let c = (verts[i] - v0).cross(verts[i + 1] - v0);
+                let w = c.dot(normal);
+                acc += (v0 + verts[i] + verts[i + 1]) * (w / 3.0);
+                wsum += w;
+            }
+            if wsum != 0.0 {
+                acc / wsum
+            } else {
+                vavg
+            }
+        } else {
+            vavg
+        };
+        if warn.is_none()
+            && verts
+                .iter()
+                .any(|v| (normal.dot(*v) - offset).abs() > VERTEPS * size)
+        {
+            warn = Some("non-planar vertex".to_string());
+        }
+        // Projection: drop the dominant normal axis.
+        let an = normal.abs();
+        let drop = if an.x >= an.y && an.x >= an.z {
+            0
+        } else if an.y >= an.z {
+            1
+        } else {
+            2
+        };
+        let (iu, iv) = match drop {
+            0 => (1, 2),
+            1 => (2, 0),
+            _ => (0, 1),
+        };
+        let p2 = |v: DVec3| [v[iu], v[iv]];
+        let mut edges = Vec::with_capacity(n);
+        let mut lo2 = [f64::INFINITY; 2];
+        let mut hi2 = [f64::NEG_INFINITY; 2];
+        for i in 0..n {
+            let a = p2(verts[i]);
+            let b = p2(verts[(i + 1) % n]);
+            let e = [b[0] - a[0], b[1] - a[1]];
+            let len2 = e[0] * e[0] + e[1] * e[1];
+            edges.push(Edge2 {
+                a,
+                e,
+                len2,
+                len: len2.sqrt(),
+            });
+            for k in 0..2 {
+                lo2[k] = lo2[k].min(a[k]);
+                hi2[k] = hi2[k].max(a[k]);
+            }
+        }
+        for k in 0..2 {
+            lo2[k] -= FTINY;
+            hi2[k] += FTINY;
+        }
+        Ok((
+            Polygon {
+                verts,
+                normal,
+                offset,
+                area,
+                centroid,
+                iu,
+                iv,
+                edges,
+                lo2,
+                hi2,
+                lo,
+                hi,
+            },
+            warn,
+        ))
+    }
+
+    /// Nearest intersection distance in `(FTINY, tmax)`; `|n·d| <= FTINY` is a miss (and so is
+    /// every ray for a zero-area polygon).
+    #[inline]
+    pub fn intersect(&self, org: DVec3, dir: DVec3, tmax: f64) -> Option<f64> {
+        let denom = self.normal.dot(dir);
+        if denom.abs() <= FTINY {
+            return None;
+        }
+        let t = (self.offset - self.normal.dot(org)) / denom;
+        if !(t > FTINY && t < tmax) {
+            return None;
+        }
+        let p = org + dir * t;
+        if self.contains_projected([p[self.iu], p[self.iv]]) {
+            Some(t)
+        } else {
+            None
+        }
+    }
+
+    /// Inside test for a point assumed to lie in the plane (even–odd, edges inclusive).
+    pub fn contains(&self, p: DVec3) -> bool {
+        self.area > 0.0 && self.contains_projected([p[self.iu], p[self.iv]])
+    }
+
+    /// Even–odd crossing test in the projection; points within `FTINY` of an edge are inside.
+    #[inline]
+    fn contains_projected(&self, p: [f64; 2]) -> bool {
+        if p[0] < self.lo2[0] || p[0] > self.hi2[0] || p[1] < self.lo2[1] || p[1] > self.hi2[1] {
+            return false;
+        }
+        let mut inside = false;
+        for ed in &self.edges {
+            let rx = p[0] - ed.a[0];
+            let ry = p[1] - ed.a[1];
+            // On-edge test: projection parameter within the segment, distance <= FTINY.
+            let s = rx * ed.e[0] + ry * ed.e[1];
+            let cross = ed.e[0] * ry - ed.e[1] * rx;
+            if ed.len2 > 0.0 {
+                if s >= -FTINY * ed.len
+                    && s <= ed.len2 + FTINY * ed.len
+                    && cross.abs() <= FTINY * ed.len
+                {
+                    return true;
+                }
+            } else if rx * rx + ry * ry <= FTINY * FTINY {
+                return true;
+            }
+            // Crossing test with a half-open rule on y: edge spans p.y, crossing right of p.
+            let ay = ed.a[1];
+            let by = ed.a[1] + ed.e[1];
+            if (ay > p[1]) != (by > p[1]) {
+                // x of the edge at p.y is right of p.x ⇔ cross has the sign of e.y.
+                if (cross > 0.0) == (ed.e[1] > 0.0) {
+                    inside = !inside;
+                }
+            }
+        }
+        inside
+    }
+
+    /// Axis-aligned bounds of the vertices.
+    pub fn bounds(&self) -> (DVec3, DVec3) {
+        (self.lo, self.hi)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn sq() -> Polygon {
+        Polygon::new(vec![
+            DVec3::new(0.0, 0.0, 0.0),
+            DVec3::new(1.0, 0.0, 0.0),
+            DVec3::new(1.0, 1.0, 0.0),
+            DVec3::new(0.0, 1.0, 0.0),
+        ])
+        .unwrap()
+        .0
+    }
+
+    #[test]
+    fn square_basics() {
+        let p = sq();
+        assert_eq!(p.normal, DVec3::Z);
+        assert!((p.area - 1.0).abs() < 1e-15);
+        assert!((p.centroid - DVec3::new(0.5, 0.5, 0.0)).length() < 1e-15);
+        assert!(p.contains(DVec3::new(0.5, 0.5, 0.0)));
+        assert!(p.contains(DVec3::new(1.0, 0.5, 0.0)));
+        assert!(p.contains(DVec3::new(1.0 + 0.5e-6, 0.5, 0.0)));
+        assert!(!p.contains(DVec3::new(1.0 + 2e-6, 0.5, 0.0)));
+        assert!(p.contains(DVec3::new(1.0, 1.0, 0.0)));
+        assert!(!p.contains(DVec3::new(-0.5, 0.5, 0.0)));
+    }
+
+    #[test]
+    fn closing_vertex_dropped() {
+        let (p, w) = Polygon::new(vec![
+            DVec3::new(0.0, 0.0, 0.0),
+            DVec3::new(1.0, 0.0, 0.0),
+            DVec3::new(1.0, 1.0, 0.0),
+            DVec3::new(0.0, 0.0, 0.0),
+        ])
+        .unwrap();
+        assert_eq!(p.verts.len(), 3);
+        assert!(w.is_none());
+        assert!((p.area - 0.5).abs() < 1e-15);
+    }
+
+    #[test]
+    fn crossing_rule_through_vertex_row() {
+        // A ray level with a vertex (y = 1 at the reflex vertex of a chevron).
+        let (p, _) = Polygon::new(vec![
+            DVec3::new(0.0, 0.0, 0.0),
+            DVec3::new(4.0, 0.0, 0.0),
+            DVec3::new(4.0, 2.0, 0.0),
+            DVec3::new(2.0, 1.0, 0.0),
+            DVec3::new(0.0, 2.0, 0.0),
+        ])
+        .unwrap();
+        assert!(p.contains(DVec3::new(1.0, 1.0, 0.0)));
+        assert!(p.contains(DVec3::new(3.0, 1.0, 0.0)));
+        assert!(!p.contains(DVec3::new(2.0, 1.5, 0.0)));
+        assert!(!p.contains(DVec3::new(-1.0, 1.0, 0.0)));
+        assert!(!p.contains(DVec3::new(5.0, 1.0, 0.0)));
+    }
+}

@@ -1,0 +1,669 @@
+//! Radiance RGBE pictures (`.hdr`, `.pic`): the header, the resolution line and the pixels.
+//!
+//! # Writing
+//! The header is `#?RADIANCE`, the command lines, `SOFTWARE=`, `FRAME=`, `TILED=`, `VIEW=`,
+//! `PIXASPECT=`, `PRIMARIES=` (Radiance's standard primaries when unset; omitted for XYZE), the
+//! other variables, `EXPOSURE=` (only when it is not 1), `FORMAT=`, a blank line, then the
+//! resolution line `-Y       32 +X       32` (top scanline first, left to right).
+//!
+//! Scanlines use the new run-length encoding: a `02 02 hi lo` marker, then the R, G, B and E
+//! bytes of the line as four separate streams of packets. A packet is either a run (count byte
+//! `128 + n`, then the byte to repeat, `4 <= n <= 127`; 2 or 3 equal bytes standing alone before a
+//! long run or the end of the line are also written as a run) or a literal (count byte `n`,
+//! `1 <= n <= 128`, then `n` bytes). Lines narrower than 17 or wider than 32767 pixels are flat
+//! (4 bytes per pixel). The output is byte-identical to Radiance 6.0a's.
+//!
+//! # Reading
+//! Any header line order; `EXPOSURE=` and `PIXASPECT=` multiply; CRLF line ends; all 8
+//! resolution-line orientations (the image is returned top row first); new RLE, old RLE
+//! (`1 1 1 n` repeat pixels with growing shifts) and flat scanlines, mixed freely line by line;
+//! RGBE and XYZE (values kept, format recorded). Truncated or corrupt data gives an error, never
+//! a panic.
+
+use std::io::{self, BufRead, Read, Write};
+use std::path::Path;
+
+use super::{Header, Image, ImageError, FORMAT_RGBE, FORMAT_XYZE, STD_PRIMARIES};
+
+/// Scanlines shorter than this are written flat (Radiance's `MINELEN`, 17 since 2024).
+const MIN_RLE_WIDTH: usize = 17;
+/// Scanlines longer than this are written flat (the length must fit in 15 bits).
+const MAX_RLE_WIDTH: usize = 0x7fff;
+/// Shortest run worth a run packet.
+const MIN_RUN: usize = 4;
+/// Longest run packet (count byte 255).
+const MAX_RUN: usize = 127;
+/// Longest literal packet.
+const MAX_LITERAL: usize = 128;
+/// Header lines longer than this are refused (Radiance itself splits long lines at 2048 bytes).
+const MAX_HEADER_LINE: u64 = 1 << 20;
+/// Largest accepted picture side (Radiance stores sizes in an `int`).
+const MAX_SIDE: u64 = i32::MAX as u64;
+
+/// Encode a linear RGB colour as RGBE, exactly as Radiance's `setcolr`: `d = max(r,g,b)`; if
+/// `d <= 1e-32` the pixel is `0 0 0 0`; otherwise with `d = m * 2^e` (`0.5 <= m < 1`) each
+/// mantissa byte is `trunc(c * 256 / 2^e)` and the exponent byte `e + 128`.
+///
+/// Negative, NaN and infinite components count as 0. Colours too bright for RGBE (above
+/// about 1.7e38) saturate to `ff ff ff ff`.
+#[inline]
+pub fn float_to_rgbe(c: [f32; 3]) -> [u8; 4] {
+    #[inline]
+    fn clean(v: f32) -> f64 {
+        if v.is_finite() && v > 0.0 {
+            v as f64
+        } else {
+            0.0
+        }
+    }
+    let (r, g, b) = (clean(c[0]), clean(c[1]), clean(c[2]));
+    let d = r.max(g).max(b);
+    if d <= 1e-32 {
+        return [0; 4];
+    }
+    // d is a normal f64 here, so its binary exponent gives frexp's e directly.
+    let e = ((d.to_bits() >> 52) & 0x7ff) as i32 - 1022;
+    if e > 127 {
+        return [255; 4];
+    }
+    let scale = pow2(8 - e); // exactly 256 / 2^e
+    [(r * scale) as u8, (g * scale) as u8, (b * scale) as u8, (e + 128) as u8]
+}
+
+/// Decode an RGBE pixel as Radiance does: `(m + 0.5) * 2^(E - 136)` per component, black when
+/// the exponent byte `E` is 0.
+#[inline]
+pub fn rgbe_to_float(p: [u8; 4]) -> [f32; 3] {
+    if p[3] == 0 {
+        return [0.0; 3];
+    }
+    let f = pow2(p[3] as i32 - 136);
+    [
+        ((p[0] as f64 + 0.5) * f) as f32,
+        ((p[1] as f64 + 0.5) * f) as f32,
+        ((p[2] as f64 + 0.5) * f) as f32,
+    ]
+}
+
+/// `2^k` as an exact f64, for `-1022 <= k <= 1023`.
+#[inline]
+fn pow2(k: i32) -> f64 {
+    f64::from_bits(((k + 1023) as u64) << 52)
+}
+
+// ---------------------------------------------------------------------------------------------
+// Writing
+
+/// Format like C's `%e` (`2.000000e+00`).
+fn c_exp(x: f64) -> String {
+    let s = format!("{x:.6e}");
+    match s.split_once('e') {
+        Some((mant, exp)) => {
+            let (sign, digits) = match exp.strip_prefix('-') {
+                Some(d) => ('-', d),
+                None => ('+', exp),
+            };
+            format!("{mant}e{sign}{digits:0>2}")
+        }
+        None => s, // inf / NaN
+    }
+}
+
+/// Header text without line breaks: a `\n` or `\r` inside a value would end the line (or, as an
+/// empty line, the header) early, so they become spaces.
+fn one_line(s: &str) -> String {
+    s.replace(['\n', '\r'], " ")
+}
+
+/// The complete header and resolution line `write_hdr` writes for `img`.
+pub fn header_bytes(img: &Image) -> Vec<u8> {
+    let h = &img.header;
+    let xyze = h.is_xyze();
+    let mut s = String::with_capacity(512);
+    s.push_str("#?RADIANCE\n");
+    for c in &h.commands {
+        let c = one_line(c);
+        if !c.trim().is_empty() {
+            s.push_str(&c);
+            s.push('\n');
+        }
+    }
+    if let Some(sw) = &h.software {
+        s.push_str(&format!("SOFTWARE= {}\n", one_line(sw.trim())));
+    }
+    if let Some(f) = h.frame {
+        s.push_str(&format!("FRAME={f}\n"));
+    }
+    if let Some((x, y)) = h.tiled {
+        s.push_str(&format!("TILED= {x} {y}\n"));
+    }
+    if let Some(v) = &h.view {
+        s.push_str(&format!("VIEW= {}\n", one_line(v.trim())));
+    }
+    if let Some(pa) = h.pixaspect {
+        s.push_str(&format!("PIXASPECT={pa:.6}\n"));
+    }
+    if !xyze {
+        let p = h.primaries.as_deref().map(str::trim).unwrap_or(STD_PRIMARIES);
+        s.push_str(&format!("PRIMARIES= {}\n", one_line(p)));
+    }
+    for (name, value) in &h.extra {
+        let name = one_line(name.trim());
+        if !name.is_empty() {
+            s.push_str(&format!("{name}={}\n", one_line(value)));
+        }
+    }
+    if h.exposure.is_finite() && h.exposure > 0.0 && h.exposure != 1.0 {
+        s.push_str(&format!("EXPOSURE={}\n", c_exp(h.exposure)));
+    }
+    s.push_str(&format!("FORMAT={}\n\n", if xyze { FORMAT_XYZE } else { FORMAT_RGBE }));
+    s.push_str(&format!("-Y {:8} +X {:8}\n", img.height, img.width));
+    s.into_bytes()
+}
+
+/// Append one component stream of a new-RLE scanline to `out`.
+fn encode_stream(src: &[u8], out: &mut Vec<u8>) {
+    let n = src.len();
+    let mut j = 0; // first byte not yet written
+    while j < n {
+        // Find the next run of at least MIN_RUN equal bytes, walking group by group (a group is
+        // a maximal stretch of equal bytes, capped at MAX_RUN).
+        let mut beg = j;
+        let mut run = 0;
+        while beg < n {
+            let b = src[beg];
+            run = 1;
+            while run < MAX_RUN && beg + run < n && src[beg + run] == b {
+                run += 1;
+            }
+            if run >= MIN_RUN {
+                break;
+            }
+            beg += run;
+        }
+        // Bytes before the run: 2 or 3 equal bytes become a short run, the rest literals.
+        let lit = &src[j..beg];
+        if (2..MIN_RUN).contains(&lit.len()) && lit.iter().all(|&b| b == lit[0]) {
+            out.push(128 + lit.len() as u8);
+            out.push(lit[0]);
+        } else {
+            for chunk in lit.chunks(MAX_LITERAL) {
+                out.push(chunk.len() as u8);
+                out.extend_from_slice(chunk);
+            }
+        }
+        if beg < n {
+            out.push(128 + run as u8);
+            out.push(src[beg]);
+            j = beg + run;
+        } else {
+            j = n;
+        }
+    }
+}
+
+/// Append one encoded scanline to `out`. `comp` is scratch space.
+fn encode_scanline(line: &[[u8; 4]], out: &mut Vec<u8>, comp: &mut Vec<u8>) {
+    let w = line.len();
+    if !(MIN_RLE_WIDTH..=MAX_RLE_WIDTH).contains(&w) {
+        for p in line {
+            out.extend_from_slice(p);
+        }
+        return;
+    }
+    out.extend_from_slice(&[2, 2, (w >> 8) as u8, (w & 0xff) as u8]);
+    for i in 0..4 {
+        comp.clear();
+        comp.extend(line.iter().map(|p| p[i]));
+        encode_stream(comp, out);
+    }
+}
+
+/// Write `img` as a Radiance RGBE picture (header, resolution line, RLE scanlines), top row
+/// first. Fails with `InvalidInput` for a picture without pixels or with a pixel count that
+/// does not match its size. Writes in large blocks; `w` need not be buffered.
+pub fn write_hdr<W: Write>(w: &mut W, img: &Image) -> io::Result<()> {
+    super::check_writable(img).map_err(|msg| io::Error::new(io::ErrorKind::InvalidInput, msg))?;
+    let mut out = header_bytes(img);
+    let mut rgbe = vec![[0u8; 4]; img.width];
+    let mut comp = Vec::with_capacity(img.width);
+    for row in img.pixels.chunks_exact(img.width) {
+        for (dst, &c) in rgbe.iter_mut().zip(row) {
+            *dst = float_to_rgbe(c);
+        }
+        encode_scanline(&rgbe, &mut out, &mut comp);
+        if out.len() >= 1 << 16 {
+            w.write_all(&out)?;
+            out.clear();
+        }
+    }
+    w.write_all(&out)
+}
+
+/// Write `img` as an RGBE picture to `path`, atomically (see [`super::output::write_atomic`]).
+pub fn write_hdr_file(path: &Path, img: &Image) -> Result<(), ImageError> {
+    super::check_writable(img)
+        .map_err(|reason| ImageError::Invalid { path: Some(path.to_path_buf()), reason })?;
+    super::output::write_atomic(path, |f| write_hdr(f, img))
+        .map_err(|source| ImageError::Io { path: Some(path.to_path_buf()), source })
+}
+
+// ---------------------------------------------------------------------------------------------
+// Reading
+
+fn bad(reason: impl std::fmt::Display) -> ImageError {
+    ImageError::format(reason)
+}
+
+/// Read one line (including its `\n`) of at most `max` bytes. `Ok(None)` at end of input.
+fn read_line<R: BufRead>(r: &mut R, max: u64, what: &str) -> Result<Option<Vec<u8>>, ImageError> {
+    let mut line = Vec::new();
+    let n = (&mut *r).take(max).read_until(b'\n', &mut line)?;
+    if n == 0 {
+        return Ok(None);
+    }
+    if line.last() != Some(&b'\n') {
+        if n as u64 >= max {
+            return Err(bad(format!("{what} longer than {max} bytes")));
+        }
+        return Err(bad(format!("truncated {what} (no end of line)")));
+    }
+    Ok(Some(line))
+}
+
+/// Strip a trailing `\n` and `\r`.
+fn chomp(line: &[u8]) -> &[u8] {
+    let line = line.strip_suffix(b"\n").unwrap_or(line);
+    line.strip_suffix(b"\r").unwrap_or(line)
+}
+
+/// Split a `VAR=value` line: the name is a C identifier directly followed by `=`.
+fn split_var(line: &str) -> Option<(&str, &str)> {
+    let eq = line.find('=')?;
+    let name = &line[..eq];
+    let mut chars = name.chars();
+    let first = chars.next()?;
+    if !(first.is_ascii_alphabetic() || first == '_') || !chars.all(|c| c.is_ascii_alphanumeric() || c == '_') {
+        return None;
+    }
+    Some((name, &line[eq + 1..]))
+}
+
+/// The first whitespace-separated word of `s` as a number.
+fn first_number<T: std::str::FromStr>(s: &str) -> Option<T> {
+    s.split_whitespace().next()?.parse().ok()
+}
+
+/// Read the header up to and including the blank line that ends it.
+pub fn read_header<R: BufRead>(r: &mut R) -> Result<Header, ImageError> {
+    match r.fill_buf()?.first() {
+        None => return Err(bad("empty file, not a Radiance picture")),
+        Some(&b) if !(0x20..0x7f).contains(&b) => {
+            return Err(bad("not a Radiance picture (binary data where the header should be)"))
+        }
+        _ => {}
+    }
+    let mut h = Header { format: String::new(), ..Header::default() };
+    let mut first = true;
+    loop {
+        let Some(raw) = read_line(r, MAX_HEADER_LINE, "header line")? else {
+            return Err(bad("truncated header (no blank line before the pixel data)"));
+        };
+        let line = chomp(&raw);
+        if line.is_empty() {
+            break;
+        }
+        let was_first = std::mem::replace(&mut first, false);
+        if was_first && line.starts_with(b"#?") {
+            continue; // magic line: #?RADIANCE
+        }
+        let text = String::from_utf8_lossy(line);
+        let Some((name, value)) = split_var(&text) else {
+            h.commands.push(text.into_owned());
+            continue;
+        };
+        let keep = |h: &mut Header| h.extra.push((name.to_string(), value.to_string()));
+        match name {
+            "FORMAT" => {
+                let f = value.trim();
+                if f != FORMAT_RGBE && f != FORMAT_XYZE {
+                    return Err(bad(format!("unsupported pixel format '{f}' (expected {FORMAT_RGBE} or {FORMAT_XYZE})")));
+                }
+                h.format = f.to_string();
+            }
+            "EXPOSURE" => match first_number::<f64>(value) {
+                Some(e) => h.exposure *= e,
+                None => keep(&mut h),
+            },
+            "PIXASPECT" => match first_number::<f64>(value) {
+                Some(a) => h.pixaspect = Some(h.pixaspect.unwrap_or(1.0) * a),
+                None => keep(&mut h),
+            },
+            "SOFTWARE" => {
+                if let Some(old) = h.software.replace(value.trim().to_string()) {
+                    h.extra.push(("SOFTWARE".into(), format!(" {old}")));
+                }
+            }
+            "VIEW" => {
+                let v = value.trim();
+                h.view = Some(match h.view.take() {
+                    Some(old) if !v.is_empty() => format!("{old} {v}"),
+                    Some(old) => old,
+                    None => v.to_string(),
+                });
+            }
+            "FRAME" => match first_number::<u32>(value) {
+                Some(f) => h.frame = Some(f),
+                None => keep(&mut h),
+            },
+            "PRIMARIES" => {
+                let p = value.trim();
+                // The standard primaries are what `None` stands for (and what the writer writes).
+                h.primaries = (p != STD_PRIMARIES).then(|| p.to_string());
+            }
+            "TILED" => {
+                let mut it = value.split_whitespace().map(str::parse::<u32>);
+                match (it.next(), it.next()) {
+                    (Some(Ok(x)), Some(Ok(y))) => h.tiled = Some((x, y)),
+                    _ => keep(&mut h),
+                }
+            }
+            _ => keep(&mut h),
+        }
+    }
+    if h.format.is_empty() {
+        h.format = FORMAT_RGBE.to_string(); // Radiance accepts pictures without FORMAT=
+    }
+    Ok(h)
+}
+
+/// Placement of the file's scanlines in the picture (Radiance's resolution-line orientation).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+struct Orientation {
+    /// Scanlines are rows (`±Y H ±X W`); otherwise columns (`±X W ±Y H`).
+    y_major: bool,
+    /// `-X`: x decreases along the file (right to left).
+    x_decr: bool,
+    /// `-Y`: y decreases along the file (top to bottom; y counts up from the bottom).
+    y_decr: bool,
+}
+
+/// Parse a resolution line: `{+-}Y H {+-}X W` or `{+-}X W {+-}Y H`. Returns (width, height,
+/// orientation).
+fn parse_resolution(line: &[u8]) -> Result<(usize, usize, Orientation), ImageError> {
+    let text = String::from_utf8_lossy(chomp(line));
+    let fail = || bad(format!("bad resolution line '{}'", text.escape_debug()));
+    let tok: Vec<&str> = text.split_whitespace().collect();
+    if tok.len() != 4 {
+        return Err(fail());
+    }
+    let axis = |t: &str| -> Option<(bool, char)> {
+        let b = t.as_bytes();
+        if b.len() != 2 {
+            return None;
+        }
+        let decr = match b[0] {
+            b'-' => true,
+            b'+' => false,
+            _ => return None,
+        };
+        match b[1] {
+            b'X' | b'Y' => Some((decr, b[1] as char)),
+            _ => None,
+        }
+    };
+    let num = |t: &str| -> Option<usize> {
+        let n: u64 = t.parse().ok()?;
+        (1..=MAX_SIDE).contains(&n).then_some(n as usize)
+    };
+    let (d1, a1) = axis(tok[0]).ok_or_else(fail)?;
+    let (d2, a2) = axis(tok[2]).ok_or_else(fail)?;
+    let (n1, n2) = (num(tok[1]).ok_or_else(fail)?, num(tok[3]).ok_or_else(fail)?);
+    match (a1, a2) {
+        ('Y', 'X') => Ok((n2, n1, Orientation { y_major: true, y_decr: d1, x_decr: d2 })),
+        ('X', 'Y') => Ok((n1, n2, Orientation { y_major: false, x_decr: d1, y_decr: d2 })),
+        _ => Err(fail()),
+    }
+}
+
+fn eof_to_truncated(e: io::Error, line: usize, lines: usize) -> ImageError {
+    if e.kind() == io::ErrorKind::UnexpectedEof {
+        bad(format!("truncated picture: end of file in scanline {} of {lines}", line + 1))
+    } else {
+        ImageError::from(e)
+    }
+}
+
+/// Read one byte.
+#[inline]
+fn byte<R: BufRead>(r: &mut R) -> io::Result<u8> {
+    let b = match r.fill_buf()?.first() {
+        Some(&b) => b,
+        None => return Err(io::ErrorKind::UnexpectedEof.into()),
+    };
+    r.consume(1);
+    Ok(b)
+}
+
+/// Read one scanline of `out.len()` pixels in whatever encoding it uses. `Ok(Err(reason))` for
+/// corrupt data.
+fn read_scanline<R: BufRead>(r: &mut R, out: &mut [[u8; 4]], comp: &mut Vec<u8>) -> io::Result<Result<(), String>> {
+    let w = out.len();
+    let mut first = [0u8; 4];
+    r.read_exact(&mut first)?;
+    if (8..=MAX_RLE_WIDTH).contains(&w) && first[0] == 2 && first[1] == 2 && first[2] & 0x80 == 0 {
+        // New RLE.
+        let len = (first[2] as usize) << 8 | first[3] as usize;
+        if len != w {
+            return Ok(Err(format!("run-length scanline says {len} pixels, the picture is {w} wide")));
+        }
+        comp.resize(w, 0);
+        for i in 0..4 {
+            let mut j = 0;
+            while j < w {
+                let code = byte(r)? as usize;
+                if code > 128 {
+                    let n = code - 128;
+                    if j + n > w {
+                        return Ok(Err("run overruns the scanline".into()));
+                    }
+                    let v = byte(r)?;
+                    comp[j..j + n].fill(v);
+                    j += n;
+                } else {
+                    if code == 0 || j + code > w {
+                        return Ok(Err(if code == 0 { "zero-length packet".into() } else { "literal overruns the scanline".into() }));
+                    }
+                    r.read_exact(&mut comp[j..j + code])?;
+                    j += code;
+                }
+            }
+            for (p, &v) in out.iter_mut().zip(comp.iter()) {
+                p[i] = v;
+            }
+        }
+        return Ok(Ok(()));
+    }
+    // Flat pixels, possibly with old-style repeat pixels (1 1 1 n).
+    let mut shift = 0u32;
+    let mut j = 0;
+    let mut px = first;
+    loop {
+        if px[0] == 1 && px[1] == 1 && px[2] == 1 {
+            if j == 0 {
+                return Ok(Err("repeat code at the start of a scanline".into()));
+            }
+            if shift > 24 {
+                return Ok(Err("repeat count too large".into()));
+            }
+            let n = (px[3] as usize) << shift;
+            if j + n > w {
+                return Ok(Err("repeat count overruns the scanline".into()));
+            }
+            let prev = out[j - 1];
+            out[j..j + n].fill(prev);
+            j += n;
+            shift += 8;
+        } else {
+            out[j] = px;
+            j += 1;
+            shift = 0;
+        }
+        if j >= w {
+            return Ok(Ok(()));
+        }
+        r.read_exact(&mut px)?;
+    }
+}
+
+/// Read a Radiance picture (RGBE or XYZE). The pixels are returned top row first, left to
+/// right, whatever the file's orientation; values are as stored (not divided by the exposure).
+/// Reads exactly one picture, so several pictures concatenated in a stream can be read one
+/// after the other.
+pub fn read_hdr<R: BufRead>(r: &mut R) -> Result<Image, ImageError> {
+    let header = read_header(r)?;
+    let Some(resline) = read_line(r, 256, "resolution line")? else {
+        return Err(bad("truncated picture: no resolution line"));
+    };
+    let (width, height, o) = parse_resolution(&resline)?;
+    let total = width
+        .checked_mul(height)
+        .filter(|&t| t.checked_mul(16).is_some())
+        .ok_or_else(|| bad(format!("picture size {width}x{height} is too large")))?;
+    let (line_len, lines) = if o.y_major { (width, height) } else { (height, width) };
+
+    // Decode every scanline in file order; grow as data arrives so a bogus size in a short file
+    // fails on the data instead of on a huge allocation.
+    let mut raw: Vec<[u8; 4]> = Vec::with_capacity(total.min(1 << 22));
+    let mut comp = Vec::new();
+    for s in 0..lines {
+        let start = raw.len();
+        raw.resize(start + line_len, [0; 4]);
+        match read_scanline(r, &mut raw[start..], &mut comp) {
+            Ok(Ok(())) => {}
+            Ok(Err(reason)) => return Err(bad(format!("corrupt scanline {} of {lines}: {reason}", s + 1))),
+            Err(e) => return Err(eof_to_truncated(e, s, lines)),
+        }
+    }
+
+    let standard = Orientation { y_major: true, y_decr: true, x_decr: false };
+    let pixels: Vec<[f32; 3]> = if o == standard {
+        raw.iter().map(|&p| rgbe_to_float(p)).collect()
+    } else {
+        let mut pixels = vec![[0.0f32; 3]; total];
+        for (k, &p) in raw.iter().enumerate() {
+            let (s, i) = (k / line_len, k % line_len);
+            // (x, y) with y counted from the bottom, as Radiance's picture coordinates.
+            let (x, y) = if o.y_major {
+                let y = if o.y_decr { lines - 1 - s } else { s };
+                let x = if o.x_decr { line_len - 1 - i } else { i };
+                (x, y)
+            } else {
+                let x = if o.x_decr { lines - 1 - s } else { s };
+                let y = if o.y_decr { line_len - 1 - i } else { i };
+                (x, y)
+            };
+            pixels[(height - 1 - y) * width + x] = rgbe_to_float(p);
+        }
+        pixels
+    };
+    Ok(Image { width, height, pixels, header })
+}
+
+/// Read a Radiance picture from a file; errors name the file.
+pub fn read_hdr_file(path: &Path) -> Result<Image, ImageError> {
+    let f = std::fs::File::open(path).map_err(|source| ImageError::Io { path: Some(path.to_path_buf()), source })?;
+    let mut r = io::BufReader::with_capacity(1 << 16, f);
+    read_hdr(&mut r).map_err(|e| e.with_path(path))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn rgbe_known_values() {
+        let c = rgbe_to_float([0xff, 0xfe, 0xfe, 0x7e]);
+        assert!((c[0] - 0.24951).abs() < 1e-5 && (c[1] - 0.24854).abs() < 1e-5 && (c[2] - 0.24854).abs() < 1e-5, "{c:?}");
+        assert_eq!(float_to_rgbe(c), [0xff, 0xfe, 0xfe, 0x7e]);
+        assert_eq!(float_to_rgbe([1.0, 0.0, 0.0]), [128, 0, 0, 129]);
+        assert_eq!(float_to_rgbe([0.5, 0.5, 0.5]), [128, 128, 128, 128]);
+        assert_eq!(float_to_rgbe([0.0; 3]), [0; 4]);
+        assert_eq!(float_to_rgbe([1e-33, 0.0, 0.0]), [0; 4]);
+        assert_eq!(rgbe_to_float([0; 4]), [0.0; 3]);
+        assert_eq!(rgbe_to_float([12, 34, 56, 0]), [0.0; 3]);
+        // Truncation, not rounding: 0.999 * 256 = 255.7 -> 255 at exponent 0 (+128).
+        assert_eq!(float_to_rgbe([0.999, 0.0, 0.0]), [255, 0, 0, 128]);
+    }
+
+    #[test]
+    fn rgbe_cleans_bad_input() {
+        assert_eq!(float_to_rgbe([f32::NAN, f32::INFINITY, -1.0]), [0; 4]);
+        assert_eq!(float_to_rgbe([f32::NAN, 1.0, f32::NEG_INFINITY]), [0, 128, 0, 129]);
+        assert_eq!(float_to_rgbe([f32::MAX, 0.0, 0.0]), [255; 4]);
+        let big = rgbe_to_float(float_to_rgbe([1e38, 1e38, 1e38]));
+        assert!((big[0] / 1e38 - 1.0).abs() < 0.01);
+    }
+
+    #[test]
+    fn rgbe_round_trip_precision() {
+        let mut x = 1e-30f32;
+        while x < 1e37 {
+            let c = [x, x * 0.37, x * 0.001];
+            let d = rgbe_to_float(float_to_rgbe(c));
+            for i in 0..3 {
+                // error at most one mantissa step of the largest component
+                assert!((d[i] - c[i]).abs() <= x / 128.0, "{c:?} -> {d:?}");
+            }
+            x *= 1.7;
+        }
+    }
+
+    #[test]
+    fn c_exp_formats_like_printf() {
+        assert_eq!(c_exp(2.0), "2.000000e+00");
+        assert_eq!(c_exp(0.00123), "1.230000e-03");
+        assert_eq!(c_exp(1.5e120), "1.500000e+120");
+    }
+
+    #[test]
+    fn stream_encoding_matches_radiance() {
+        let enc = |s: &[u8]| {
+            let mut o = Vec::new();
+            encode_stream(s, &mut o);
+            o
+        };
+        // The 48-wide exponent stream from the facts: literal 1, run 46, literal 1.
+        let mut e = vec![0x7e];
+        e.extend(std::iter::repeat(0x7f).take(46));
+        e.push(0x7e);
+        assert_eq!(enc(&e), [0x01, 0x7e, 0xae, 0x7f, 0x01, 0x7e]);
+        // Short runs of 2-3 before a long run / at the end.
+        assert_eq!(enc(&[5, 5, 7, 7, 7, 7]), [0x82, 5, 0x84, 7]);
+        assert_eq!(enc(&[1, 2, 3, 3, 3]), [0x05, 1, 2, 3, 3, 3]); // only a whole pending stretch becomes a short run
+        assert_eq!(enc(&[1, 2, 3, 3, 3, 3]), [0x02, 1, 2, 0x84, 3]);
+        assert_eq!(enc(&[9, 9, 9]), [0x83, 9]);
+        assert_eq!(enc(&[1, 2, 3]), [0x03, 1, 2, 3]);
+        // Runs are capped at 127 and literals at 128.
+        let long = vec![4u8; 300];
+        assert_eq!(enc(&long), [0xff, 4, 0xff, 4, 0x80 + 46, 4]);
+        let lit: Vec<u8> = (0..200).map(|i| (i % 2) as u8).collect();
+        let o = enc(&lit);
+        assert_eq!(o[0], 128);
+        assert_eq!(o[129], 72);
+        assert_eq!(o.len(), 202);
+    }
+
+    #[test]
+    fn resolution_lines() {
+        let (w, h, o) = parse_resolution(b"-Y       32 +X       48\n").unwrap();
+        assert_eq!((w, h), (48, 32));
+        assert_eq!(o, Orientation { y_major: true, y_decr: true, x_decr: false });
+        let (w, h, o) = parse_resolution(b"+X 3 -Y 2\r\n").unwrap();
+        assert_eq!((w, h), (3, 2));
+        assert_eq!(o, Orientation { y_major: false, y_decr: true, x_decr: false });
+        for bad in [&b"-Y 0 +X 3\n"[..], b"-Y 3 +Y 3\n", b"Y 3 X 3\n", b"-Y 3 +X\n", b"-Y -3 +X 3\n", b"-Y 3 +X 3 4\n"] {
+            assert!(parse_resolution(bad).is_err(), "{}", String::from_utf8_lossy(bad));
+        }
+    }
+}

@@ -1,0 +1,507 @@
+//! Scene reader: text → flat list of [`Primitive`]s, expanding inline commands.
+//!
+//! - Primitives are `modifier type identifier`, then `nS s..`, `nI i..`, `nR r..`; `alias`
+//!   takes a single word (the aliased identifier) instead of counts, which ends up as its only
+//!   string argument.
+//! - `!xform ...` and `!genbox ...` are built in (no shell). Other commands, commands using
+//!   shell syntax, and built-in options that are not implemented run through `sh -c` only when
+//!   [`ReadOptions::allow_commands`] is set; their standard output is read as scene text
+//!   located at `<command: ...>`.
+//! - Files named by `xform` are looked up like real xform does: an absolute path as is, a
+//!   relative one in each [`ReadOptions::raypath`] directory in turn (Radiance's default
+//!   RAYPATH `.` is the current directory, *not* the including file's directory).
+//!   Top-level files are opened as given.
+//! - Octrees (`*.oct`) are refused.
+
+use std::io::Read;
+use std::path::{Path, PathBuf};
+use std::sync::Arc;
+
+use super::error::SceneError;
+use super::genbox;
+use super::lexer::{split_command_words, Lexer, Token, TokenKind};
+use super::primitive::{Location, Primitive};
+use super::xform::{parse_xform_args, XformArgError};
+
+/// Maximum nesting of inline commands (a file that includes itself hits this).
+pub const MAX_DEPTH: u32 = 32;
+
+/// Every type keyword of the scene language (Radiance's 59 types including `alias`).
+pub const KNOWN_TYPES: &[&str] = &[
+    "polygon",
+    "cone",
+    "sphere",
+    "ring",
+    "cylinder",
+    "cup",
+    "bubble",
+    "tube",
+    "source",
+    "instance",
+    "mesh",
+    "plastic",
+    "metal",
+    "glass",
+    "trans",
+    "dielectric",
+    "plastic2",
+    "metal2",
+    "trans2",
+    "interface",
+    "plasfunc",
+    "metfunc",
+    "glow",
+    "light",
+    "illum",
+    "spotlight",
+    "mist",
+    "mirror",
+    "transfunc",
+    "BRTDfunc",
+    "BSDF",
+    "aBSDF",
+    "WGMDfunc",
+    "plasdata",
+    "metdata",
+    "transdata",
+    "antimatter",
+    "prism1",
+    "prism2",
+    "ashik2",
+    "brightfunc",
+    "brightdata",
+    "brighttext",
+    "colorpict",
+    "colorfunc",
+    "colordata",
+    "colortext",
+    "spectrum",
+    "specfile",
+    "specfunc",
+    "specdata",
+    "specpict",
+    "texfunc",
+    "texdata",
+    "mixfunc",
+    "mixdata",
+    "mixtext",
+    "mixpict",
+    "alias",
+];
+
+/// How to read scenes.
+#[derive(Clone, Debug, Default)]
+pub struct ReadOptions {
+    /// Run inline commands other than the built-in `xform`/`genbox` through `sh -c`.
+    pub allow_commands: bool,
+    /// Directories searched for files named by `xform` (Radiance's RAYPATH).
+    pub raypath: Vec<PathBuf>,
+}
+
+impl ReadOptions {
+    /// raypath from $RAYPATH (':'-separated; default "."), allow_commands from
+    /// TESSERA_ALLOW_COMMANDS=1.
+    pub fn from_env() -> ReadOptions {
+        let rp = std::env::var("RAYPATH").unwrap_or_default();
+        let mut raypath: Vec<PathBuf> = rp
+            .split(':')
+            .filter(|s| !s.is_empty())
+            .map(PathBuf::from)
+            .collect();
+        if raypath.is_empty() {
+            raypath.push(PathBuf::from("."));
+        }
+        ReadOptions {
+            allow_commands: std::env::var("TESSERA_ALLOW_COMMANDS").is_ok_and(|v| v == "1"),
+            raypath,
+        }
+    }
+}
+
+/// Whether `w` is a Radiance real number: optional sign, digits with an optional point
+/// (at least one digit), optional exponent.
+pub fn is_real(w: &str) -> bool {
+    let b = w.as_bytes();
+    let mut i = 0;
+    if matches!(b.first(), Some(b'+' | b'-')) {
+        i += 1;
+    }
+    let mut digits = 0;
+    while i < b.len() && b[i].is_ascii_digit() {
+        i += 1;
+        digits += 1;
+    }
+    if i < b.len() && b[i] == b'.' {
+        i += 1;
+        while i < b.len() && b[i].is_ascii_digit() {
+            i += 1;
+            digits += 1;
+        }
+    }
+    if digits == 0 {
+        return false;
+    }
+    if i < b.len() && matches!(b[i], b'e' | b'E') {
+        i += 1;
+        if matches!(b.get(i), Some(b'+' | b'-')) {
+            i += 1;
+        }
+        let s = i;
+        while i < b.len() && b[i].is_ascii_digit() {
+            i += 1;
+        }
+        if i == s {
+            return false;
+        }
+    }
+    i == b.len()
+}
+
+/// Whether `w` is an integer (optional sign, digits).
+pub fn is_int(w: &str) -> bool {
+    let d = w.strip_prefix(['+', '-']).unwrap_or(w);
+    !d.is_empty() && d.bytes().all(|c| c.is_ascii_digit())
+}
+
+/// Read scene files in order ("-" = stdin) into the flat list of primitives, expanding
+/// inline commands. Errors about a file that cannot be opened are located at `path:0`.
+pub fn read_scene_files(
+    paths: &[String],
+    opts: &ReadOptions,
+) -> Result<Vec<Primitive>, SceneError> {
+    let mut out = Vec::new();
+    for p in paths {
+        if p == "-" {
+            let mut text = String::new();
+            std::io::stdin()
+                .read_to_string(&mut text)
+                .map_err(|e| SceneError::Io {
+                    loc: Location::new("<stdin>", 0),
+                    path: "-".into(),
+                    reason: e.to_string(),
+                })?;
+            parse_into(&text, Arc::from("<stdin>"), opts, 0, &mut out)?;
+            continue;
+        }
+        let loc = Location::new(p.as_str(), 0);
+        let text = read_file(Path::new(p), p, &loc)?;
+        parse_into(&text, Arc::from(p.as_str()), opts, 0, &mut out)?;
+    }
+    Ok(out)
+}
+
+/// Parse scene text (for tests and commands' output).
+pub fn parse_scene_text(
+    text: &str,
+    file: &str,
+    opts: &ReadOptions,
+) -> Result<Vec<Primitive>, SceneError> {
+    let mut out = Vec::new();
+    parse_into(text, Arc::from(file), opts, 0, &mut out)?;
+    Ok(out)
+}
+
+fn read_file(path: &Path, named: &str, loc: &Location) -> Result<String, SceneError> {
+    if named.ends_with(".oct") {
+        return Err(SceneError::Octree {
+            loc: loc.clone(),
+            path: named.to_string(),
+        });
+    }
+    let bytes = std::fs::read(path).map_err(|e| SceneError::Io {
+        loc: loc.clone(),
+        path: named.to_string(),
+        reason: e.to_string(),
+    })?;
+    String::from_utf8(bytes).map_err(|_| SceneError::Io {
+        loc: loc.clone(),
+        path: named.to_string(),
+        reason: "not UTF-8 text (is it a binary file?)".to_string(),
+    })
+}
+
+/// Find a file named in a command: absolute as is, relative along the RAYPATH.
+fn find_on_raypath(name: &str, opts: &ReadOptions) -> Option<PathBuf> {
+    let p = Path::new(name);
+    if p.is_absolute() {
+        return p.is_file().then(|| p.to_path_buf());
+    }
+    let dirs: Vec<PathBuf> = if opts.raypath.is_empty() {
+        vec![PathBuf::from(".")]
+    } else {
+        opts.raypath.clone()
+    };
+    dirs.iter().map(|d| d.join(p)).find(|c| c.is_file())
+}
+
+struct Cursor<'a> {
+    lx: Lexer<'a>,
+    file: Arc<str>,
+    /// Line of the last token read (where an unexpected end of file is reported).
+    last_line: u32,
+}
+
+impl Cursor<'_> {
+    fn loc(&self, line: u32) -> Location {
+        Location {
+            file: self.file.clone(),
+            line,
+        }
+    }
+
+    fn word(&mut self, start: u32, what: &str, prim: &str) -> Result<Token, SceneError> {
+        match self.lx.next_token(false) {
+            Ok(Some(t)) => {
+                self.last_line = t.line;
+                Ok(t)
+            }
+            Ok(None) => Err(SceneError::syntax(
+                self.loc(self.last_line),
+                format!("unexpected end of file: missing {what}{prim} (started at line {start})"),
+            )),
+            Err(e) => Err(SceneError::syntax(self.loc(e.line), e.reason)),
+        }
+    }
+
+    fn count(&mut self, start: u32, what: &str, prim: &str) -> Result<usize, SceneError> {
+        let t = self.word(start, &format!("{what} argument count"), prim)?;
+        match t.text.parse::<usize>() {
+            Ok(n) if is_int(&t.text) && n <= 100_000_000 => Ok(n),
+            _ => Err(SceneError::syntax(
+                self.loc(t.line),
+                format!("bad {what} argument count '{}'{prim}", t.text),
+            )),
+        }
+    }
+}
+
+fn parse_into(
+    text: &str,
+    file: Arc<str>,
+    opts: &ReadOptions,
+    depth: u32,
+    out: &mut Vec<Primitive>,
+) -> Result<(), SceneError> {
+    let mut cur = Cursor {
+        lx: Lexer::new(text),
+        file,
+        last_line: 1,
+    };
+    loop {
+        let tok = match cur.lx.next_token(true) {
+            Ok(Some(t)) => t,
+            Ok(None) => return Ok(()),
+            Err(e) => return Err(SceneError::syntax(cur.loc(e.line), e.reason)),
+        };
+        let start = tok.line;
+        cur.last_line = start;
+        let loc = cur.loc(start);
+        if tok.kind == TokenKind::Command {
+            expand_command(&tok.text, &loc, opts, depth, out)?;
+            continue;
+        }
+        let modifier = tok.text;
+        let ptype = cur.word(start, "type", "")?;
+        if !KNOWN_TYPES.contains(&ptype.text.as_str()) {
+            return Err(SceneError::syntax(
+                cur.loc(ptype.line),
+                format!(
+                    "unknown primitive type '{}' (modifier '{modifier}')",
+                    ptype.text
+                ),
+            ));
+        }
+        let ptype = ptype.text;
+        let name = cur.word(start, "identifier", &format!(" of {ptype}"))?.text;
+        let ctx = format!(" in {ptype} \"{name}\"");
+        let mut prim = Primitive {
+            modifier,
+            ptype,
+            name,
+            sargs: Vec::new(),
+            iargs: Vec::new(),
+            rargs: Vec::new(),
+            loc,
+        };
+        if prim.ptype == "alias" {
+            let t = cur.word(start, "aliased identifier", &ctx)?;
+            prim.sargs.push(t.text);
+            out.push(prim);
+            continue;
+        }
+        let ns = cur.count(start, "string", &ctx)?;
+        for k in 0..ns {
+            let t = cur.word(start, &format!("string argument {} of {ns}", k + 1), &ctx)?;
+            prim.sargs.push(t.text);
+        }
+        let ni = cur.count(start, "integer", &ctx)?;
+        for k in 0..ni {
+            let t = cur.word(start, &format!("integer argument {} of {ni}", k + 1), &ctx)?;
+            match t.text.parse::<i64>() {
+                Ok(v) if is_int(&t.text) => prim.iargs.push(v),
+                _ => {
+                    return Err(SceneError::syntax(
+                        cur.loc(t.line),
+                        format!(
+                            "integer argument {} '{}' is not an integer{ctx}",
+                            k + 1,
+                            t.text
+                        ),
+                    ))
+                }
+            }
+        }
+        let nr = cur.count(start, "real", &ctx)?;
+        for k in 0..nr {
+            let t = cur.word(start, &format!("real argument {} of {nr}", k + 1), &ctx)?;
+            match t.text.parse::<f64>() {
+                Ok(v) if is_real(&t.text) && v.is_finite() => prim.rargs.push(v),
+                _ => {
+                    return Err(SceneError::syntax(
+                        cur.loc(t.line),
+                        format!("real argument {} '{}' is not a number{ctx}", k + 1, t.text),
+                    ))
+                }
+            }
+        }
+        out.push(prim);
+    }
+}
+
+fn program_name(cmd: &str) -> String {
+    cmd.split_whitespace().next().unwrap_or("").to_string()
+}
+
+fn expand_command(
+    cmd: &str,
+    loc: &Location,
+    opts: &ReadOptions,
+    depth: u32,
+    out: &mut Vec<Primitive>,
+) -> Result<(), SceneError> {
+    if depth >= MAX_DEPTH {
+        return Err(SceneError::Recursion {
+            loc: loc.clone(),
+            depth,
+            command: cmd.to_string(),
+        });
+    }
+    let words = split_command_words(cmd).map_err(|e| SceneError::syntax(loc.clone(), e))?;
+    let mut unsupported = None;
+    if let Some(words) = &words {
+        match words.first().map(String::as_str) {
+            None => return Err(SceneError::syntax(loc.clone(), "empty inline command '!'")),
+            Some("xform") => match parse_xform_args(&words[1..]) {
+                Ok(x) => return run_xform(&x, loc, opts, depth, out),
+                Err(XformArgError::Bad(r)) => return Err(SceneError::syntax(loc.clone(), r)),
+                Err(XformArgError::Unsupported(r)) => unsupported = Some(r),
+            },
+            Some("genbox") => match genbox::genbox(&words[1..], loc) {
+                Ok(p) => {
+                    out.extend(p);
+                    return Ok(());
+                }
+                Err(genbox::ArgError::Bad(r)) => return Err(SceneError::syntax(loc.clone(), r)),
+                Err(genbox::ArgError::Unsupported(r)) => unsupported = Some(r),
+            },
+            Some(_) => {}
+        }
+    }
+    if !opts.allow_commands {
+        return Err(SceneError::CommandNotAllowed {
+            loc: loc.clone(),
+            name: program_name(cmd),
+            command: cmd.to_string(),
+            note: unsupported.map(|r| format!(" ({r})")).unwrap_or_default(),
+        });
+    }
+    let text = run_shell(cmd, loc)?;
+    parse_into(
+        &text,
+        Arc::from(format!("<command: {cmd}>")),
+        opts,
+        depth + 1,
+        out,
+    )
+}
+
+fn run_shell(cmd: &str, loc: &Location) -> Result<String, SceneError> {
+    let fail = |reason: String| SceneError::CommandFailed {
+        loc: loc.clone(),
+        command: cmd.to_string(),
+        reason,
+    };
+    let o = std::process::Command::new("sh")
+        .arg("-c")
+        .arg(cmd)
+        .stdin(std::process::Stdio::null())
+        .output()
+        .map_err(|e| fail(format!("cannot run sh: {e}")))?;
+    if !o.status.success() {
+        let err = String::from_utf8_lossy(&o.stderr);
+        let err = err.trim().replace('\n', "; ");
+        return Err(fail(format!("{} ({err})", o.status)));
+    }
+    String::from_utf8(o.stdout).map_err(|_| fail("output is not UTF-8 text".to_string()))
+}
+
+fn run_xform(
+    x: &super::xform::XformCommand,
+    loc: &Location,
+    opts: &ReadOptions,
+    depth: u32,
+    out: &mut Vec<Primitive>,
+) -> Result<(), SceneError> {
+    let mut contents: Vec<Vec<Primitive>> = Vec::new();
+    for f in &x.files {
+        if f == "-" {
+            return Err(SceneError::syntax(
+                loc.clone(),
+                "xform: reading standard input is not allowed inline",
+            ));
+        }
+        if f.ends_with(".oct") {
+            return Err(SceneError::Octree {
+                loc: loc.clone(),
+                path: f.clone(),
+            });
+        }
+        let path = find_on_raypath(f, opts).ok_or_else(|| SceneError::Io {
+            loc: loc.clone(),
+            path: f.clone(),
+            reason: format!("not found on RAYPATH {:?}", opts.raypath),
+        })?;
+        let text = read_file(&path, f, loc)?;
+        let mut prims = Vec::new();
+        let shown = path.to_string_lossy().into_owned();
+        parse_into(&text, Arc::from(shown), opts, depth + 1, &mut prims)?;
+        contents.push(prims);
+    }
+    for copy in &x.copies {
+        for prims in &contents {
+            for p in prims {
+                let q = x
+                    .apply(copy, p)
+                    .map_err(|r| SceneError::syntax(p.loc.clone(), format!("xform: {r}")))?;
+                out.push(q);
+            }
+        }
+    }
+    Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn numbers() {
+        for ok in [".5", "1e-3", "+2", "-1.", "3", "1E+10", "0.0"] {
+            assert!(is_real(ok), "{ok}");
+        }
+        for bad in ["", ".", "e3", "1e", "nan", "inf", "1x", "--1", "+"] {
+            assert!(!is_real(bad), "{bad}");
+        }
+        assert!(is_int("-3") && is_int("+0") && !is_int("1.0") && !is_int("-"));
+    }
+}

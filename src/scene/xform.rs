@@ -1,0 +1,220 @@
+//! Built-in `xform`: the command-line layer around [`Transform`].
+//!
+//! `xform [-c] [-e] [-I] [-n prefix] [-m modifier] transforms... [-a N transforms...]... files...`
+//! Behaviour follows real xform 6.0a (checked against it):
+//! - `-n pre` renames surfaces (and instances/meshes) to `pre.name`; materials, patterns and
+//!   other non-surfaces keep their names. `-m mod` likewise replaces only surfaces' modifiers.
+//! - `-a N` makes N copies; the transforms after it (up to the next `-a`) are applied k times
+//!   in copy k (it becomes `-i k`). Copies are named `pre.k` with `-n pre`, else `ak`; nested
+//!   arrays give `pre.j.k` / `aj.k` with the last index varying fastest.
+//! - `-i n` repeats the group of transforms that follows it n times.
+//! - `-I` turns surfaces inside out (see [`Transform::with_invert`]).
+//! - `-c` and `-e` are accepted and ignored (everything is expanded anyway).
+//! - at least one file must be named (reading stdin makes no sense inline).
+
+use super::primitive::Primitive;
+use super::transform::{is_surface, parse_transform, Transform};
+
+/// One copy produced by an xform command.
+#[derive(Clone, Debug, PartialEq)]
+pub struct XformCopy {
+    /// Name prefix for surfaces (`pre`, `pre.0`, `a1.2`...), if any.
+    pub prefix: Option<String>,
+    /// The transform of this copy (with `-I` applied).
+    pub transform: Transform,
+}
+
+/// A parsed xform command line.
+#[derive(Clone, Debug, PartialEq)]
+pub struct XformCommand {
+    /// Replacement modifier for surfaces (`-m`).
+    pub modifier: Option<String>,
+    /// The copies (one unless `-a` is used).
+    pub copies: Vec<XformCopy>,
+    /// The files to read, in order.
+    pub files: Vec<String>,
+}
+
+/// Why xform arguments were not accepted.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub enum XformArgError {
+    /// Valid for real xform but not built in (run the real program if allowed).
+    Unsupported(String),
+    /// Invalid arguments.
+    Bad(String),
+}
+
+/// Upper bound on the number of array copies, to keep bad input from exhausting memory.
+const MAX_COPIES: u64 = 1_000_000;
+
+/// Parse the arguments after the word `xform`.
+pub fn parse_xform_args(args: &[String]) -> Result<XformCommand, XformArgError> {
+    let bad = |s: String| XformArgError::Bad(format!("xform: {s}"));
+    let mut prefix: Option<String> = None;
+    let mut modifier = None;
+    let mut invert = false;
+    // Transform words, with "-a N" kept as (index into words, count).
+    let mut words: Vec<String> = Vec::new();
+    let mut arrays: Vec<(usize, u64)> = Vec::new();
+    let mut i = 0;
+    while i < args.len() {
+        let w = args[i].as_str();
+        match w {
+            "-c" | "-e" => i += 1,
+            "-I" => {
+                invert = true;
+                i += 1;
+            }
+            "-n" | "-m" => {
+                let v = args
+                    .get(i + 1)
+                    .ok_or_else(|| bad(format!("missing argument for {w}")))?;
+                if w == "-n" {
+                    prefix = Some(v.clone());
+                } else {
+                    modifier = Some(v.clone());
+                }
+                i += 2;
+            }
+            "-a" => {
+                let v = args
+                    .get(i + 1)
+                    .ok_or_else(|| bad("missing argument for -a".to_string()))?;
+                let n: u64 = v
+                    .parse()
+                    .map_err(|_| bad(format!("bad array count '{v}' for -a")))?;
+                arrays.push((words.len(), n));
+                words.push("-a".to_string());
+                words.push(v.clone());
+                i += 2;
+            }
+            _ => {
+                let (_, used) = parse_transform(&args[i..]).map_err(bad)?;
+                if used == 0 {
+                    if w.starts_with('-') && w.len() > 1 {
+                        return Err(XformArgError::Unsupported(format!(
+                            "xform option '{w}' is not built in"
+                        )));
+                    }
+                    break;
+                }
+                words.extend(args[i..i + used].iter().cloned());
+                i += used;
+            }
+        }
+    }
+    let files: Vec<String> = args[i..].to_vec();
+    if files.is_empty() {
+        return Err(bad(
+            "no file named (xform reading standard input is not allowed inline)".to_string(),
+        ));
+    }
+    let total: u64 = arrays
+        .iter()
+        .try_fold(1u64, |acc, &(_, n)| {
+            acc.checked_mul(n).filter(|&t| t <= MAX_COPIES)
+        })
+        .ok_or_else(|| bad(format!("array too large (more than {MAX_COPIES} copies)")))?;
+    let mut copies = Vec::new();
+    for flat in 0..total {
+        // Decode indices, last array fastest.
+        let mut idx = vec![0u64; arrays.len()];
+        let mut rest = flat;
+        for (k, &(_, n)) in arrays.iter().enumerate().rev() {
+            idx[k] = rest % n;
+            rest /= n;
+        }
+        let mut ew = words.clone();
+        for (k, &(pos, _)) in arrays.iter().enumerate() {
+            ew[pos] = "-i".to_string();
+            ew[pos + 1] = idx[k].to_string();
+        }
+        let (t, used) = parse_transform(&ew).map_err(bad)?;
+        if used != ew.len() {
+            return Err(bad(format!("bad transform word '{}'", ew[used])));
+        }
+        let ids: Vec<String> = idx.iter().map(|k| k.to_string()).collect();
+        let copy_prefix = match (&prefix, arrays.is_empty()) {
+            (p, true) => p.clone(),
+            (Some(p), false) => Some(format!("{p}.{}", ids.join("."))),
+            (None, false) => Some(format!("a{}", ids.join("."))),
+        };
+        copies.push(XformCopy {
+            prefix: copy_prefix,
+            transform: t.with_invert(invert),
+        });
+    }
+    Ok(XformCommand {
+        modifier,
+        copies,
+        files,
+    })
+}
+
+impl XformCommand {
+    /// Apply one copy (transform, `-n` renaming and `-m` modifier) to a primitive.
+    pub fn apply(&self, copy: &XformCopy, p: &Primitive) -> Result<Primitive, String> {
+        let mut q = copy.transform.apply(p)?;
+        if is_surface(&p.ptype) {
+            if let Some(pre) = &copy.prefix {
+                q.name = format!("{pre}.{}", q.name);
+            }
+            if let Some(m) = &self.modifier {
+                q.modifier = m.clone();
+            }
+        }
+        Ok(q)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn a(s: &str) -> Vec<String> {
+        s.split_whitespace().map(String::from).collect()
+    }
+
+    #[test]
+    fn arrays_and_names() {
+        let c =
+            parse_xform_args(&a("-n pre -a 2 -t 1 0 0 -a 3 -t 0 1 0 -i 2 -rx 3 f.rad")).unwrap();
+        assert_eq!(c.copies.len(), 6);
+        assert_eq!(c.copies[1].prefix.as_deref(), Some("pre.0.1"));
+        assert_eq!(
+            c.copies[5].transform.words(),
+            &a("-i 1 -t 1 0 0 -i 2 -t 0 1 0 -i 2 -rx 3")[..]
+        );
+        let c = parse_xform_args(&a("-t 1 0 0 -a 2 -rz 90 f g")).unwrap();
+        assert_eq!(c.copies[1].prefix.as_deref(), Some("a1"));
+        assert_eq!(c.files, a("f g"));
+        assert_eq!(
+            c.copies[0].transform.words(),
+            &a("-i 1 -t 1 0 0 -i 0 -rz 90")[..]
+        );
+    }
+
+    #[test]
+    fn errors() {
+        assert!(matches!(
+            parse_xform_args(&a("-t 1 2 3")),
+            Err(XformArgError::Bad(_))
+        ));
+        assert!(matches!(
+            parse_xform_args(&a("-t 1 2 x f")),
+            Err(XformArgError::Bad(_))
+        ));
+        assert!(matches!(
+            parse_xform_args(&a("-a x f")),
+            Err(XformArgError::Bad(_))
+        ));
+        assert!(matches!(
+            parse_xform_args(&a("-f args f")),
+            Err(XformArgError::Unsupported(_))
+        ));
+        assert!(matches!(
+            parse_xform_args(&a("-a 100000 -a 100000 -t 1 0 0 f")),
+            Err(XformArgError::Bad(_))
+        ));
+    }
+}

@@ -1,0 +1,148 @@
+//! Helpers shared by integration tests: finding real Radiance, running tpict, comparing
+//! pictures with Radiance's own test-suite tolerances.
+#![allow(dead_code)]
+
+use std::path::{Path, PathBuf};
+use std::process::Command;
+use tessera::image::Image;
+
+/// The folder holding Radiance's binaries, or None (tests then skip, unless
+/// `TESSERA_REQUIRE_RADIANCE=1`, as in CI, where a missing Radiance is a failure).
+pub fn radiance_bin() -> Option<PathBuf> {
+    let found = find_radiance();
+    if found.is_none() && std::env::var("TESSERA_REQUIRE_RADIANCE").as_deref() == Ok("1") {
+        panic!("Radiance not found but TESSERA_REQUIRE_RADIANCE=1 (set TESSERA_RADIANCE_BIN)");
+    }
+    if found.is_none() {
+        eprintln!("skipping: Radiance not found (set TESSERA_RADIANCE_BIN to its bin folder)");
+    }
+    found
+}
+
+fn find_radiance() -> Option<PathBuf> {
+    if let Ok(d) = std::env::var("TESSERA_RADIANCE_BIN") {
+        let p = PathBuf::from(d);
+        if p.join("rpict").exists() {
+            return Some(p);
+        }
+    }
+    if let Ok(path) = std::env::var("PATH") {
+        for d in std::env::split_paths(&path) {
+            if d.join("rpict").exists() && d.join("oconv").exists() {
+                return Some(d);
+            }
+        }
+    }
+    let p = PathBuf::from("/opt/radvenv/lib/python3.11/site-packages/pyradiance/bin");
+    p.join("rpict").exists().then_some(p)
+}
+
+/// A Command for a Radiance program with PATH and RAYPATH set up.
+pub fn radiance(bin: &Path, prog: &str) -> Command {
+    let mut c = Command::new(bin.join(prog));
+    let lib = bin.parent().map(|p| p.join("lib")).unwrap_or_default();
+    let path = std::env::var("PATH").unwrap_or_default();
+    c.env("PATH", format!("{}:{path}", bin.display()));
+    c.env("RAYPATH", format!(".:{}", lib.display()));
+    c
+}
+
+/// Path of the tpict binary built for the tests.
+pub fn tpict_bin() -> PathBuf {
+    PathBuf::from(env!("CARGO_BIN_EXE_tpict"))
+}
+
+/// Run a command, panicking with its stderr on failure; returns stdout.
+pub fn run_ok(c: &mut Command) -> Vec<u8> {
+    let out = c.output().expect("cannot start command");
+    if !out.status.success() {
+        panic!(
+            "command {:?} failed ({}):\n{}",
+            c,
+            out.status,
+            String::from_utf8_lossy(&out.stderr)
+        );
+    }
+    out.stdout
+}
+
+/// Box-filter a picture down to `w`×`h` (each output pixel averages the input pixels whose
+/// centres fall inside it).
+pub fn reduce(img: &Image, w: usize, h: usize) -> Vec<[f64; 3]> {
+    let mut sum = vec![[0f64; 3]; w * h];
+    let mut cnt = vec![0u32; w * h];
+    for y in 0..img.height {
+        let oy = y * h / img.height;
+        for x in 0..img.width {
+            let ox = x * w / img.width;
+            let p = img.pixels[y * img.width + x];
+            let k = oy * w + ox;
+            for c in 0..3 {
+                sum[k][c] += p[c] as f64;
+            }
+            cnt[k] += 1;
+        }
+    }
+    for (s, n) in sum.iter_mut().zip(cnt) {
+        for v in s.iter_mut() {
+            *v /= n.max(1) as f64;
+        }
+    }
+    sum
+}
+
+/// Radiance's test-suite comparison figures.
+#[derive(Debug, Clone, Copy)]
+pub struct Compare {
+    /// RMS relative difference.
+    pub rms: f64,
+    /// Largest per-pixel relative difference.
+    pub max: f64,
+    /// Relative difference of the mean luminance.
+    pub mean_lum: f64,
+}
+
+fn lum(p: [f64; 3]) -> f64 {
+    0.265074126 * p[0] + 0.670114631 * p[1] + 0.064811243 * p[2]
+}
+
+/// Compare like `radcompare -rel REL`: per pixel, the channel mean and the largest channel,
+/// relative difference² = (a−b)²/(¼(a²+2|ab|+b²)) with the denominator floored at REL².
+pub fn compare(a: &[[f64; 3]], b: &[[f64; 3]], rel: f64) -> Compare {
+    assert_eq!(a.len(), b.len());
+    let rd2 = |x: f64, y: f64| -> f64 {
+        let den = (0.25 * (x * x + 2.0 * (x * y).abs() + y * y)).max(rel * rel);
+        (x - y) * (x - y) / den
+    };
+    let mut sum = 0.0;
+    let mut n = 0usize;
+    let mut max: f64 = 0.0;
+    for (p, q) in a.iter().zip(b) {
+        let ma = (p[0] + p[1] + p[2]) / 3.0;
+        let mb = (q[0] + q[1] + q[2]) / 3.0;
+        let xa = p[0].max(p[1]).max(p[2]);
+        let xb = q[0].max(q[1]).max(q[2]);
+        for d2 in [rd2(ma, mb), rd2(xa, xb)] {
+            sum += d2;
+            n += 1;
+            max = max.max(d2.sqrt());
+        }
+    }
+    let la: f64 = a.iter().map(|p| lum(*p)).sum::<f64>() / a.len() as f64;
+    let lb: f64 = b.iter().map(|p| lum(*p)).sum::<f64>() / b.len() as f64;
+    Compare {
+        rms: (sum / n as f64).sqrt(),
+        max,
+        mean_lum: (la - lb).abs() / lb.abs().max(1e-12),
+    }
+}
+
+/// Assert no pixel holds a non-finite or negative value.
+pub fn assert_finite(img: &Image) {
+    for (i, p) in img.pixels.iter().enumerate() {
+        assert!(
+            p.iter().all(|v| v.is_finite() && *v >= 0.0),
+            "pixel {i} is {p:?}"
+        );
+    }
+}

@@ -1,0 +1,146 @@
+//! tpict against real Radiance (rpict from pyradiance) at `-ab 0`, under Radiance's own test
+//! tolerance: pictures reduced to 128×128, relative RMS ≤ 10%, max ≤ 150%, mean luminance
+//! within 2%. Skips (with a message) when Radiance is not installed.
+
+mod common;
+
+use common::*;
+use std::path::Path;
+use tessera::image::read_picture;
+
+const RES: &str = "256";
+
+struct Case<'a> {
+    dir: &'a str,
+    files: &'a [&'a str],
+    view: &'a str,
+    opts: &'a [&'a str],
+}
+
+fn check(case: &Case) {
+    let Some(bin) = radiance_bin() else { return };
+    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/scenes").join(case.dir);
+    let tmp = tempfile::tempdir().unwrap();
+    let oct = tmp.path().join("scene.oct");
+    let octdata = run_ok(radiance(&bin, "oconv").current_dir(&dir).args(case.files));
+    std::fs::write(&oct, octdata).unwrap();
+    let mut common_args: Vec<&str> = vec!["-vf", case.view, "-x", RES, "-y", RES];
+    common_args.extend_from_slice(case.opts);
+    let reff = tmp.path().join("ref.hdr");
+    let data = run_ok(
+        radiance(&bin, "rpict")
+            .current_dir(&dir)
+            .args(&common_args)
+            .arg(&oct),
+    );
+    std::fs::write(&reff, data).unwrap();
+    let ours = tmp.path().join("ours.hdr");
+    run_ok(
+        std::process::Command::new(tpict_bin())
+            .current_dir(&dir)
+            .args(&common_args)
+            .arg("-o")
+            .arg(&ours)
+            .args(case.files),
+    );
+    let a = read_picture(&ours).unwrap();
+    let b = read_picture(&reff).unwrap();
+    assert_finite(&a);
+    assert_eq!((a.width, a.height), (b.width, b.height), "resolution differs");
+    let c = compare(&reduce(&a, 128, 128), &reduce(&b, 128, 128), 0.007);
+    eprintln!("{}: {c:?}", case.dir);
+    if std::env::var("TESSERA_KEEP_COMPARE").is_ok() {
+        let keep = Path::new(env!("CARGO_TARGET_TMPDIR")).join(case.dir.replace('/', "_"));
+        std::fs::create_dir_all(&keep).unwrap();
+        std::fs::copy(&ours, keep.join("ours.hdr")).unwrap();
+        std::fs::copy(&reff, keep.join("ref.hdr")).unwrap();
+    }
+    assert!(c.rms <= 0.10, "{}: relative RMS {:.3} > 0.10", case.dir, c.rms);
+    assert!(c.max <= 1.50, "{}: max relative difference {:.3} > 1.5", case.dir, c.max);
+    assert!(
+        c.mean_lum <= 0.02,
+        "{}: mean luminance differs by {:.2}%",
+        case.dir,
+        100.0 * c.mean_lum
+    );
+}
+
+#[test]
+fn spheres_plastic_metal_sphere_and_polygon_lights() {
+    check(&Case {
+        dir: "",
+        files: &["spheres.rad"],
+        view: "spheres.vf",
+        opts: &["-ab", "0", "-av", ".05", ".05", ".05", "-ps", "1"],
+    });
+}
+
+#[test]
+fn curved_cones_cups_tubes_rings_and_concave_polygon() {
+    check(&Case {
+        dir: "",
+        files: &["curved.rad"],
+        view: "curved.vf",
+        opts: &["-ab", "0", "-av", ".05", ".05", ".05", "-ps", "1"],
+    });
+}
+
+#[test]
+fn glassy_glass_trans_dielectric_interface_sun_and_sky() {
+    check(&Case {
+        dir: "",
+        files: &["glassy.rad"],
+        view: "glassy.vf",
+        opts: &["-ab", "0", "-av", ".05", ".05", ".05", "-ps", "1"],
+    });
+}
+
+#[test]
+fn mirrors_virtual_sources_illum_spotlight_glow() {
+    check(&Case {
+        dir: "",
+        files: &["mirrors.rad"],
+        view: "mirrors.vf",
+        opts: &["-ab", "0", "-av", ".05", ".05", ".05", "-ps", "1"],
+    });
+}
+
+#[test]
+fn aniso_plastic2_metal2_antimatter_genbox_xform() {
+    check(&Case {
+        dir: "",
+        files: &["aniso.rad"],
+        view: "aniso.vf",
+        opts: &["-ab", "0", "-av", ".05", ".05", ".05", "-ps", "1"],
+    });
+}
+
+#[test]
+fn examp_shared_scene_with_builtin_genbox() {
+    check(&Case {
+        dir: "examp",
+        files: &["examp"],
+        view: "examp.vp",
+        opts: &["-ab", "0", "-av", ".5", ".5", ".5", "-ps", "1"],
+    });
+}
+
+#[test]
+fn daffodil_shared_scene_flat() {
+    check(&Case {
+        dir: "daffodil",
+        files: &["daffodil.flat.rad", "room.flat.rad"],
+        view: "daffodil.vp",
+        opts: &["-ab", "0", "-av", ".2", ".2", ".2", "-ps", "1"],
+    });
+}
+
+#[test]
+fn adaptive_sampling_default_ps_matches_rpict() {
+    check(&Case {
+        dir: "",
+        files: &["curved.rad"],
+        view: "curved.vf",
+        opts: &["-ab", "0", "-av", ".05", ".05", ".05"],
+    });
+}
