@@ -354,11 +354,17 @@ impl LightSet {
             }
         }
         let start = out.len();
-        let mut push = |dir: DVec3, dist: f64, omega: f64, at: DVec3| {
+        let focal = src.emitter.focal_distance();
+        let center = src.center;
+        let mut push = |dir: DVec3, dist: f64, mut omega: f64, _at: DVec3| {
             if !(omega > 0.0) || !dir.is_finite() {
                 return;
             }
-            let spot = src.emitter.spot_factor(at, q);
+            let spot = src.emitter.spot_factor(center, q);
+            if focal > 0.0 && dist.is_finite() {
+                // A spotlight's area is seen as if from its focal point behind the source.
+                omega *= (dist / (dist + focal)).powi(2);
+            }
             if spot <= 0.0 {
                 return;
             }
@@ -460,33 +466,35 @@ impl LightSet {
                 }
             }
             SourceShape::Cylinder { p0, p1, radius } => {
+                // Seen from q, a cylinder projects to a rectangle of length |axis| and width
+                // 2r lying in the plane through its axis that faces q; sample that rectangle
+                // and weight each cell by the cylinder's projected area toward the sample.
                 let axis = *p1 - *p0;
                 let len = axis.length();
-                let c = (*p0 + *p1) * 0.5;
-                let d = (c - q).length().max(FTINY);
-                let (na, nb) = partitions(len / d, 2.0 * radius / d, ds, weight);
-                let nb = (2 * nb).max(2);
                 let a = axis / len;
-                let u = any_perpendicular(a);
-                let v = a.cross(u);
-                let cell = 2.0 * PI * radius * len / (na * nb) as f64;
+                let c = (*p0 + *p1) * 0.5;
+                let w = c - q;
+                let wperp = w - a * w.dot(a);
+                if wperp.length() <= *radius {
+                    return;
+                }
+                let b = a.cross(wperp).normalize();
+                let d = w.length().max(FTINY);
+                let (na, nb) = partitions(len / d, 2.0 * radius / d, ds, weight);
+                let cell = 2.0 * radius * len / (na * nb) as f64;
                 for i in 0..na {
                     for j in 0..nb {
                         let t = strat(i, na, dj, rng);
-                        let phi = 2.0 * PI * strat(j, nb, dj, rng);
-                        let nrm = u * phi.cos() + v * phi.sin();
-                        let s = *p0 + axis * t + nrm * *radius;
-                        let w = s - q;
-                        let dist = w.length();
+                        let u = strat(j, nb, dj, rng) - 0.5;
+                        let s = *p0 + axis * t + b * (2.0 * radius * u);
+                        let v = s - q;
+                        let dist = v.length();
                         if dist <= FTINY {
                             continue;
                         }
-                        let dir = w / dist;
-                        let cos_s = -dir.dot(nrm);
-                        if cos_s <= FTINY {
-                            continue;
-                        }
-                        push(dir, dist, cell * cos_s / (dist * dist), s);
+                        let dir = v / dist;
+                        let proj = (1.0 - dir.dot(a).powi(2)).max(0.0).sqrt();
+                        push(dir, dist, cell * proj / (dist * dist), s);
                     }
                 }
             }

@@ -98,13 +98,20 @@ impl Emitter {
         }
     }
 
-    /// Radiance leaving the source toward a receiver in direction `toward` (unit, from the
-    /// emitting point) for a spotlight whose emitting point is `from`.
+    /// Focal distance of a spotlight (0 for other emitters).
+    pub fn focal_distance(&self) -> f64 {
+        match self.kind {
+            EmitterKind::Spot { focal, .. } => focal,
+            _ => 0.0,
+        }
+    }
+
+    /// 1 when a receiver at `receiver` lies inside a spotlight's cone (measured from the
+    /// source centre, as Radiance does), else 0; always 1 for other emitters.
     pub fn spot_factor(&self, center: DVec3, receiver: DVec3) -> f64 {
         match self.kind {
-            EmitterKind::Spot { cos_half, dir, focal } => {
-                let apex = center - dir * focal;
-                let w = (receiver - apex).normalize_or_zero();
+            EmitterKind::Spot { cos_half, dir, .. } => {
+                let w = (receiver - center).normalize_or_zero();
                 if w.dot(dir) >= cos_half {
                     1.0
                 } else {
