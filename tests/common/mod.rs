@@ -91,6 +91,21 @@ pub fn reduce(img: &Image, w: usize, h: usize) -> Vec<[f64; 3]> {
     sum
 }
 
+/// Pixels as f64 triples.
+pub trait PixelsF64 {
+    /// The pixels, top row first, as f64.
+    fn pixels_f64(&self) -> Vec<[f64; 3]>;
+}
+
+impl PixelsF64 for Image {
+    fn pixels_f64(&self) -> Vec<[f64; 3]> {
+        self.pixels
+            .iter()
+            .map(|p| [p[0] as f64, p[1] as f64, p[2] as f64])
+            .collect()
+    }
+}
+
 /// Radiance's test-suite comparison figures.
 #[derive(Debug, Clone, Copy)]
 pub struct Compare {
