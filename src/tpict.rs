@@ -77,9 +77,18 @@ fn run_inner(args: &[String], mut log: Log) -> std::result::Result<(), (Log, any
     };
     log.warnings = opts.warnings;
     if let Some(ef) = &opts.error_file {
-        match std::fs::OpenOptions::new().create(true).append(true).open(ef) {
+        match std::fs::OpenOptions::new()
+            .create(true)
+            .append(true)
+            .open(ef)
+        {
             Ok(mut f) => {
-                let _ = writeln!(f, "*** PID {}: tpict {}", std::process::id(), args.join(" "));
+                let _ = writeln!(
+                    f,
+                    "*** PID {}: tpict {}",
+                    std::process::id(),
+                    args.join(" ")
+                );
                 log.sink = Mutex::new(Box::new(f));
             }
             Err(e) => {
@@ -199,7 +208,9 @@ fn render_command(args: &[String], opts: &RpictOptions, log: &Log) -> Result<()>
                         match write_new_picture(path, &img) {
                             Ok(()) => {}
                             Err(e) if path.exists() => {
-                                log.warn(&format!("frame {n}: {name} appeared meanwhile ({e}); skipped"));
+                                log.warn(&format!(
+                                    "frame {n}: {name} appeared meanwhile ({e}); skipped"
+                                ));
                             }
                             Err(e) => return Err(e),
                         }
@@ -230,7 +241,10 @@ fn write_new_picture(path: &Path, img: &Image) -> Result<()> {
         .with_context(|| format!("cannot write {}", path.display())),
         _ => {
             if path.exists() {
-                bail!("cannot open output file \"{}\": File exists", path.display());
+                bail!(
+                    "cannot open output file \"{}\": File exists",
+                    path.display()
+                );
             }
             write_picture(Some(path), img).map_err(|e| anyhow!(e))
         }

@@ -21,7 +21,9 @@ struct Case<'a> {
 
 fn check(case: &Case) {
     let Some(bin) = radiance_bin() else { return };
-    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/scenes").join(case.dir);
+    let dir = Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("tests/scenes")
+        .join(case.dir);
     let tmp = tempfile::tempdir().unwrap();
     let oct = tmp.path().join("scene.oct");
     let octdata = run_ok(radiance(&bin, "oconv").current_dir(&dir).args(case.files));
@@ -49,7 +51,11 @@ fn check(case: &Case) {
     let full = read_picture(&ours).unwrap();
     assert_finite(&full);
     let b = read_picture(&reff).unwrap();
-    assert_eq!((full.width, full.height), (b.width, b.height), "resolution differs");
+    assert_eq!(
+        (full.width, full.height),
+        (b.width, b.height),
+        "resolution differs"
+    );
     // Reduce both as Radiance's test suite does: pfilt -1 -r 1 -x 128 -y 128 -pa 1.
     let reduce_with_pfilt = |p: &Path| {
         let data = run_ok(
@@ -71,8 +77,18 @@ fn check(case: &Case) {
         std::fs::copy(&ours, keep.join("ours.hdr")).unwrap();
         std::fs::copy(&reff, keep.join("ref.hdr")).unwrap();
     }
-    assert!(c.rms <= 0.10, "{}: relative RMS {:.3} > 0.10", case.dir, c.rms);
-    assert!(c.max <= 1.50, "{}: max relative difference {:.3} > 1.5", case.dir, c.max);
+    assert!(
+        c.rms <= 0.10,
+        "{}: relative RMS {:.3} > 0.10",
+        case.dir,
+        c.rms
+    );
+    assert!(
+        c.max <= 1.50,
+        "{}: max relative difference {:.3} > 1.5",
+        case.dir,
+        c.max
+    );
     assert!(
         c.mean_lum <= 0.02,
         "{}: mean luminance differs by {:.2}%",

@@ -17,12 +17,18 @@
 //! a)`, and when neither (or both) prefer, the smaller `(t, index)` wins. At most
 //! [`WINDOW`] eligible hits are kept; beyond that (more than 16 surfaces within `FTINY`) the
 //! farthest ones are dropped.
+//!
+//! Degenerate inputs (thousands of identical or nested boxes) build deep trees; traversal
+//! stays correct (the traversal stack spills to the heap beyond 32 levels) but obvhs's PLOC
+//! builder becomes slow on them (about 1 s for 1000 identical boxes in a debug build).
 
-use glam::{DVec3, Vec3A};
+use glam::{uvec2, DVec3, UVec2, Vec3A};
 use obvhs::aabb::Aabb;
-use obvhs::cwbvh::builder::build_cwbvh;
+use obvhs::bvh2::reinsertion::ReinsertionOptimizer;
+use obvhs::cwbvh::bvh2_to_cwbvh::bvh2_to_cwbvh;
 use obvhs::cwbvh::CwBvh;
-use obvhs::ray::{Ray, RayHit};
+use obvhs::ploc::PlocBuilder;
+use obvhs::ray::Ray;
 use obvhs::{Boundable, BvhBuildParams};
 
 use crate::FTINY;
@@ -45,6 +51,110 @@ struct BoxPrim(Aabb);
 impl Boundable for BoxPrim {
     fn aabb(&self) -> Aabb {
         self.0
+    }
+}
+
+/// Traversal stack: 32 entries inline, spilling to the heap for (degenerate) deeper trees.
+/// obvhs's own fixed stack silently drops entries beyond 32 levels, so it is not used.
+struct DeepStack {
+    inline: [UVec2; 32],
+    len: usize,
+    spill: Vec<UVec2>,
+}
+
+impl DeepStack {
+    fn new() -> Self {
+        DeepStack {
+            inline: [UVec2::ZERO; 32],
+            len: 0,
+            spill: Vec::new(),
+        }
+    }
+
+    #[inline(always)]
+    fn push(&mut self, v: UVec2) {
+        if self.len < 32 {
+            self.inline[self.len] = v;
+        } else {
+            self.spill.push(v);
+        }
+        self.len += 1;
+    }
+
+    #[inline(always)]
+    fn pop_fast(&mut self) -> UVec2 {
+        if self.len == 0 {
+            return UVec2::ZERO;
+        }
+        self.len -= 1;
+        if self.len >= 32 {
+            self.spill.pop().unwrap_or(UVec2::ZERO)
+        } else {
+            self.inline[self.len]
+        }
+    }
+
+    #[inline(always)]
+    fn is_empty(&self) -> bool {
+        self.len == 0
+    }
+}
+
+/// State for obvhs's `traverse!` macro (same field names as `obvhs::cwbvh::Traversal`).
+struct TravState {
+    stack: DeepStack,
+    current_group: UVec2,
+    primitive_group: UVec2,
+    oct_inv4: u32,
+    primitive_id: u32,
+    hitmask: u32,
+}
+
+impl TravState {
+    fn new(dir: Vec3A) -> Self {
+        // Octant code as the CwBvh node layout expects it (one byte per child slot).
+        let oct_inv4 = (if dir.x < 0.0 { 0 } else { 0x0404_0404 })
+            | (if dir.y < 0.0 { 0 } else { 0x0202_0202 })
+            | (if dir.z < 0.0 { 0 } else { 0x0101_0101 });
+        TravState {
+            stack: DeepStack::new(),
+            current_group: uvec2(0, 0x8000_0000),
+            primitive_group: UVec2::ZERO,
+            oct_inv4,
+            primitive_id: 0,
+            hitmask: 0,
+        }
+    }
+}
+
+/// Build the wide BVH (PLOC, reinsertion, conversion to CwBvh) without obvhs's debug-build
+/// validation, which asserts on trees deeper than its fixed traversal stack.
+fn build_cw(prims: &[BoxPrim]) -> CwBvh {
+    let p = BvhBuildParams::medium_build();
+    let mut bvh2 = PlocBuilder::with_capacity(prims.len()).build(
+        p.ploc_search_distance,
+        prims,
+        (0..prims.len() as u32).collect(),
+        p.sort_precision,
+        p.search_depth_threshold,
+    );
+    ReinsertionOptimizer::default().run(&mut bvh2, p.reinsertion_batch_ratio, None);
+    bvh2_to_cwbvh(&bvh2, p.max_prims_per_leaf.clamp(1, 3), true, false)
+}
+
+/// [`build_cw`] on a thread with a large stack (the conversion recurses once per tree
+/// level, and degenerate inputs make very deep trees); inline if no thread can be started.
+fn build_cw_big_stack(prims: &[BoxPrim]) -> CwBvh {
+    let res = std::thread::scope(|s| {
+        std::thread::Builder::new()
+            .stack_size(256 << 20)
+            .spawn_scoped(s, || build_cw(prims))
+            .map(|h| h.join())
+    });
+    match res {
+        Ok(Ok(cw)) => cw,
+        Ok(Err(e)) => std::panic::resume_unwind(e),
+        Err(_) => build_cw(prims),
     }
 }
 
@@ -187,8 +297,12 @@ impl Bvh {
             if !(a.is_finite() && b.is_finite()) || i > u32::MAX as usize {
                 continue;
             }
-            let lo = a.min(b).clamp(DVec3::splat(-COORD_LIMIT), DVec3::splat(COORD_LIMIT));
-            let hi = a.max(b).clamp(DVec3::splat(-COORD_LIMIT), DVec3::splat(COORD_LIMIT));
+            let lo = a
+                .min(b)
+                .clamp(DVec3::splat(-COORD_LIMIT), DVec3::splat(COORD_LIMIT));
+            let hi = a
+                .max(b)
+                .clamp(DVec3::splat(-COORD_LIMIT), DVec3::splat(COORD_LIMIT));
             s = s.max(lo.abs().max_element()).max(hi.abs().max_element());
             boxes.push((lo, hi));
             ids.push(i as u32);
@@ -212,8 +326,7 @@ impl Bvh {
         let cw = if prims.is_empty() {
             None
         } else {
-            let mut dt = std::time::Duration::default();
-            Some(build_cwbvh(&prims, BvhBuildParams::medium_build(), &mut dt))
+            Some(build_cw_big_stack(&prims)).filter(|cw| !cw.nodes.is_empty())
         };
         Bvh {
             cw,
@@ -243,7 +356,11 @@ impl Bvh {
     /// The f32 ray for a query, and the shift `s` such that f32 distance = f64 distance − s.
     fn setup(&self, org: DVec3, dir: DVec3, tmax: f64) -> Option<(Ray, f64)> {
         self.cw.as_ref()?;
-        if !(org.is_finite() && dir.is_finite()) || dir == DVec3::ZERO || !(tmax > FTINY) {
+        if !(org.is_finite() && dir.is_finite())
+            || dir == DVec3::ZERO
+            || tmax.is_nan()
+            || tmax <= FTINY
+        {
             return None;
         }
         let mut t_in: f64 = 0.0;
@@ -262,7 +379,7 @@ impl Bvh {
                 t_out = t_out.min(tb);
             }
         }
-        if !(t_in <= t_out) {
+        if t_in.is_nan() || t_out.is_nan() || t_in > t_out {
             return None;
         }
         let shift = t_in - MARGIN;
@@ -270,7 +387,9 @@ impl Bvh {
         let tmax32 = f32_up((t_out - shift) * (1.0 + 1e-6) + 2.0 * self.pad);
         let ray = Ray::new(
             Vec3A::new(o.x as f32, o.y as f32, o.z as f32),
-            Vec3A::new(dir.x as f32, dir.y as f32, dir.z as f32),
+            // `+ 0.0` turns -0.0 (also from f32 underflow) into +0.0: obvhs picks the slab
+            // side from `d < 0` but the reciprocal from the sign bit.
+            Vec3A::new(dir.x as f32 + 0.0, dir.y as f32 + 0.0, dir.z as f32 + 0.0),
             0.0,
             tmax32,
         );
@@ -293,45 +412,44 @@ impl Bvh {
         mut intersect: impl FnMut(usize) -> Option<f64>,
         prefer: impl Fn(usize, usize) -> bool,
     ) -> Option<(usize, f64)> {
-        let cw = self.cw.as_ref()?;
         let (ray, shift) = self.setup(org, dir, tmax)?;
         let mut win = Window::new();
-        let mut hit = RayHit::none();
         let pad2 = 2.0 * self.pad;
-        cw.ray_traverse(ray, &mut hit, |_r, id| {
-            let Some(&slot) = cw.primitive_indices.get(id) else {
-                return f32::INFINITY;
-            };
-            let Some(&i) = self.ids.get(slot as usize) else {
-                return f32::INFINITY;
-            };
-            let i = i as usize;
-            match intersect(i) {
-                Some(t) if t > FTINY && t < tmax => {
-                    if win.push(i, t) {
-                        f32_up((t + FTINY - shift) * (1.0 + 1e-6) + pad2)
-                    } else {
-                        f32::INFINITY
-                    }
-                }
-                _ => f32::INFINITY,
+        self.traverse(ray, |i| match intersect(i) {
+            Some(t) if t > FTINY && t < tmax && win.push(i, t) => {
+                // A new closest distance: prune (conservatively) beyond it plus FTINY.
+                f32_up((t + FTINY - shift) * (1.0 + 1e-6) + pad2)
             }
+            _ => f32::INFINITY,
         });
         win.select(&prefer)
     }
 
     /// Every candidate whose box the ray touches (for tests/diagnostics), in any order.
     pub fn candidates(&self, org: DVec3, dir: DVec3, tmax: f64, mut f: impl FnMut(usize)) {
-        let Some(cw) = self.cw.as_ref() else {
-            return;
-        };
         let Some((ray, _)) = self.setup(org, dir, tmax) else {
             return;
         };
-        cw.ray_traverse_anyhit(ray, |_r, id| {
-            if let Some(&slot) = cw.primitive_indices.get(id) {
-                if let Some(&i) = self.ids.get(slot as usize) {
-                    f(i as usize);
+        self.traverse(ray, |i| {
+            f(i);
+            f32::INFINITY
+        });
+    }
+
+    /// Visit every primitive whose box the f32 ray reaches, calling `prim(caller index)`;
+    /// the returned value lowers the ray's (f32) tmax when smaller.
+    fn traverse(&self, mut ray: Ray, mut prim: impl FnMut(usize) -> f32) {
+        let Some(cw) = self.cw.as_ref() else {
+            return;
+        };
+        let mut state = TravState::new(ray.direction);
+        let mut node;
+        obvhs::traverse!(cw, node, state, node.intersect_ray(&ray, state.oct_inv4), {
+            let slot = cw.primitive_indices.get(state.primitive_id as usize);
+            if let Some(&i) = slot.and_then(|&s| self.ids.get(s as usize)) {
+                let t = prim(i as usize);
+                if t < ray.tmax {
+                    ray.tmax = t;
                 }
             }
         });
@@ -366,6 +484,43 @@ mod tests {
     }
 
     #[test]
+    fn deep_tree_traversal_finds_everything() {
+        // Nested boxes make a chain-like tree deeper than obvhs's 32-entry stack.
+        let nested: Vec<_> = (0..600)
+            .map(|i| {
+                let s = 1.01f64.powi(i);
+                (DVec3::splat(-s), DVec3::splat(s))
+            })
+            .collect();
+        let bvh = Bvh::build(&nested);
+        let cw = bvh.cw.as_ref().unwrap();
+        let parents = cw.compute_parents();
+        let depth = (0..parents.len())
+            .map(|mut n| {
+                let mut d = 0;
+                while n != 0 && d < 100_000 {
+                    n = parents[n] as usize;
+                    d += 1;
+                }
+                d
+            })
+            .max()
+            .unwrap();
+        assert!(depth > 40, "depth {depth}");
+        let mut seen = vec![false; nested.len()];
+        bvh.candidates(DVec3::ZERO, DVec3::Y, 1e10, |i| seen[i] = true);
+        assert!(seen.iter().all(|&b| b));
+        let got = bvh.closest(
+            DVec3::ZERO,
+            DVec3::Y,
+            1e10,
+            |i| Some(1.0 + i as f64),
+            |_, _| false,
+        );
+        assert_eq!(got, Some((0, 1.0)));
+    }
+
+    #[test]
     fn window_rules() {
         // Closest wins when nothing is preferred.
         assert_eq!(
@@ -390,7 +545,11 @@ mod tests {
         // Eviction when a nearer hit arrives later.
         assert_eq!(
             select_closest(
-                [(1, 1.0 + 0.9 * FTINY), (2, 1.0 + 0.5 * FTINY), (3, 1.0 - 0.2 * FTINY)],
+                [
+                    (1, 1.0 + 0.9 * FTINY),
+                    (2, 1.0 + 0.5 * FTINY),
+                    (3, 1.0 - 0.2 * FTINY)
+                ],
                 10.0,
                 |a, b| a < b
             ),

@@ -67,10 +67,7 @@ pub struct Cone {
 impl Cone {
     /// Build from a cone/cup/cylinder/tube primitive. Returns Radiance's warning for
     /// negative radii (the type is flipped), if any.
-    pub fn from_primitive(
-        p: &Primitive,
-        origin: DVec3,
-    ) -> Result<(Cone, Option<String>), String> {
+    pub fn from_primitive(p: &Primitive, origin: DVec3) -> Result<(Cone, Option<String>), String> {
         let (mut kind, cyl) = match p.ptype.as_str() {
             "cone" => (ConeKind::Cone, false),
             "cup" => (ConeKind::Cup, false),

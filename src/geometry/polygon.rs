@@ -62,7 +62,7 @@ impl Polygon {
         origin: DVec3,
     ) -> Result<(Polygon, Option<String>), String> {
         let r = &p.rargs;
-        if r.len() < 9 || r.len() % 3 != 0 {
+        if r.len() < 9 || !r.len().is_multiple_of(3) {
             return Err(format!("bad # arguments for polygon \"{}\"", p.name));
         }
         let verts: Vec<DVec3> = r
@@ -70,7 +70,10 @@ impl Polygon {
             .map(|c| DVec3::new(c[0], c[1], c[2]) - origin)
             .collect();
         let (poly, warn) = Polygon::new(verts)?;
-        Ok((poly, warn.map(|w| format!("{w} for polygon \"{}\"", p.name))))
+        Ok((
+            poly,
+            warn.map(|w| format!("{w} for polygon \"{}\"", p.name)),
+        ))
     }
 
     /// Build from vertices already in the relative frame. Returns a warning text ("zero

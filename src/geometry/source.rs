@@ -31,7 +31,7 @@ impl DistantSource {
     /// Build from a direction (any non-zero length) and a full angle in degrees.
     pub fn new(dir: DVec3, angle_deg: f64) -> Result<DistantSource, String> {
         let len = dir.length();
-        if !(len > 0.0 && len.is_finite()) || !angle_deg.is_finite() {
+        if !(len > 0.0 && len.is_finite() && angle_deg.is_finite()) {
             return Err("illegal direction".to_string());
         }
         let half = (angle_deg * 0.5).to_radians();
@@ -45,8 +45,7 @@ impl DistantSource {
     /// Radiance's test: 2π(1 − dir·d) < solid_angle (with an angle-0 source never hit).
     /// `d` is the (unit) ray direction.
     pub fn hit_by(&self, d: DVec3) -> bool {
-        self.angle_deg > 0.0
-            && std::f64::consts::TAU * (1.0 - self.dir.dot(d)) < self.solid_angle
+        self.angle_deg > 0.0 && std::f64::consts::TAU * (1.0 - self.dir.dot(d)) < self.solid_angle
     }
 }
 

@@ -42,13 +42,20 @@ const A_EXTRA: &str = "radiance.extra";
 /// EXR text is Latin-1; characters outside it become `?`.
 fn text(s: &str) -> Text {
     Text::new_or_none(s).unwrap_or_else(|| {
-        let latin1: String = s.chars().map(|c| if (c as u32) < 256 { c } else { '?' }).collect();
+        let latin1: String = s
+            .chars()
+            .map(|c| if (c as u32) < 256 { c } else { '?' })
+            .collect();
         Text::new_or_panic(latin1)
     })
 }
 
 fn parse_primaries(p: &str) -> Option<Chromaticities> {
-    let v: Vec<f32> = p.split_whitespace().map(str::parse).collect::<Result<_, _>>().ok()?;
+    let v: Vec<f32> = p
+        .split_whitespace()
+        .map(str::parse)
+        .collect::<Result<_, _>>()
+        .ok()?;
     (v.len() == 8).then(|| Chromaticities {
         red: x::Vec2(v[0], v[1]),
         green: x::Vec2(v[2], v[3]),
@@ -67,14 +74,20 @@ fn exr_io_error(e: x::Error) -> io::Error {
 /// Write `img` as an OpenEXR file (float RGB, header as attributes, see the module docs),
 /// atomically.
 pub fn write_exr(path: &Path, img: &Image) -> Result<(), ImageError> {
-    super::check_writable(img).map_err(|reason| ImageError::Invalid { path: Some(path.to_path_buf()), reason })?;
+    super::check_writable(img).map_err(|reason| ImageError::Invalid {
+        path: Some(path.to_path_buf()),
+        reason,
+    })?;
     let h = &img.header;
     let mut la = x::LayerAttributes::default();
     let mut put = |name: &str, v: AttributeValue| {
         la.other.insert(text(name), v);
     };
     if !h.commands.is_empty() {
-        put(A_COMMANDS, AttributeValue::Text(text(&h.commands.join("\n"))));
+        put(
+            A_COMMANDS,
+            AttributeValue::Text(text(&h.commands.join("\n"))),
+        );
     }
     if let Some(v) = &h.view {
         put(A_VIEW, AttributeValue::Text(text(v)));
@@ -89,12 +102,22 @@ pub fn write_exr(path: &Path, img: &Image) -> Result<(), ImageError> {
         put(A_PIXASPECT, AttributeValue::Text(text(&pa.to_string())));
     }
     if h.exposure != 1.0 {
-        put(A_EXPOSURE, AttributeValue::Text(text(&h.exposure.to_string())));
+        put(
+            A_EXPOSURE,
+            AttributeValue::Text(text(&h.exposure.to_string())),
+        );
     }
     if let Some(p) = &h.primaries {
         put(A_PRIMARIES, AttributeValue::Text(text(p)));
     }
-    put(A_FORMAT, AttributeValue::Text(text(if h.is_xyze() { FORMAT_XYZE } else { FORMAT_RGBE })));
+    put(
+        A_FORMAT,
+        AttributeValue::Text(text(if h.is_xyze() {
+            FORMAT_XYZE
+        } else {
+            FORMAT_RGBE
+        })),
+    );
     if let Some((tx, ty)) = h.tiled {
         put(A_TILED, AttributeValue::Text(text(&format!("{tx} {ty}"))));
     }
@@ -109,7 +132,12 @@ pub fn write_exr(path: &Path, img: &Image) -> Result<(), ImageError> {
         let c = pixels[p.y() * w + p.x()];
         (c[0], c[1], c[2])
     });
-    let layer = x::Layer::new((img.width, img.height), la, x::Encoding::SMALL_LOSSLESS, channels);
+    let layer = x::Layer::new(
+        (img.width, img.height),
+        la,
+        x::Encoding::SMALL_LOSSLESS,
+        channels,
+    );
     let mut image = x::Image::from_layer(layer);
     if let Some(pa) = h.pixaspect {
         image.attributes.pixel_aspect = pa as f32;
@@ -118,8 +146,13 @@ pub fn write_exr(path: &Path, img: &Image) -> Result<(), ImageError> {
         image.attributes.chromaticities =
             parse_primaries(h.primaries.as_deref().unwrap_or(super::STD_PRIMARIES));
     }
-    super::output::write_atomic(path, |f| image.write().to_unbuffered(f).map_err(exr_io_error))
-        .map_err(|source| ImageError::Io { path: Some(path.to_path_buf()), source })
+    super::output::write_atomic(path, |f| {
+        image.write().to_unbuffered(f).map_err(exr_io_error)
+    })
+    .map_err(|source| ImageError::Io {
+        path: Some(path.to_path_buf()),
+        source,
+    })
 }
 
 fn attr_text(v: &AttributeValue) -> Option<String> {
@@ -141,7 +174,9 @@ pub fn read_exr(path: &Path) -> Result<Image, ImageError> {
         .required("G")
         .required("B")
         .collect_pixels(
-            |size: x::Vec2<usize>, _| -> Px { (size.width(), vec![[0.0; 3]; size.width() * size.height()]) },
+            |size: x::Vec2<usize>, _| -> Px {
+                (size.width(), vec![[0.0; 3]; size.width() * size.height()])
+            },
             |px: &mut Px, pos: x::Vec2<usize>, (r, g, b): (f32, f32, f32)| {
                 let w = px.0;
                 px.1[pos.y() * w + pos.x()] = [r, g, b];
@@ -151,8 +186,14 @@ pub fn read_exr(path: &Path) -> Result<Image, ImageError> {
         .all_attributes()
         .from_file(path);
     let image = read.map_err(|e| match e {
-        x::Error::Io(source) => ImageError::Io { path: Some(path.to_path_buf()), source },
-        other => ImageError::Format { path: Some(path.to_path_buf()), reason: format!("OpenEXR: {other}") },
+        x::Error::Io(source) => ImageError::Io {
+            path: Some(path.to_path_buf()),
+            source,
+        },
+        other => ImageError::Format {
+            path: Some(path.to_path_buf()),
+            reason: format!("OpenEXR: {other}"),
+        },
     })?;
     let layer = &image.layer_data;
     let (width, height) = (layer.size.width(), layer.size.height());
@@ -160,14 +201,22 @@ pub fn read_exr(path: &Path) -> Result<Image, ImageError> {
 
     let get = |name: &str| {
         let key = text(name);
-        layer.attributes.other.get(&key).or_else(|| image.attributes.other.get(&key))
+        layer
+            .attributes
+            .other
+            .get(&key)
+            .or_else(|| image.attributes.other.get(&key))
     };
     let get_text = |name: &str| get(name).and_then(attr_text);
     let mut h = Header::default();
     if let Some(c) = get_text(A_COMMANDS) {
         h.commands = c.lines().map(str::to_string).collect();
     }
-    h.software = layer.attributes.software_name.as_ref().map(|t| t.to_string());
+    h.software = layer
+        .attributes
+        .software_name
+        .as_ref()
+        .map(|t| t.to_string());
     h.view = get_text(A_VIEW);
     h.frame = match get(A_FRAME) {
         Some(AttributeValue::I32(f)) => u32::try_from(*f).ok(),
@@ -203,7 +252,10 @@ pub fn read_exr(path: &Path) -> Result<Image, ImageError> {
         }
     }
     if let Some(t) = get_text(A_TILED) {
-        let v: Vec<u32> = t.split_whitespace().filter_map(|s| s.parse().ok()).collect();
+        let v: Vec<u32> = t
+            .split_whitespace()
+            .filter_map(|s| s.parse().ok())
+            .collect();
         if v.len() == 2 {
             h.tiled = Some((v[0], v[1]));
         }
@@ -211,8 +263,16 @@ pub fn read_exr(path: &Path) -> Result<Image, ImageError> {
     if let Some(e) = get_text(A_EXTRA) {
         h.extra = e
             .lines()
-            .filter_map(|l| l.split_once('=').map(|(n, v)| (n.to_string(), v.to_string())))
+            .filter_map(|l| {
+                l.split_once('=')
+                    .map(|(n, v)| (n.to_string(), v.to_string()))
+            })
             .collect();
     }
-    Ok(Image { width, height, pixels, header: h })
+    Ok(Image {
+        width,
+        height,
+        pixels,
+        header: h,
+    })
 }

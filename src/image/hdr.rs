@@ -67,7 +67,12 @@ pub fn float_to_rgbe(c: [f32; 3]) -> [u8; 4] {
         return [255; 4];
     }
     let scale = pow2(8 - e); // exactly 256 / 2^e
-    [(r * scale) as u8, (g * scale) as u8, (b * scale) as u8, (e + 128) as u8]
+    [
+        (r * scale) as u8,
+        (g * scale) as u8,
+        (b * scale) as u8,
+        (e + 128) as u8,
+    ]
 }
 
 /// Decode an RGBE pixel as Radiance does: `(m + 0.5) * 2^(E - 136)` per component, black when
@@ -144,7 +149,11 @@ pub fn header_bytes(img: &Image) -> Vec<u8> {
         s.push_str(&format!("PIXASPECT={pa:.6}\n"));
     }
     if !xyze {
-        let p = h.primaries.as_deref().map(str::trim).unwrap_or(STD_PRIMARIES);
+        let p = h
+            .primaries
+            .as_deref()
+            .map(str::trim)
+            .unwrap_or(STD_PRIMARIES);
         s.push_str(&format!("PRIMARIES= {}\n", one_line(p)));
     }
     for (name, value) in &h.extra {
@@ -156,7 +165,10 @@ pub fn header_bytes(img: &Image) -> Vec<u8> {
     if h.exposure.is_finite() && h.exposure > 0.0 && h.exposure != 1.0 {
         s.push_str(&format!("EXPOSURE={}\n", c_exp(h.exposure)));
     }
-    s.push_str(&format!("FORMAT={}\n\n", if xyze { FORMAT_XYZE } else { FORMAT_RGBE }));
+    s.push_str(&format!(
+        "FORMAT={}\n\n",
+        if xyze { FORMAT_XYZE } else { FORMAT_RGBE }
+    ));
     s.push_str(&format!("-Y {:8} +X {:8}\n", img.height, img.width));
     s.into_bytes()
 }
@@ -242,10 +254,14 @@ pub fn write_hdr<W: Write>(w: &mut W, img: &Image) -> io::Result<()> {
 
 /// Write `img` as an RGBE picture to `path`, atomically (see [`super::output::write_atomic`]).
 pub fn write_hdr_file(path: &Path, img: &Image) -> Result<(), ImageError> {
-    super::check_writable(img)
-        .map_err(|reason| ImageError::Invalid { path: Some(path.to_path_buf()), reason })?;
-    super::output::write_atomic(path, |f| write_hdr(f, img))
-        .map_err(|source| ImageError::Io { path: Some(path.to_path_buf()), source })
+    super::check_writable(img).map_err(|reason| ImageError::Invalid {
+        path: Some(path.to_path_buf()),
+        reason,
+    })?;
+    super::output::write_atomic(path, |f| write_hdr(f, img)).map_err(|source| ImageError::Io {
+        path: Some(path.to_path_buf()),
+        source,
+    })
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -283,7 +299,9 @@ fn split_var(line: &str) -> Option<(&str, &str)> {
     let name = &line[..eq];
     let mut chars = name.chars();
     let first = chars.next()?;
-    if !(first.is_ascii_alphabetic() || first == '_') || !chars.all(|c| c.is_ascii_alphanumeric() || c == '_') {
+    if !(first.is_ascii_alphabetic() || first == '_')
+        || !chars.all(|c| c.is_ascii_alphanumeric() || c == '_')
+    {
         return None;
     }
     Some((name, &line[eq + 1..]))
@@ -299,15 +317,22 @@ pub fn read_header<R: BufRead>(r: &mut R) -> Result<Header, ImageError> {
     match r.fill_buf()?.first() {
         None => return Err(bad("empty file, not a Radiance picture")),
         Some(&b) if !(0x20..0x7f).contains(&b) => {
-            return Err(bad("not a Radiance picture (binary data where the header should be)"))
+            return Err(bad(
+                "not a Radiance picture (binary data where the header should be)",
+            ))
         }
         _ => {}
     }
-    let mut h = Header { format: String::new(), ..Header::default() };
+    let mut h = Header {
+        format: String::new(),
+        ..Header::default()
+    };
     let mut first = true;
     loop {
         let Some(raw) = read_line(r, MAX_HEADER_LINE, "header line")? else {
-            return Err(bad("truncated header (no blank line before the pixel data)"));
+            return Err(bad(
+                "truncated header (no blank line before the pixel data)",
+            ));
         };
         let line = chomp(&raw);
         if line.is_empty() {
@@ -327,7 +352,9 @@ pub fn read_header<R: BufRead>(r: &mut R) -> Result<Header, ImageError> {
             "FORMAT" => {
                 let f = value.trim();
                 if f != FORMAT_RGBE && f != FORMAT_XYZE {
-                    return Err(bad(format!("unsupported pixel format '{f}' (expected {FORMAT_RGBE} or {FORMAT_XYZE})")));
+                    return Err(bad(format!(
+                        "unsupported pixel format '{f}' (expected {FORMAT_RGBE} or {FORMAT_XYZE})"
+                    )));
                 }
                 h.format = f.to_string();
             }
@@ -420,15 +447,34 @@ fn parse_resolution(line: &[u8]) -> Result<(usize, usize, Orientation), ImageErr
     let (d2, a2) = axis(tok[2]).ok_or_else(fail)?;
     let (n1, n2) = (num(tok[1]).ok_or_else(fail)?, num(tok[3]).ok_or_else(fail)?);
     match (a1, a2) {
-        ('Y', 'X') => Ok((n2, n1, Orientation { y_major: true, y_decr: d1, x_decr: d2 })),
-        ('X', 'Y') => Ok((n1, n2, Orientation { y_major: false, x_decr: d1, y_decr: d2 })),
+        ('Y', 'X') => Ok((
+            n2,
+            n1,
+            Orientation {
+                y_major: true,
+                y_decr: d1,
+                x_decr: d2,
+            },
+        )),
+        ('X', 'Y') => Ok((
+            n1,
+            n2,
+            Orientation {
+                y_major: false,
+                x_decr: d1,
+                y_decr: d2,
+            },
+        )),
         _ => Err(fail()),
     }
 }
 
 fn eof_to_truncated(e: io::Error, line: usize, lines: usize) -> ImageError {
     if e.kind() == io::ErrorKind::UnexpectedEof {
-        bad(format!("truncated picture: end of file in scanline {} of {lines}", line + 1))
+        bad(format!(
+            "truncated picture: end of file in scanline {} of {lines}",
+            line + 1
+        ))
     } else {
         ImageError::from(e)
     }
@@ -447,7 +493,11 @@ fn byte<R: BufRead>(r: &mut R) -> io::Result<u8> {
 
 /// Read one scanline of `out.len()` pixels in whatever encoding it uses. `Ok(Err(reason))` for
 /// corrupt data.
-fn read_scanline<R: BufRead>(r: &mut R, out: &mut [[u8; 4]], comp: &mut Vec<u8>) -> io::Result<Result<(), String>> {
+fn read_scanline<R: BufRead>(
+    r: &mut R,
+    out: &mut [[u8; 4]],
+    comp: &mut Vec<u8>,
+) -> io::Result<Result<(), String>> {
     let w = out.len();
     let mut first = [0u8; 4];
     r.read_exact(&mut first)?;
@@ -455,7 +505,9 @@ fn read_scanline<R: BufRead>(r: &mut R, out: &mut [[u8; 4]], comp: &mut Vec<u8>)
         // New RLE.
         let len = (first[2] as usize) << 8 | first[3] as usize;
         if len != w {
-            return Ok(Err(format!("run-length scanline says {len} pixels, the picture is {w} wide")));
+            return Ok(Err(format!(
+                "run-length scanline says {len} pixels, the picture is {w} wide"
+            )));
         }
         comp.resize(w, 0);
         for i in 0..4 {
@@ -472,7 +524,11 @@ fn read_scanline<R: BufRead>(r: &mut R, out: &mut [[u8; 4]], comp: &mut Vec<u8>)
                     j += n;
                 } else {
                     if code == 0 || j + code > w {
-                        return Ok(Err(if code == 0 { "zero-length packet".into() } else { "literal overruns the scanline".into() }));
+                        return Ok(Err(if code == 0 {
+                            "zero-length packet".into()
+                        } else {
+                            "literal overruns the scanline".into()
+                        }));
                     }
                     r.read_exact(&mut comp[j..j + code])?;
                     j += code;
@@ -530,7 +586,11 @@ pub fn read_hdr<R: BufRead>(r: &mut R) -> Result<Image, ImageError> {
         .checked_mul(height)
         .filter(|&t| t.checked_mul(16).is_some())
         .ok_or_else(|| bad(format!("picture size {width}x{height} is too large")))?;
-    let (line_len, lines) = if o.y_major { (width, height) } else { (height, width) };
+    let (line_len, lines) = if o.y_major {
+        (width, height)
+    } else {
+        (height, width)
+    };
 
     // Decode every scanline in file order; grow as data arrives so a bogus size in a short file
     // fails on the data instead of on a huge allocation.
@@ -541,12 +601,21 @@ pub fn read_hdr<R: BufRead>(r: &mut R) -> Result<Image, ImageError> {
         raw.resize(start + line_len, [0; 4]);
         match read_scanline(r, &mut raw[start..], &mut comp) {
             Ok(Ok(())) => {}
-            Ok(Err(reason)) => return Err(bad(format!("corrupt scanline {} of {lines}: {reason}", s + 1))),
+            Ok(Err(reason)) => {
+                return Err(bad(format!(
+                    "corrupt scanline {} of {lines}: {reason}",
+                    s + 1
+                )))
+            }
             Err(e) => return Err(eof_to_truncated(e, s, lines)),
         }
     }
 
-    let standard = Orientation { y_major: true, y_decr: true, x_decr: false };
+    let standard = Orientation {
+        y_major: true,
+        y_decr: true,
+        x_decr: false,
+    };
     let pixels: Vec<[f32; 3]> = if o == standard {
         raw.iter().map(|&p| rgbe_to_float(p)).collect()
     } else {
@@ -567,12 +636,20 @@ pub fn read_hdr<R: BufRead>(r: &mut R) -> Result<Image, ImageError> {
         }
         pixels
     };
-    Ok(Image { width, height, pixels, header })
+    Ok(Image {
+        width,
+        height,
+        pixels,
+        header,
+    })
 }
 
 /// Read a Radiance picture from a file; errors name the file.
 pub fn read_hdr_file(path: &Path) -> Result<Image, ImageError> {
-    let f = std::fs::File::open(path).map_err(|source| ImageError::Io { path: Some(path.to_path_buf()), source })?;
+    let f = std::fs::File::open(path).map_err(|source| ImageError::Io {
+        path: Some(path.to_path_buf()),
+        source,
+    })?;
     let mut r = io::BufReader::with_capacity(1 << 16, f);
     read_hdr(&mut r).map_err(|e| e.with_path(path))
 }
@@ -584,7 +661,12 @@ mod tests {
     #[test]
     fn rgbe_known_values() {
         let c = rgbe_to_float([0xff, 0xfe, 0xfe, 0x7e]);
-        assert!((c[0] - 0.24951).abs() < 1e-5 && (c[1] - 0.24854).abs() < 1e-5 && (c[2] - 0.24854).abs() < 1e-5, "{c:?}");
+        assert!(
+            (c[0] - 0.24951).abs() < 1e-5
+                && (c[1] - 0.24854).abs() < 1e-5
+                && (c[2] - 0.24854).abs() < 1e-5,
+            "{c:?}"
+        );
         assert_eq!(float_to_rgbe(c), [0xff, 0xfe, 0xfe, 0x7e]);
         assert_eq!(float_to_rgbe([1.0, 0.0, 0.0]), [128, 0, 0, 129]);
         assert_eq!(float_to_rgbe([0.5, 0.5, 0.5]), [128, 128, 128, 128]);
@@ -599,7 +681,10 @@ mod tests {
     #[test]
     fn rgbe_cleans_bad_input() {
         assert_eq!(float_to_rgbe([f32::NAN, f32::INFINITY, -1.0]), [0; 4]);
-        assert_eq!(float_to_rgbe([f32::NAN, 1.0, f32::NEG_INFINITY]), [0, 128, 0, 129]);
+        assert_eq!(
+            float_to_rgbe([f32::NAN, 1.0, f32::NEG_INFINITY]),
+            [0, 128, 0, 129]
+        );
         assert_eq!(float_to_rgbe([f32::MAX, 0.0, 0.0]), [255; 4]);
         let big = rgbe_to_float(float_to_rgbe([1e38, 1e38, 1e38]));
         assert!((big[0] / 1e38 - 1.0).abs() < 0.01);
@@ -658,12 +743,37 @@ mod tests {
     fn resolution_lines() {
         let (w, h, o) = parse_resolution(b"-Y       32 +X       48\n").unwrap();
         assert_eq!((w, h), (48, 32));
-        assert_eq!(o, Orientation { y_major: true, y_decr: true, x_decr: false });
+        assert_eq!(
+            o,
+            Orientation {
+                y_major: true,
+                y_decr: true,
+                x_decr: false
+            }
+        );
         let (w, h, o) = parse_resolution(b"+X 3 -Y 2\r\n").unwrap();
         assert_eq!((w, h), (3, 2));
-        assert_eq!(o, Orientation { y_major: false, y_decr: true, x_decr: false });
-        for bad in [&b"-Y 0 +X 3\n"[..], b"-Y 3 +Y 3\n", b"Y 3 X 3\n", b"-Y 3 +X\n", b"-Y -3 +X 3\n", b"-Y 3 +X 3 4\n"] {
-            assert!(parse_resolution(bad).is_err(), "{}", String::from_utf8_lossy(bad));
+        assert_eq!(
+            o,
+            Orientation {
+                y_major: false,
+                y_decr: true,
+                x_decr: false
+            }
+        );
+        for bad in [
+            &b"-Y 0 +X 3\n"[..],
+            b"-Y 3 +Y 3\n",
+            b"Y 3 X 3\n",
+            b"-Y 3 +X\n",
+            b"-Y -3 +X 3\n",
+            b"-Y 3 +X 3 4\n",
+        ] {
+            assert!(
+                parse_resolution(bad).is_err(),
+                "{}",
+                String::from_utf8_lossy(bad)
+            );
         }
     }
 }

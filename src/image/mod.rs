@@ -66,14 +66,24 @@ impl Image {
     /// The pixel at column `x`, row `y_from_top`. Panics when out of range.
     #[inline]
     pub fn get(&self, x: usize, y_from_top: usize) -> [f32; 3] {
-        assert!(x < self.width && y_from_top < self.height, "pixel ({x}, {y_from_top}) outside {}x{}", self.width, self.height);
+        assert!(
+            x < self.width && y_from_top < self.height,
+            "pixel ({x}, {y_from_top}) outside {}x{}",
+            self.width,
+            self.height
+        );
         self.pixels[y_from_top * self.width + x]
     }
 
     /// Set the pixel at column `x`, row `y_from_top`. Panics when out of range.
     #[inline]
     pub fn set(&mut self, x: usize, y_from_top: usize, c: [f32; 3]) {
-        assert!(x < self.width && y_from_top < self.height, "pixel ({x}, {y_from_top}) outside {}x{}", self.width, self.height);
+        assert!(
+            x < self.width && y_from_top < self.height,
+            "pixel ({x}, {y_from_top}) outside {}x{}",
+            self.width,
+            self.height
+        );
         self.pixels[y_from_top * self.width + x] = c;
     }
 
@@ -150,7 +160,10 @@ impl Default for Header {
 impl Header {
     /// The value of the first `extra` variable called `name`, if any.
     pub fn extra_value(&self, name: &str) -> Option<&str> {
-        self.extra.iter().find(|(n, _)| n == name).map(|(_, v)| v.as_str())
+        self.extra
+            .iter()
+            .find(|(n, _)| n == name)
+            .map(|(_, v)| v.as_str())
     }
 
     /// True for an XYZE picture.
@@ -173,7 +186,11 @@ pub enum PictureFormat {
 impl PictureFormat {
     /// `.exr` → Exr, `.png` → Png (either case), anything else → Hdr.
     pub fn from_path(p: &Path) -> PictureFormat {
-        match p.extension().and_then(|e| e.to_str()).map(|e| e.to_ascii_lowercase()) {
+        match p
+            .extension()
+            .and_then(|e| e.to_str())
+            .map(|e| e.to_ascii_lowercase())
+        {
             Some(e) if e == "exr" => PictureFormat::Exr,
             Some(e) if e == "png" => PictureFormat::Png,
             _ => PictureFormat::Hdr,
@@ -223,7 +240,10 @@ fn prefix(path: &Option<PathBuf>) -> String {
 impl ImageError {
     /// A format error without a file name.
     pub fn format(reason: impl fmt::Display) -> ImageError {
-        ImageError::Format { path: None, reason: reason.to_string() }
+        ImageError::Format {
+            path: None,
+            reason: reason.to_string(),
+        }
     }
 
     /// Attach `path` to the error (replacing any path it had).
@@ -255,7 +275,10 @@ impl From<std::io::Error> for ImageError {
 /// Check that `img` can be written: at least one pixel, and `pixels.len() == width * height`.
 pub(crate) fn check_writable(img: &Image) -> Result<(), String> {
     if img.width == 0 || img.height == 0 {
-        return Err(format!("cannot write an empty {}x{} picture", img.width, img.height));
+        return Err(format!(
+            "cannot write an empty {}x{} picture",
+            img.width, img.height
+        ));
     }
     if img.width.checked_mul(img.height) != Some(img.pixels.len()) {
         return Err(format!(
@@ -280,7 +303,10 @@ pub fn write_picture(path: Option<&Path>, img: &Image) -> Result<(), ImageError>
         let stdout = std::io::stdout();
         let mut w = std::io::BufWriter::with_capacity(1 << 16, stdout.lock());
         let res = hdr::write_hdr(&mut w, img).and_then(|()| w.flush());
-        return res.map_err(|source| ImageError::Io { path: Some(PathBuf::from("<stdout>")), source });
+        return res.map_err(|source| ImageError::Io {
+            path: Some(PathBuf::from("<stdout>")),
+            source,
+        });
     };
     match PictureFormat::from_path(path) {
         PictureFormat::Hdr => hdr::write_hdr_file(path, img),
@@ -295,20 +321,29 @@ pub fn read_picture(path: &Path) -> Result<Image, ImageError> {
     let mut magic = [0u8; 4];
     let is_exr_magic = {
         use std::io::Read;
-        let mut f = std::fs::File::open(path)
-            .map_err(|source| ImageError::Io { path: Some(path.to_path_buf()), source })?;
+        let mut f = std::fs::File::open(path).map_err(|source| ImageError::Io {
+            path: Some(path.to_path_buf()),
+            source,
+        })?;
         let mut n = 0;
         while n < 4 {
             match f.read(&mut magic[n..]) {
                 Ok(0) => break,
                 Ok(k) => n += k,
                 Err(e) if e.kind() == std::io::ErrorKind::Interrupted => {}
-                Err(source) => return Err(ImageError::Io { path: Some(path.to_path_buf()), source }),
+                Err(source) => {
+                    return Err(ImageError::Io {
+                        path: Some(path.to_path_buf()),
+                        source,
+                    })
+                }
             }
         }
         n == 4 && magic == [0x76, 0x2f, 0x31, 0x01]
     };
-    if is_exr_magic || (PictureFormat::from_path(path) == PictureFormat::Exr && magic[..2] != *b"#?") {
+    if is_exr_magic
+        || (PictureFormat::from_path(path) == PictureFormat::Exr && magic[..2] != *b"#?")
+    {
         exr::read_exr(path)
     } else {
         hdr::read_hdr_file(path)

@@ -20,9 +20,12 @@ fn temp_beside(path: &Path) -> io::Result<NamedTempFile> {
         Some(d) if !d.as_os_str().is_empty() => d,
         _ => Path::new("."),
     };
-    let name = path
-        .file_name()
-        .ok_or_else(|| io::Error::new(io::ErrorKind::InvalidInput, format!("{}: not a file name", path.display())))?;
+    let name = path.file_name().ok_or_else(|| {
+        io::Error::new(
+            io::ErrorKind::InvalidInput,
+            format!("{}: not a file name", path.display()),
+        )
+    })?;
     let prefix = format!(".{}.", name.to_string_lossy());
     let mut b = tempfile::Builder::new();
     b.prefix(&prefix).suffix(".tmp");
@@ -58,7 +61,10 @@ pub fn write_atomic(path: &Path, f: impl FnOnce(&mut File) -> io::Result<()>) ->
 /// already there) and atomically when the file is given its name (`renameat2(RENAME_NOREPLACE)`,
 /// or a hard link where that is unsupported, e.g. on NFS), so of several processes racing for the
 /// same name exactly one succeeds and the others' temporary files are removed.
-pub fn write_atomic_noclobber(path: &Path, f: impl FnOnce(&mut File) -> io::Result<()>) -> io::Result<()> {
+pub fn write_atomic_noclobber(
+    path: &Path,
+    f: impl FnOnce(&mut File) -> io::Result<()>,
+) -> io::Result<()> {
     if path.symlink_metadata().is_ok() {
         return Err(exists(path));
     }
@@ -73,7 +79,10 @@ pub fn write_atomic_noclobber(path: &Path, f: impl FnOnce(&mut File) -> io::Resu
 }
 
 fn exists(path: &Path) -> io::Error {
-    io::Error::new(io::ErrorKind::AlreadyExists, format!("{} already exists", path.display()))
+    io::Error::new(
+        io::ErrorKind::AlreadyExists,
+        format!("{} already exists", path.display()),
+    )
 }
 
 #[cfg(test)]
@@ -81,8 +90,10 @@ mod tests {
     use super::*;
 
     fn names(dir: &Path) -> Vec<String> {
-        let mut v: Vec<String> =
-            std::fs::read_dir(dir).unwrap().map(|e| e.unwrap().file_name().to_string_lossy().into_owned()).collect();
+        let mut v: Vec<String> = std::fs::read_dir(dir)
+            .unwrap()
+            .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+            .collect();
         v.sort();
         v
     }
@@ -153,7 +164,10 @@ mod tests {
         // Same as a freshly created ordinary file.
         let q = d.path().join("q");
         std::fs::write(&q, b"x").unwrap();
-        assert_eq!(mode, std::fs::metadata(&q).unwrap().permissions().mode() & 0o777);
+        assert_eq!(
+            mode,
+            std::fs::metadata(&q).unwrap().permissions().mode() & 0o777
+        );
     }
 
     #[test]

@@ -74,7 +74,11 @@ pub fn auto_exposure(img: &Image) -> f64 {
 pub fn tone_map(img: &Image) -> Vec<u8> {
     let k = auto_exposure(img) as f32;
     let lut: Vec<u8> = (0..LUT_SIZE)
-        .map(|i| (srgb_encode(i as f64 / (LUT_SIZE - 1) as f64) * 255.0).round().clamp(0.0, 255.0) as u8)
+        .map(|i| {
+            (srgb_encode(i as f64 / (LUT_SIZE - 1) as f64) * 255.0)
+                .round()
+                .clamp(0.0, 255.0) as u8
+        })
         .collect();
     let scale = (LUT_SIZE - 1) as f32;
     let mut out = Vec::with_capacity(img.pixels.len() * 3);
@@ -91,11 +95,19 @@ pub fn tone_map(img: &Image) -> Vec<u8> {
 /// Write an 8-bit sRGB PNG preview of `img` (tone-mapped as the module docs describe),
 /// atomically.
 pub fn write_png(path: &Path, img: &Image) -> Result<(), ImageError> {
-    let invalid = |reason: String| ImageError::Invalid { path: Some(path.to_path_buf()), reason };
+    let invalid = |reason: String| ImageError::Invalid {
+        path: Some(path.to_path_buf()),
+        reason,
+    };
     super::check_writable(img).map_err(invalid)?;
     let (w, h) = match (u32::try_from(img.width), u32::try_from(img.height)) {
         (Ok(w), Ok(h)) => (w, h),
-        _ => return Err(invalid(format!("{}x{} is too large for PNG", img.width, img.height))),
+        _ => {
+            return Err(invalid(format!(
+                "{}x{} is too large for PNG",
+                img.width, img.height
+            )))
+        }
     };
     let bytes = tone_map(img);
     super::output::write_atomic(path, |f| {
@@ -108,7 +120,10 @@ pub fn write_png(path: &Path, img: &Image) -> Result<(), ImageError> {
             })?;
         io::Write::flush(&mut bw)
     })
-    .map_err(|source| ImageError::Io { path: Some(path.to_path_buf()), source })
+    .map_err(|source| ImageError::Io {
+        path: Some(path.to_path_buf()),
+        source,
+    })
 }
 
 #[cfg(test)]

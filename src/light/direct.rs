@@ -30,7 +30,16 @@ pub fn direct(
     let params = tr.params;
     let mut samples: Vec<SourceSample> = Vec::new();
     for si in 0..lights.sources.len() {
-        lights.sample(tr.scene, si, p, weight, params.ds, params.dj, rng, &mut samples);
+        lights.sample(
+            tr.scene,
+            si,
+            p,
+            weight,
+            params.ds,
+            params.dj,
+            rng,
+            &mut samples,
+        );
     }
     // Potentials.
     let mut cands: Vec<(f64, Color, usize)> = Vec::with_capacity(samples.len());

@@ -154,7 +154,11 @@ fn partitions(a: f64, b: f64, ds: f64, weight: f64) -> (usize, usize) {
 /// Position within stratum `i` of `n`, with jitter fraction `dj`.
 #[inline]
 fn strat(i: usize, n: usize, dj: f64, rng: &mut Sampler) -> f64 {
-    let j = if dj > 0.0 { dj * (rng.next() - 0.5) } else { 0.0 };
+    let j = if dj > 0.0 {
+        dj * (rng.next() - 0.5)
+    } else {
+        0.0
+    };
     ((i as f64 + 0.5 + j) / n as f64).clamp(0.0, 1.0 - 1e-12)
 }
 
@@ -459,7 +463,8 @@ impl LightSet {
                 let omega = total / (na * nb) as f64;
                 for i in 0..na {
                     for j in 0..nb {
-                        let dir = cone_dir(axis, cos_max, strat(i, na, dj, rng), strat(j, nb, dj, rng));
+                        let dir =
+                            cone_dir(axis, cos_max, strat(i, na, dj, rng), strat(j, nb, dj, rng));
                         let dist = sphere_dist(q, dir, *center, *radius).unwrap_or(d);
                         push(dir, dist, omega, q + dir * dist);
                     }
@@ -578,7 +583,8 @@ mod tests {
         let mut sum_r2 = 0.0;
         for i in 0..n {
             for j in 0..n {
-                let (x, y) = square_to_disk((i as f64 + 0.5) / n as f64, (j as f64 + 0.5) / n as f64);
+                let (x, y) =
+                    square_to_disk((i as f64 + 0.5) / n as f64, (j as f64 + 0.5) / n as f64);
                 assert!(x * x + y * y <= 1.0 + 1e-12);
                 sum_r2 += x * x + y * y;
             }

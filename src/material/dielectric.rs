@@ -46,7 +46,10 @@ impl Glass {
     pub fn coefficients(&self, cos1: f64) -> (Color, Color) {
         let cos1 = cos1.clamp(1e-6, 1.0);
         let n = self.n;
-        let cos2 = (1.0 - (1.0 - cos1 * cos1) / (n * n)).max(0.0).sqrt().max(1e-6);
+        let cos2 = (1.0 - (1.0 - cos1 * cos1) / (n * n))
+            .max(0.0)
+            .sqrt()
+            .max(1e-6);
         // Fresnel reflectance for the two polarisations.
         let re = ((cos1 - n * cos2) / (cos1 + n * cos2)).powi(2);
         let rm = ((1.0 / cos1 - n / cos2) / (1.0 / cos1 + n / cos2)).powi(2);

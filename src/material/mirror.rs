@@ -20,7 +20,11 @@ pub struct Mirror {
 
 impl Mirror {
     /// Parse `mirror` (0 or 1 string, 3 reals).
-    pub fn parse(sargs: &[String], rargs: &[f64], lookup: &dyn MaterialLookup) -> Result<Mirror, String> {
+    pub fn parse(
+        sargs: &[String],
+        rargs: &[f64],
+        lookup: &dyn MaterialLookup,
+    ) -> Result<Mirror, String> {
         expect_args("mirror", sargs, rargs, 0..=1, &[3])?;
         let (alternate, alternate_void) = match sargs.first() {
             Some(name) => {

@@ -228,8 +228,8 @@ fn render_cell(
         let c11 = get(x1, y1, &mut grid, rays);
         let small = x1 - x0 <= 1 && y1 - y0 <= 1;
         let corners = [c00, c10, c01, c11];
-        let differ = !small
-            && (0..4).any(|i| (i + 1..4).any(|j| bigdiff(&corners[i], &corners[j], fs.pt)));
+        let differ =
+            !small && (0..4).any(|i| (i + 1..4).any(|j| bigdiff(&corners[i], &corners[j], fs.pt)));
         if small || !differ {
             for y in y0..=y1 {
                 for x in x0..=x1 {

@@ -191,10 +191,8 @@ impl<'a> Tracer<'a> {
             let Some(m) = d.material else { continue };
             match self.scene.material(m) {
                 Material::Emitter(e) => {
-                    let glowish = matches!(
-                        e.kind,
-                        EmitterKind::Glow { .. } | EmitterKind::Illum { .. }
-                    );
+                    let glowish =
+                        matches!(e.kind, EmitterKind::Glow { .. } | EmitterKind::Illum { .. });
                     let v = self.emitter_value(ray, e, f64::INFINITY);
                     if glowish {
                         fallback.get_or_insert(v);
@@ -308,8 +306,11 @@ impl<'a> Tracer<'a> {
             }
             if weight < lw {
                 // Deterministic roulette from the direction bits keeps this per-pixel exact.
-                let bits = dir.x.to_bits() ^ dir.y.to_bits().rotate_left(21) ^ dir.z.to_bits().rotate_left(42);
-                let u = (bits.wrapping_mul(0x9E37_79B9_7F4A_7C15) >> 11) as f64 / (1u64 << 53) as f64;
+                let bits = dir.x.to_bits()
+                    ^ dir.y.to_bits().rotate_left(21)
+                    ^ dir.z.to_bits().rotate_left(42);
+                let u =
+                    (bits.wrapping_mul(0x9E37_79B9_7F4A_7C15) >> 11) as f64 / (1u64 << 53) as f64;
                 if weight <= 0.0 || u >= weight / lw {
                     return None;
                 }
@@ -378,12 +379,9 @@ impl<'a> Tracer<'a> {
                         return Color::ZERO;
                     }
                     let rdir = crate::material::reflect(dir, relay.normal);
-                    let rest = if dist.is_finite() {
-                        dist - hit.t
-                    } else {
-                        dist
-                    };
-                    let real = self.shadow_real(hit.point, rdir, rest, relay.real, hit.antimatter, rng);
+                    let rest = if dist.is_finite() { dist - hit.t } else { dist };
+                    let real =
+                        self.shadow_real(hit.point, rdir, rest, relay.real, hit.antimatter, rng);
                     return t * relay.color * real;
                 }
                 let tr = self.shadow_transmission(&hit, dir);

@@ -6,7 +6,7 @@ use super::primitive::{Location, Primitive};
 use crate::geometry::bvh::Bvh;
 use crate::geometry::source::DistantSource;
 use crate::geometry::Surface;
-use crate::material::{Material, MatId, MaterialLookup, MATERIAL_TYPES, UNSUPPORTED_TYPES};
+use crate::material::{MatId, Material, MaterialLookup, MATERIAL_TYPES, UNSUPPORTED_TYPES};
 use glam::DVec3;
 use std::collections::HashMap;
 
@@ -130,9 +130,10 @@ impl Scene {
         for p in prims {
             let t = p.ptype.as_str();
             if t == "alias" {
-                let target = p.sargs.first().ok_or_else(|| {
-                    err(p, format!("alias {} names no original", p.name))
-                })?;
+                let target = p
+                    .sargs
+                    .first()
+                    .ok_or_else(|| err(p, format!("alias {} names no original", p.name)))?;
                 let m = mods.material(target).map_err(|m| err(p, m))?;
                 if p.modifier != "void" && p.modifier != "inherit" {
                     // A pattern or texture modifier on the alias is not supported yet.
@@ -204,7 +205,10 @@ impl Scene {
             if UNSUPPORTED_TYPES.contains(&t) {
                 return Err(err(
                     p,
-                    format!("unsupported primitive type {t} ({} {t} {})", p.modifier, p.name),
+                    format!(
+                        "unsupported primitive type {t} ({} {t} {})",
+                        p.modifier, p.name
+                    ),
                 ));
             }
             return Err(err(p, format!("unknown primitive type '{t}'")));
