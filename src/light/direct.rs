@@ -62,11 +62,10 @@ pub fn direct(
         0.0
     };
     let mut result = Color::ZERO;
-    let mut tested = 0usize;
     // Per-source visibility statistics from this point's tests.
     let mut stats: Vec<(f64, u32)> = vec![(0.0, 0); lights.sources.len()];
     let mut untested_from = n;
-    for i in 0..n {
+    for (tested, i) in (0..n).enumerate() {
         if thresh > 0.0 && tested >= MIN_SHADOW_TESTS {
             let ahead: f64 = cands[i..(i + nshadcheck).min(n)].iter().map(|c| c.0).sum();
             if ahead < thresh * bright(result) {
@@ -77,7 +76,6 @@ pub fn direct(
         let (_, c, k) = cands[i];
         let s = &samples[k];
         let t = tr.shadow(p, s.dir, s.dist, s.src, rng);
-        tested += 1;
         let st = &mut stats[s.src];
         st.0 += bright(t).clamp(0.0, 1.0);
         st.1 += 1;

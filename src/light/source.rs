@@ -155,7 +155,7 @@ fn partitions(a: f64, b: f64, ds: f64, weight: f64) -> (usize, usize) {
 #[inline]
 fn strat(i: usize, n: usize, dj: f64, rng: &mut Sampler) -> f64 {
     let j = if dj > 0.0 {
-        dj * (rng.next() - 0.5)
+        dj * (rng.uniform() - 0.5)
     } else {
         0.0
     };
@@ -361,7 +361,7 @@ impl LightSet {
         let focal = src.emitter.focal_distance();
         let center = src.center;
         let mut push = |dir: DVec3, dist: f64, mut omega: f64, _at: DVec3| {
-            if !(omega > 0.0) || !dir.is_finite() {
+            if omega.is_nan() || omega <= 0.0 || !dir.is_finite() {
                 return;
             }
             let spot = src.emitter.spot_factor(center, q);

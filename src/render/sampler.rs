@@ -50,14 +50,14 @@ impl Sampler {
 
     /// Uniform in [0, 1).
     #[inline]
-    pub fn next(&mut self) -> f64 {
+    pub fn uniform(&mut self) -> f64 {
         (self.next_u64() >> 11) as f64 * (1.0 / (1u64 << 53) as f64)
     }
 
     /// Two uniforms in [0, 1).
     #[inline]
     pub fn next2(&mut self) -> (f64, f64) {
-        (self.next(), self.next())
+        (self.uniform(), self.uniform())
     }
 }
 
@@ -70,16 +70,16 @@ mod tests {
         let mut a = Sampler::for_pixel(0, 10, 20, 0);
         let mut b = Sampler::for_pixel(0, 10, 20, 0);
         let mut c = Sampler::for_pixel(0, 11, 20, 0);
-        let va: Vec<f64> = (0..100).map(|_| a.next()).collect();
-        let vb: Vec<f64> = (0..100).map(|_| b.next()).collect();
-        let vc: Vec<f64> = (0..100).map(|_| c.next()).collect();
+        let va: Vec<f64> = (0..100).map(|_| a.uniform()).collect();
+        let vb: Vec<f64> = (0..100).map(|_| b.uniform()).collect();
+        let vc: Vec<f64> = (0..100).map(|_| c.uniform()).collect();
         assert_eq!(va, vb);
         assert_ne!(va, vc);
         let mut s = Sampler::for_pixel(1, 2, 3, 4);
         let n = 100_000;
-        let mean: f64 = (0..n).map(|_| s.next()).sum::<f64>() / n as f64;
+        let mean: f64 = (0..n).map(|_| s.uniform()).sum::<f64>() / n as f64;
         assert!((mean - 0.5).abs() < 0.01, "mean {mean}");
         let mut s = Sampler::for_pixel(1, 2, 3, 4);
-        assert!((0..n).map(|_| s.next()).all(|v| (0.0..1.0).contains(&v)));
+        assert!((0..n).map(|_| s.uniform()).all(|v| (0.0..1.0).contains(&v)));
     }
 }
