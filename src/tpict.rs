@@ -161,6 +161,86 @@ fn render_command(args: &[String], opts: &RpictOptions, log: &Log) -> Result<()>
         .build()
         .context("cannot start render threads")?;
     let command_line = format!("tpict {}", args.join(" "));
+    let stats = Mutex::new(RunStats {
+        software: SOFTWARE.to_string(),
+        threads,
+        ..RunStats::default()
+    });
+    let started = Instant::now();
+    let result = render_frames(opts, &scene, &lights, &pool, &command_line, log, &stats);
+    if let Some(path) = &opts.stats_file {
+        let mut st = stats.into_inner().unwrap_or_default();
+        st.wall_seconds = started.elapsed().as_secs_f64();
+        st.cpu_seconds = process_cpu_seconds();
+        st.rays_per_second = if st.wall_seconds > 0.0 {
+            st.total_rays as f64 / st.wall_seconds
+        } else {
+            0.0
+        };
+        let text = serde_json::to_string_pretty(&st).context("encoding statistics")?;
+        output::write_atomic(Path::new(path), |f| f.write_all(text.as_bytes()))
+            .with_context(|| format!("cannot write statistics file {path}"))?;
+    }
+    result
+}
+
+/// Statistics written by `--stats FILE` (JSON).
+#[derive(Debug, Default, serde::Serialize)]
+pub struct RunStats {
+    /// Producing software.
+    pub software: String,
+    /// Render threads.
+    pub threads: usize,
+    /// One entry per rendered frame.
+    pub frames: Vec<FrameStats>,
+    /// Rays traced in all frames (primary, reflected, transmitted and shadow rays).
+    pub total_rays: u64,
+    /// Wall-clock time of the whole run after the scene was loaded.
+    pub wall_seconds: f64,
+    /// CPU time (user + system) of the process, when the platform reports it.
+    pub cpu_seconds: Option<f64>,
+    /// `total_rays / wall_seconds`.
+    pub rays_per_second: f64,
+}
+
+/// Statistics of one frame.
+#[derive(Debug, Default, serde::Serialize)]
+pub struct FrameStats {
+    /// Frame number (0 without -S).
+    pub frame: u32,
+    /// Picture width.
+    pub width: usize,
+    /// Picture height.
+    pub height: usize,
+    /// Rays traced.
+    pub rays: u64,
+    /// Wall-clock seconds.
+    pub wall_seconds: f64,
+}
+
+/// User + system CPU seconds of this process (Linux `/proc/self/stat`), or None.
+pub fn process_cpu_seconds() -> Option<f64> {
+    let text = std::fs::read_to_string("/proc/self/stat").ok()?;
+    // Fields after the parenthesised command name; utime and stime are fields 14 and 15.
+    let rest = &text[text.rfind(')')? + 2..];
+    let f: Vec<&str> = rest.split_whitespace().collect();
+    let utime: f64 = f.get(11)?.parse().ok()?;
+    let stime: f64 = f.get(12)?.parse().ok()?;
+    Some((utime + stime) / 100.0)
+}
+
+#[allow(clippy::too_many_arguments)]
+fn render_frames(
+    opts: &RpictOptions,
+    scene: &Scene,
+    lights: &LightSet,
+    pool: &rayon::ThreadPool,
+    command_line: &str,
+    log: &Log,
+    stats: &Mutex<RunStats>,
+) -> Result<()> {
+    let (scene, lights) = (scene, lights);
+    let command_line = command_line.to_string();
     match opts.sequence_start {
         None => {
             if let Some(o) = &opts.output {
@@ -168,8 +248,8 @@ fn render_command(args: &[String], opts: &RpictOptions, log: &Log) -> Result<()>
                     bail!("cannot open output file \"{o}\": File exists");
                 }
             }
-            let img = pool.install(|| render_view(&scene, &lights, opts, &opts.view, 0, log))?;
-            let mut img = img;
+            let mut img =
+                pool.install(|| render_view(scene, lights, opts, &opts.view, 0, log, stats))?;
             img.header.commands.push(command_line);
             match &opts.output {
                 Some(o) => {
@@ -202,7 +282,7 @@ fn render_command(args: &[String], opts: &RpictOptions, log: &Log) -> Result<()>
                             continue;
                         }
                         let mut img =
-                            pool.install(|| render_view(&scene, &lights, opts, &view, n, log))?;
+                            pool.install(|| render_view(scene, lights, opts, &view, n, log, stats))?;
                         img.header.commands.push(command_line.clone());
                         img.header.frame = Some(n);
                         match write_new_picture(path, &img) {
@@ -217,7 +297,7 @@ fn render_command(args: &[String], opts: &RpictOptions, log: &Log) -> Result<()>
                     }
                     None => {
                         let mut img =
-                            pool.install(|| render_view(&scene, &lights, opts, &view, n, log))?;
+                            pool.install(|| render_view(scene, lights, opts, &view, n, log, stats))?;
                         img.header.commands.push(command_line.clone());
                         img.header.frame = Some(n);
                         write_picture(None, &img)?;
@@ -306,6 +386,7 @@ pub fn render_view(
     view: &View,
     frame: u32,
     log: &Log,
+    stats: &Mutex<RunStats>,
 ) -> Result<Image> {
     let vf = view.frame().map_err(|e| anyhow!("bad view: {e}"))?;
     let mut pa = opts.pa;
@@ -366,6 +447,17 @@ pub fn render_view(
     }
     if opts.report_interval > 0.0 {
         log.say(&report_line(&progress, 100.0, start));
+    }
+    if let Ok(mut st) = stats.lock() {
+        let rays = progress.rays.load(Ordering::Relaxed);
+        st.total_rays += rays;
+        st.frames.push(FrameStats {
+            frame,
+            width: x,
+            height: y,
+            rays,
+            wall_seconds: start.elapsed().as_secs_f64(),
+        });
     }
     let mut img = Image::new(x, y);
     img.pixels = pixels;

@@ -135,20 +135,30 @@ pub fn square_to_disk(a: f64, b: f64) -> (f64, f64) {
     (r * phi.cos(), r * phi.sin())
 }
 
-/// Per-axis partition counts for a source of angular sizes (a, b) radians, limited to 64 in all.
+/// Per-axis partition counts for a source of angular sizes (a, b) radians: each axis is halved
+/// until its part subtends at most `-ds` (scaled up for low-weight rays), as Radiance's counts
+/// show (size/distance 0.4 at `-ds .25` gives 2×2 partitions, 0.8 gives 4×4), limited to 64.
 fn partitions(a: f64, b: f64, ds: f64, weight: f64) -> (usize, usize) {
     if ds <= 0.0 {
         return (1, 1);
     }
-    let thr = ds / (2.0 * weight.max(1e-3));
-    let mut na = (a / thr).ceil().max(1.0);
-    let mut nb = (b / thr).ceil().max(1.0);
-    if na * nb > 64.0 {
-        let s = (64.0 / (na * nb)).sqrt();
-        na = (na * s).floor().max(1.0);
-        nb = (nb * s).floor().max(1.0);
+    let thr = ds / weight.clamp(1e-3, 1.0);
+    let halvings = |size: f64| -> usize {
+        let mut n = 1usize;
+        while size / n as f64 > thr && n < 64 {
+            n *= 2;
+        }
+        n
+    };
+    let (mut na, mut nb) = (halvings(a), halvings(b));
+    while na * nb > 64 {
+        if na >= nb {
+            na /= 2;
+        } else {
+            nb /= 2;
+        }
     }
-    (na as usize, nb as usize)
+    (na, nb)
 }
 
 /// Position within stratum `i` of `n`, with jitter fraction `dj`.
@@ -429,11 +439,17 @@ impl LightSet {
                 let cell = PI * (r1 * r1 - r0 * r0) / (nr * nphi) as f64;
                 for i in 0..nr {
                     for j in 0..nphi {
-                        let a = strat(i, nr, dj, rng);
-                        let b = strat(j, nphi, dj, rng);
-                        let r = (r0 * r0 + a * (r1 * r1 - r0 * r0)).sqrt();
-                        let phi = 2.0 * PI * b;
-                        let s = *center + u * (r * phi.cos()) + v * (r * phi.sin());
+                        // Concentric map: one partition aims at the centre, like Radiance.
+                        let (x, y) = square_to_disk(strat(i, nr, dj, rng), strat(j, nphi, dj, rng));
+                        let rho2 = x * x + y * y;
+                        let r = (r0 * r0 + rho2 * (r1 * r1 - r0 * r0)).sqrt();
+                        let (c, sn) = if rho2 > 0.0 {
+                            let rho = rho2.sqrt();
+                            (x / rho, y / rho)
+                        } else {
+                            (1.0, 0.0)
+                        };
+                        let s = *center + u * (r * c) + v * (r * sn);
                         let w = s - q;
                         let dist = w.length();
                         if dist <= FTINY {
@@ -457,8 +473,8 @@ impl LightSet {
                 let axis = w / d;
                 let sin_max = radius / d;
                 let cos_max = (1.0 - sin_max * sin_max).max(0.0).sqrt();
-                let ang = 2.0 * sin_max.asin();
-                let (na, nb) = partitions(ang, ang, ds, weight);
+                // Radiance never partitions spherical sources (measured with rpict -dt 0).
+                let (na, nb) = (1, 1);
                 let total = 2.0 * PI * (1.0 - cos_max);
                 let omega = total / (na * nb) as f64;
                 for i in 0..na {
@@ -508,7 +524,8 @@ impl LightSet {
                 half_angle,
                 solid_angle,
             } => {
-                let (na, nb) = partitions(2.0 * half_angle, 2.0 * half_angle, ds, weight);
+                // Radiance never partitions distant sources (measured with rpict -dt 0).
+                let (na, nb) = (1, 1);
                 let cos_max = half_angle.cos();
                 let omega = solid_angle / (na * nb) as f64;
                 for i in 0..na {
@@ -609,9 +626,13 @@ mod tests {
     #[test]
     fn partitions_limited() {
         assert_eq!(partitions(1.0, 1.0, 0.0, 1.0), (1, 1));
-        let (a, b) = partitions(10.0, 10.0, 0.25, 1.0);
-        assert!(a * b <= 64 && a * b >= 49);
-        let (a, b) = partitions(0.01, 0.01, 0.25, 1.0);
-        assert_eq!((a, b), (1, 1));
+        assert_eq!(partitions(10.0, 10.0, 0.25, 1.0), (8, 8));
+        assert_eq!(partitions(0.01, 0.01, 0.25, 1.0), (1, 1));
+        // Radiance's counts for a square source at distance 5 (measured with rpict -dt 0):
+        assert_eq!(partitions(0.2, 0.2, 0.25, 1.0), (1, 1));
+        assert_eq!(partitions(0.4, 0.4, 0.25, 1.0), (2, 2));
+        assert_eq!(partitions(0.8, 0.8, 0.25, 1.0), (4, 4));
+        assert_eq!(partitions(0.2, 0.2, 0.1, 1.0), (2, 2));
+        assert_eq!(partitions(0.4, 0.4, 0.5, 1.0), (1, 1));
     }
 }
