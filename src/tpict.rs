@@ -133,6 +133,9 @@ pub fn load_scene(opts: &RpictOptions, log: &Log) -> Result<(Scene, LightSet)> {
     };
     let prims = read_scene_files(&files, &ro)?;
     let scene = Scene::build(&prims)?;
+    for w in &scene.warnings {
+        log.warn(w);
+    }
     let lights = LightSet::collect(&scene, opts.params.dr);
     for w in &lights.warnings {
         log.warn(w);
@@ -278,26 +281,37 @@ fn render_frames(
                     Some(pattern) => {
                         let name = frame_name(pattern, n)?;
                         let path = Path::new(&name);
-                        if path.exists() {
-                            continue;
+                        // Claim the frame as rpict does: create its file with O_EXCL; a frame
+                        // whose file exists belongs to another process (or is done).
+                        match std::fs::OpenOptions::new()
+                            .write(true)
+                            .create_new(true)
+                            .open(path)
+                        {
+                            Ok(_) => {}
+                            Err(e) if e.kind() == std::io::ErrorKind::AlreadyExists => continue,
+                            Err(e) => bail!("cannot create output file \"{name}\": {e}"),
                         }
-                        let mut img =
-                            pool.install(|| render_view(scene, lights, opts, &view, n, log, stats))?;
+                        let rendered =
+                            pool.install(|| render_view(scene, lights, opts, &view, n, log, stats));
+                        let mut img = match rendered {
+                            Ok(img) => img,
+                            Err(e) => {
+                                let _ = std::fs::remove_file(path);
+                                return Err(e);
+                            }
+                        };
                         img.header.commands.push(command_line.clone());
                         img.header.frame = Some(n);
-                        match write_new_picture(path, &img) {
-                            Ok(()) => {}
-                            Err(e) if path.exists() => {
-                                log.warn(&format!(
-                                    "frame {n}: {name} appeared meanwhile ({e}); skipped"
-                                ));
-                            }
-                            Err(e) => return Err(e),
+                        // Replace the claimed (empty) file atomically with the picture.
+                        if let Err(e) = write_picture(Some(path), &img) {
+                            let _ = std::fs::remove_file(path);
+                            return Err(anyhow!(e));
                         }
                     }
                     None => {
-                        let mut img =
-                            pool.install(|| render_view(scene, lights, opts, &view, n, log, stats))?;
+                        let mut img = pool
+                            .install(|| render_view(scene, lights, opts, &view, n, log, stats))?;
                         img.header.commands.push(command_line.clone());
                         img.header.frame = Some(n);
                         write_picture(None, &img)?;

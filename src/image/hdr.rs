@@ -39,6 +39,13 @@ const MAX_LITERAL: usize = 128;
 const MAX_HEADER_LINE: u64 = 1 << 20;
 /// Largest accepted picture side (Radiance stores sizes in an `int`).
 const MAX_SIDE: u64 = i32::MAX as u64;
+/// Largest accepted pixel count when reading (2^32: 48 GiB as floats, beyond any machine we run
+/// on); it keeps a corrupt size from overflowing.
+const MAX_PIXELS: usize = if usize::BITS >= 64 {
+    1usize.wrapping_shl(32)
+} else {
+    usize::MAX / 16
+};
 
 /// Encode a linear RGB colour as RGBE, exactly as Radiance's `setcolr`: `d = max(r,g,b)`; if
 /// `d <= 1e-32` the pixel is `0 0 0 0`; otherwise with `d = m * 2^e` (`0.5 <= m < 1`) each
@@ -48,25 +55,28 @@ const MAX_SIDE: u64 = i32::MAX as u64;
 /// about 1.7e38) saturate to `ff ff ff ff`.
 #[inline]
 pub fn float_to_rgbe(c: [f32; 3]) -> [u8; 4] {
-    #[inline]
-    fn clean(v: f32) -> f64 {
-        if v.is_finite() && v > 0.0 {
-            v as f64
+    #[inline(always)]
+    fn clean(v: f32) -> f32 {
+        // NaN compares false, so it becomes 0 too.
+        if v > 0.0 && v < f32::INFINITY {
+            v
         } else {
             0.0
         }
     }
     let (r, g, b) = (clean(c[0]), clean(c[1]), clean(c[2]));
     let d = r.max(g).max(b);
-    if d <= 1e-32 {
+    if d <= RGBE_ZERO {
         return [0; 4];
     }
-    // d is a normal f64 here, so its binary exponent gives frexp's e directly.
-    let e = ((d.to_bits() >> 52) & 0x7ff) as i32 - 1022;
+    // d is a normal f32 here (> 1e-32), so its binary exponent gives frexp's e directly.
+    let e = ((d.to_bits() >> 23) & 0xff) as i32 - 126;
     if e > 127 {
         return [255; 4];
     }
-    let scale = pow2(8 - e); // exactly 256 / 2^e
+    // Multiplying by 256 / 2^e (a power of two, normal for every e here) is exact, so this
+    // truncates exactly what Radiance's double arithmetic truncates.
+    let scale = f32::from_bits(((8 - e + 127) as u32) << 23);
     [
         (r * scale) as u8,
         (g * scale) as u8,
@@ -74,6 +84,9 @@ pub fn float_to_rgbe(c: [f32; 3]) -> [u8; 4] {
         (e + 128) as u8,
     ]
 }
+
+/// The largest f32 that is `<= 1e-32` as a double: Radiance writes black at or below 1e-32.
+const RGBE_ZERO: f32 = f32::from_bits(1e-32f32.to_bits() - 1);
 
 /// Decode an RGBE pixel as Radiance does: `(m + 0.5) * 2^(E - 136)` per component, black when
 /// the exponent byte `E` is 0.
@@ -174,25 +187,15 @@ pub fn header_bytes(img: &Image) -> Vec<u8> {
 }
 
 /// Append one component stream of a new-RLE scanline to `out`.
+///
+/// Radiance walks the line in groups of equal bytes and turns the first group of 4 or more into a
+/// run; that group always starts at the first position where 4 equal bytes begin, which is what
+/// `next_run` finds in one pass.
 fn encode_stream(src: &[u8], out: &mut Vec<u8>) {
     let n = src.len();
     let mut j = 0; // first byte not yet written
     while j < n {
-        // Find the next run of at least MIN_RUN equal bytes, walking group by group (a group is
-        // a maximal stretch of equal bytes, capped at MAX_RUN).
-        let mut beg = j;
-        let mut run = 0;
-        while beg < n {
-            let b = src[beg];
-            run = 1;
-            while run < MAX_RUN && beg + run < n && src[beg + run] == b {
-                run += 1;
-            }
-            if run >= MIN_RUN {
-                break;
-            }
-            beg += run;
-        }
+        let (beg, run) = next_run(src, j);
         // Bytes before the run: 2 or 3 equal bytes become a short run, the rest literals.
         let lit = &src[j..beg];
         if (2..MIN_RUN).contains(&lit.len()) && lit.iter().all(|&b| b == lit[0]) {
@@ -204,7 +207,7 @@ fn encode_stream(src: &[u8], out: &mut Vec<u8>) {
                 out.extend_from_slice(chunk);
             }
         }
-        if beg < n {
+        if run > 0 {
             out.push(128 + run as u8);
             out.push(src[beg]);
             j = beg + run;
@@ -214,42 +217,88 @@ fn encode_stream(src: &[u8], out: &mut Vec<u8>) {
     }
 }
 
-/// Append one encoded scanline to `out`. `comp` is scratch space.
-fn encode_scanline(line: &[[u8; 4]], out: &mut Vec<u8>, comp: &mut Vec<u8>) {
-    let w = line.len();
+/// The first run of at least `MIN_RUN` equal bytes at or after `j`: its start and its length
+/// (capped at `MAX_RUN`), or `(src.len(), 0)` when there is none.
+#[inline]
+fn next_run(src: &[u8], j: usize) -> (usize, usize) {
+    let n = src.len();
+    let mut i = j;
+    while i + MIN_RUN <= n {
+        let b = src[i];
+        if src[i + 1] != b {
+            i += 1;
+        } else if src[i + 2] != b {
+            i += 2;
+        } else if src[i + 3] != b {
+            i += 3;
+        } else {
+            let mut run = MIN_RUN;
+            while run < MAX_RUN && i + run < n && src[i + run] == b {
+                run += 1;
+            }
+            return (i, run);
+        }
+    }
+    (n, 0)
+}
+
+/// Append one encoded row of pixels to `out`. `comp` is scratch space.
+fn encode_row(row: &[[f32; 3]], out: &mut Vec<u8>, comp: &mut [Vec<u8>; 4]) {
+    let w = row.len();
     if !(MIN_RLE_WIDTH..=MAX_RLE_WIDTH).contains(&w) {
-        for p in line {
-            out.extend_from_slice(p);
+        out.reserve(4 * w);
+        for &c in row {
+            out.extend_from_slice(&float_to_rgbe(c));
         }
         return;
     }
+    for v in comp.iter_mut() {
+        v.clear();
+    }
+    let [cr, cg, cb, ce] = comp;
+    for &c in row {
+        let p = float_to_rgbe(c);
+        cr.push(p[0]);
+        cg.push(p[1]);
+        cb.push(p[2]);
+        ce.push(p[3]);
+    }
+    out.reserve(4 + 4 * w + 4 * (w / 128 + 1));
     out.extend_from_slice(&[2, 2, (w >> 8) as u8, (w & 0xff) as u8]);
-    for i in 0..4 {
-        comp.clear();
-        comp.extend(line.iter().map(|p| p[i]));
-        encode_stream(comp, out);
+    for v in comp.iter() {
+        encode_stream(v, out);
     }
 }
 
 /// Write `img` as a Radiance RGBE picture (header, resolution line, RLE scanlines), top row
 /// first. Fails with `InvalidInput` for a picture without pixels or with a pixel count that
-/// does not match its size. Writes in large blocks; `w` need not be buffered.
+/// does not match its size. Large pictures are encoded on several threads (rayon), in batches so
+/// memory stays bounded; the bytes do not depend on the thread count. Writes in large blocks,
+/// so `w` need not be buffered.
 pub fn write_hdr<W: Write>(w: &mut W, img: &Image) -> io::Result<()> {
+    use rayon::prelude::*;
     super::check_writable(img).map_err(|msg| io::Error::new(io::ErrorKind::InvalidInput, msg))?;
-    let mut out = header_bytes(img);
-    let mut rgbe = vec![[0u8; 4]; img.width];
-    let mut comp = Vec::with_capacity(img.width);
-    for row in img.pixels.chunks_exact(img.width) {
-        for (dst, &c) in rgbe.iter_mut().zip(row) {
-            *dst = float_to_rgbe(c);
-        }
-        encode_scanline(&rgbe, &mut out, &mut comp);
-        if out.len() >= 1 << 16 {
-            w.write_all(&out)?;
-            out.clear();
+    w.write_all(&header_bytes(img))?;
+    // Rows per parallel task (about 64K pixels) and per batch written out at once.
+    let block = (65536 / img.width).clamp(1, img.height);
+    let batch = block * 4 * rayon::current_num_threads().max(1);
+    for rows in img.pixels.chunks(batch * img.width) {
+        let encoded: Vec<Vec<u8>> = rows
+            .par_chunks(block * img.width)
+            .map(|blk| {
+                let mut out = Vec::with_capacity(blk.len() * 4 + 64);
+                let mut comp: [Vec<u8>; 4] = std::array::from_fn(|_| Vec::with_capacity(img.width));
+                for row in blk.chunks_exact(img.width) {
+                    encode_row(row, &mut out, &mut comp);
+                }
+                out
+            })
+            .collect();
+        for e in &encoded {
+            w.write_all(e)?;
         }
     }
-    w.write_all(&out)
+    Ok(())
 }
 
 /// Write `img` as an RGBE picture to `path`, atomically (see [`super::output::write_atomic`]).
@@ -491,14 +540,15 @@ fn byte<R: BufRead>(r: &mut R) -> io::Result<u8> {
     Ok(b)
 }
 
-/// Read one scanline of `out.len()` pixels in whatever encoding it uses. `Ok(Err(reason))` for
-/// corrupt data.
+/// Read one scanline of `w` pixels in whatever encoding it uses and append it to `out`.
+/// `Ok(Err(reason))` for corrupt data. Flat lines grow `out` as their data arrives, so a bogus
+/// width in a short file costs no huge allocation.
 fn read_scanline<R: BufRead>(
     r: &mut R,
-    out: &mut [[u8; 4]],
+    w: usize,
+    out: &mut Vec<[u8; 4]>,
     comp: &mut Vec<u8>,
 ) -> io::Result<Result<(), String>> {
-    let w = out.len();
     let mut first = [0u8; 4];
     r.read_exact(&mut first)?;
     if (8..=MAX_RLE_WIDTH).contains(&w) && first[0] == 2 && first[1] == 2 && first[2] & 0x80 == 0 {
@@ -510,6 +560,8 @@ fn read_scanline<R: BufRead>(
             )));
         }
         comp.resize(w, 0);
+        let start = out.len();
+        out.resize(start + w, [0; 4]);
         for i in 0..4 {
             let mut j = 0;
             while j < w {
@@ -522,50 +574,47 @@ fn read_scanline<R: BufRead>(
                     let v = byte(r)?;
                     comp[j..j + n].fill(v);
                     j += n;
+                } else if code == 0 {
+                    return Ok(Err("zero-length packet".into()));
+                } else if j + code > w {
+                    return Ok(Err("literal overruns the scanline".into()));
                 } else {
-                    if code == 0 || j + code > w {
-                        return Ok(Err(if code == 0 {
-                            "zero-length packet".into()
-                        } else {
-                            "literal overruns the scanline".into()
-                        }));
-                    }
                     r.read_exact(&mut comp[j..j + code])?;
                     j += code;
                 }
             }
-            for (p, &v) in out.iter_mut().zip(comp.iter()) {
+            for (p, &v) in out[start..].iter_mut().zip(comp.iter()) {
                 p[i] = v;
             }
         }
         return Ok(Ok(()));
     }
-    // Flat pixels, possibly with old-style repeat pixels (1 1 1 n).
+    // Flat pixels, possibly with old-style repeat pixels (1 1 1 n): n << shift copies of the
+    // previous pixel, the shift growing by 8 for each consecutive repeat pixel.
+    let end = out.len() + w;
+    let start = out.len();
     let mut shift = 0u32;
-    let mut j = 0;
     let mut px = first;
     loop {
         if px[0] == 1 && px[1] == 1 && px[2] == 1 {
-            if j == 0 {
+            if out.len() == start {
                 return Ok(Err("repeat code at the start of a scanline".into()));
             }
             if shift > 24 {
                 return Ok(Err("repeat count too large".into()));
             }
             let n = (px[3] as usize) << shift;
-            if j + n > w {
+            if out.len() + n > end {
                 return Ok(Err("repeat count overruns the scanline".into()));
             }
-            let prev = out[j - 1];
-            out[j..j + n].fill(prev);
-            j += n;
+            let prev = out[out.len() - 1];
+            out.extend(std::iter::repeat_n(prev, n));
             shift += 8;
         } else {
-            out[j] = px;
-            j += 1;
+            out.push(px);
             shift = 0;
         }
-        if j >= w {
+        if out.len() >= end {
             return Ok(Ok(()));
         }
         r.read_exact(&mut px)?;
@@ -584,7 +633,7 @@ pub fn read_hdr<R: BufRead>(r: &mut R) -> Result<Image, ImageError> {
     let (width, height, o) = parse_resolution(&resline)?;
     let total = width
         .checked_mul(height)
-        .filter(|&t| t.checked_mul(16).is_some())
+        .filter(|&t| t <= MAX_PIXELS)
         .ok_or_else(|| bad(format!("picture size {width}x{height} is too large")))?;
     let (line_len, lines) = if o.y_major {
         (width, height)
@@ -597,9 +646,7 @@ pub fn read_hdr<R: BufRead>(r: &mut R) -> Result<Image, ImageError> {
     let mut raw: Vec<[u8; 4]> = Vec::with_capacity(total.min(1 << 22));
     let mut comp = Vec::new();
     for s in 0..lines {
-        let start = raw.len();
-        raw.resize(start + line_len, [0; 4]);
-        match read_scanline(r, &mut raw[start..], &mut comp) {
+        match read_scanline(r, line_len, &mut raw, &mut comp) {
             Ok(Ok(())) => {}
             Ok(Err(reason)) => {
                 return Err(bad(format!(
@@ -720,7 +767,7 @@ mod tests {
         };
         // The 48-wide exponent stream from the facts: literal 1, run 46, literal 1.
         let mut e = vec![0x7e];
-        e.extend(std::iter::repeat(0x7f).take(46));
+        e.extend(std::iter::repeat_n(0x7f, 46));
         e.push(0x7e);
         assert_eq!(enc(&e), [0x01, 0x7e, 0xae, 0x7f, 0x01, 0x7e]);
         // Short runs of 2-3 before a long run / at the end.

@@ -56,6 +56,23 @@ pub struct MaterialDef {
     pub loc: Location,
 }
 
+/// Whether a surface primitive has the argument counts its type needs (a wrong count is a
+/// fatal error; degenerate geometry with the right counts is dropped with a warning, as
+/// oconv does).
+fn surface_counts_ok(p: &Primitive) -> bool {
+    if !p.sargs.is_empty() || !p.iargs.is_empty() {
+        return false;
+    }
+    let n = p.rargs.len();
+    match p.ptype.as_str() {
+        "polygon" => n >= 9 && n.is_multiple_of(3),
+        "sphere" | "bubble" | "source" => n == 4,
+        "cone" | "cup" | "ring" => n == 8,
+        "cylinder" | "tube" => n == 7,
+        _ => false,
+    }
+}
+
 /// A scene ready for rendering.
 pub struct Scene {
     /// Scene origin: every coordinate in geometry is relative to it.
@@ -70,6 +87,8 @@ pub struct Scene {
     pub distant: Vec<DistantObject>,
     /// Acceleration structure over `objects`.
     pub bvh: Bvh,
+    /// Warnings (degenerate geometry dropped, zero areas), each naming file:line.
+    pub warnings: Vec<String>,
 }
 
 struct Modifiers {
@@ -105,8 +124,13 @@ impl Scene {
         let mut hi = DVec3::splat(f64::NEG_INFINITY);
         for p in prims {
             if SURFACE_TYPES.contains(&p.ptype.as_str()) && p.ptype != "source" {
-                let s = Surface::from_primitive(p, DVec3::ZERO)
-                    .map_err(|m| err(p, format!("{} {}: {m}", p.ptype, p.name)))?;
+                let s = match Surface::from_primitive(p, DVec3::ZERO) {
+                    Ok(s) => s,
+                    Err(m) if !surface_counts_ok(p) => {
+                        return Err(err(p, format!("{} {}: {m}", p.ptype, p.name)))
+                    }
+                    Err(_) => continue,
+                };
                 let (a, b) = s.bounds();
                 lo = lo.min(a);
                 hi = hi.max(b);
@@ -127,6 +151,7 @@ impl Scene {
         let mut materials: Vec<MaterialDef> = Vec::new();
         let mut objects = Vec::new();
         let mut distant = Vec::new();
+        let mut warnings = Vec::new();
         for p in prims {
             let t = p.ptype.as_str();
             if t == "alias" {
@@ -163,8 +188,21 @@ impl Scene {
                         modifier: p.modifier.clone(),
                     });
                 } else {
-                    let surface = Surface::from_primitive(p, origin)
-                        .map_err(|m| err(p, format!("{t} {}: {m}", p.name)))?;
+                    let surface = match Surface::from_primitive_warn(p, origin) {
+                        Ok((s, w)) => {
+                            if let Some(w) = w {
+                                warnings.push(format!("{}: {w}", p.loc));
+                            }
+                            s
+                        }
+                        Err(m) if !surface_counts_ok(p) => {
+                            return Err(err(p, format!("{t} {}: {m}", p.name)))
+                        }
+                        Err(m) => {
+                            warnings.push(format!("{}: {t} {} dropped: {m}", p.loc, p.name));
+                            continue;
+                        }
+                    };
                     objects.push(Object {
                         surface,
                         material,
@@ -222,6 +260,7 @@ impl Scene {
             objects,
             distant,
             bvh,
+            warnings,
         })
     }
 
