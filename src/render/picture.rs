@@ -219,7 +219,10 @@ fn render_cell(
         s
     };
     let mut values: Vec<Option<Color>> = vec![None; gw * gh];
-    // Recursive subdivision with an explicit stack.
+    // Recursive subdivision with an explicit stack. A region is interpolated bilinearly from
+    // its corners when its centre sample agrees with that interpolation (within -pt); else it
+    // is split in four around the centre. Smooth gradients are therefore interpolated and only
+    // edges, shadows and highlights are refined.
     let mut stack = vec![(xa, xb, ya, yb)];
     while let Some((x0, x1, y0, y1)) = stack.pop() {
         let c00 = get(x0, y0, &mut grid, rays);
@@ -227,53 +230,62 @@ fn render_cell(
         let c01 = get(x0, y1, &mut grid, rays);
         let c11 = get(x1, y1, &mut grid, rays);
         let small = x1 - x0 <= 1 && y1 - y0 <= 1;
-        let corners = [c00, c10, c01, c11];
-        let differ =
-            !small && (0..4).any(|i| (i + 1..4).any(|j| bigdiff(&corners[i], &corners[j], fs.pt)));
-        if small || !differ {
+        let xm = (x0 + x1) / 2;
+        let ym = (y0 + y1) / 2;
+        let bilinear = |x: usize, y: usize| -> Color {
+            let fx = if x1 > x0 {
+                (x - x0) as f64 / (x1 - x0) as f64
+            } else {
+                0.0
+            };
+            let fy = if y1 > y0 {
+                (y - y0) as f64 / (y1 - y0) as f64
+            } else {
+                0.0
+            };
+            c00.color * ((1.0 - fx) * (1.0 - fy))
+                + c10.color * (fx * (1.0 - fy))
+                + c01.color * ((1.0 - fx) * fy)
+                + c11.color * (fx * fy)
+        };
+        let refine = !small && {
+            let centre = get(xm, ym, &mut grid, rays);
+            let predicted = Sample {
+                color: bilinear(xm, ym),
+                dist: if [c00, c10, c01, c11].iter().all(|c| c.dist.is_finite()) {
+                    centre.dist
+                } else {
+                    f64::INFINITY
+                },
+            };
+            bigdiff(&centre, &predicted, fs.pt)
+        };
+        if !refine {
             for y in y0..=y1 {
                 for x in x0..=x1 {
                     let k = (y - ya) * gw + (x - xa);
-                    if values[k].is_some() {
-                        continue;
+                    if values[k].is_none() {
+                        values[k] = Some(match grid[k] {
+                            Some(s) => s.color,
+                            None => bilinear(x, y),
+                        });
                     }
-                    if let Some(s) = grid[k] {
-                        values[k] = Some(s.color);
-                        continue;
-                    }
-                    let fx = if x1 > x0 {
-                        (x - x0) as f64 / (x1 - x0) as f64
-                    } else {
-                        0.0
-                    };
-                    let fy = if y1 > y0 {
-                        (y - y0) as f64 / (y1 - y0) as f64
-                    } else {
-                        0.0
-                    };
-                    let c = c00.color * ((1.0 - fx) * (1.0 - fy))
-                        + c10.color * (fx * (1.0 - fy))
-                        + c01.color * ((1.0 - fx) * fy)
-                        + c11.color * (fx * fy);
-                    values[k] = Some(c);
                 }
             }
             continue;
         }
-        let xm = (x0 + x1) / 2;
-        let ym = (y0 + y1) / 2;
-        let xs: Vec<(usize, usize)> = if x1 - x0 >= 2 {
-            vec![(x0, xm), (xm, x1)]
+        let xs: &[(usize, usize)] = if x1 - x0 >= 2 {
+            &[(x0, xm), (xm, x1)]
         } else {
-            vec![(x0, x1)]
+            &[(x0, x1)]
         };
-        let ys: Vec<(usize, usize)> = if y1 - y0 >= 2 {
-            vec![(y0, ym), (ym, y1)]
+        let ys: &[(usize, usize)] = if y1 - y0 >= 2 {
+            &[(y0, ym), (ym, y1)]
         } else {
-            vec![(y0, y1)]
+            &[(y0, y1)]
         };
-        for &(a, b) in &xs {
-            for &(c, d) in &ys {
+        for &(a, b) in xs {
+            for &(c, d) in ys {
                 stack.push((a, b, c, d));
             }
         }
