@@ -378,7 +378,7 @@ fn nested_xform_of_nested_file() {
 }
 
 fn data(p: &str) -> String {
-    format!("{}/tests/data/scenes/{p}", env!("CARGO_MANIFEST_DIR"))
+    format!("{}/tests/scenes/{p}", env!("CARGO_MANIFEST_DIR"))
 }
 
 #[test]
