@@ -75,7 +75,7 @@ pub fn direct(
         }
         let (_, c, k) = cands[i];
         let s = &samples[k];
-        let t = tr.shadow(p, s.dir, s.dist, s.src, rng);
+        let t = tr.shadow(p, s.dir, s.dist, s.src, hit.antimatter, rng);
         let st = &mut stats[s.src];
         st.0 += bright(t).clamp(0.0, 1.0);
         st.1 += 1;

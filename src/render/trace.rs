@@ -139,6 +139,8 @@ impl<'a> Tracer<'a> {
                     // Leaving: if the exit point lies inside a cut object, the exit face is
                     // shaded with the first listed modifier.
                     let was_inside = am.contains(&Some(m));
+                    // Rays leaving the exit face go back into the antimatter volume.
+                    let inside_state = am;
                     if let Some(slot) = am.iter_mut().find(|s| **s == Some(m)) {
                         *slot = None;
                     }
@@ -153,7 +155,7 @@ impl<'a> Tracer<'a> {
                                 hit.material = list.first().copied().flatten();
                                 hit.normal = -g.normal;
                                 hit.back = false;
-                                hit.antimatter = am;
+                                hit.antimatter = inside_state;
                                 return Some(hit);
                             }
                         }
@@ -363,11 +365,21 @@ impl<'a> Tracer<'a> {
 
     /// Transmission of a shadow ray from `org` in direction `dir` toward source `si` at
     /// distance `dist` (infinite for distant sources).
-    pub fn shadow(&self, org: DVec3, dir: DVec3, dist: f64, si: usize, rng: &mut Sampler) -> Color {
+    #[allow(clippy::too_many_arguments)]
+    pub fn shadow(
+        &self,
+        org: DVec3,
+        dir: DVec3,
+        dist: f64,
+        si: usize,
+        antimatter: [Option<MatId>; MAX_ANTIMATTER],
+        rng: &mut Sampler,
+    ) -> Color {
         let src = &self.lights.sources[si];
         if let Some(relay) = &src.relay {
             // First leg: to the mirror.
             let mut ray = Ray::shadow(org, dir);
+            ray.antimatter = antimatter;
             let mut t = Color::ONE;
             for _ in 0..64 {
                 rng.rays += 1;
@@ -394,7 +406,7 @@ impl<'a> Tracer<'a> {
             }
             return Color::ZERO;
         }
-        self.shadow_real(org, dir, dist, si, [None; MAX_ANTIMATTER], rng)
+        self.shadow_real(org, dir, dist, si, antimatter, rng)
     }
 
     fn shadow_real(
