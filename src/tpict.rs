@@ -437,7 +437,12 @@ pub fn render_view(
         let reporter = s.spawn(|| {
             let mut last = Instant::now();
             while !done.load(Ordering::Relaxed) {
-                std::thread::sleep(Duration::from_millis(100));
+                // Parked rather than slept, so that the render's end (which unparks this
+                // thread) is not delayed by up to 100 ms waiting for the join below.
+                std::thread::park_timeout(Duration::from_millis(100));
+                if done.load(Ordering::Relaxed) {
+                    break;
+                }
                 let total = progress.rows_total.load(Ordering::Relaxed).max(1);
                 let pct = 100.0 * progress.rows_done.load(Ordering::Relaxed) as f64 / total as f64;
                 if let Some(b) = &bar {
@@ -453,6 +458,7 @@ pub fn render_view(
         });
         let px = render_region(&tracer, &fs, 0, 0, x, y, &progress);
         done.store(true, Ordering::Relaxed);
+        reporter.thread().unpark();
         let _ = reporter.join();
         px
     });
