@@ -64,11 +64,12 @@ fn sample_pixel(tr: &Tracer, fs: &FrameSetup, px: usize, py_top: usize, rays: &m
         };
     };
     let ray = Ray::primary(org - tr.scene.origin, dir, tmax);
-    let dist = tr.intersect(&ray).map(|h| h.t).unwrap_or(f64::INFINITY);
-    let color = if fs.irradiance {
-        irradiance(tr, &ray, &mut rng)
+    // The first hit's distance comes with the traced colour (one intersection, not two).
+    let (color, dist) = if fs.irradiance {
+        let dist = tr.intersect(&ray).map(|h| h.t).unwrap_or(f64::INFINITY);
+        (irradiance(tr, &ray, &mut rng), dist)
     } else {
-        tr.trace(&ray, &mut rng)
+        tr.trace_dist(&ray, &mut rng)
     };
     *rays += rng.rays;
     Sample {

@@ -172,12 +172,18 @@ impl<'a> Tracer<'a> {
 
     /// Radiance arriving along a ray.
     pub fn trace(&self, ray: &Ray, rng: &mut Sampler) -> Color {
+        self.trace_dist(ray, rng).0
+    }
+
+    /// [`Tracer::trace`] that also returns the distance of the first hit (infinite when the
+    /// ray hits nothing), so that the pixel loop need not intersect primary rays twice.
+    pub fn trace_dist(&self, ray: &Ray, rng: &mut Sampler) -> (Color, f64) {
         rng.rays += 1;
-        let c = match self.intersect(ray) {
-            Some(hit) => self.shade(ray, &hit, hit.material, rng),
-            None => self.escaped(ray),
+        let (c, dist) = match self.intersect(ray) {
+            Some(hit) => (self.shade(ray, &hit, hit.material, rng), hit.t),
+            None => (self.escaped(ray), f64::INFINITY),
         };
-        sanitize(c * ray.gain)
+        (sanitize(c * ray.gain), dist)
     }
 
     /// A ray that left the scene: distant sources and glows.
