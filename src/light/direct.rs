@@ -13,6 +13,18 @@ use glam::DVec3;
 /// Shadow rays always traced before the adaptive test may stop (Radiance's MINSHADCNT).
 const MIN_SHADOW_TESTS: usize = 2;
 
+/// Per-thread buffers reused by every [`direct`] call (no allocation per shading point).
+#[derive(Default)]
+struct Scratch {
+    samples: Vec<SourceSample>,
+    cands: Vec<(f64, Color, usize)>,
+    stats: Vec<(f64, u32)>,
+}
+
+thread_local! {
+    static SCRATCH: std::cell::RefCell<Scratch> = std::cell::RefCell::default();
+}
+
 /// Direct light reflected toward the viewer: `coef(l, ω)` is the material's coefficient for
 /// light arriving from unit direction `l` over solid angle `ω`.
 pub fn direct(
@@ -26,23 +38,33 @@ pub fn direct(
     if lights.sources.is_empty() {
         return Color::ZERO;
     }
+    // The buffers are taken out of the thread-local (and put back below), so a nested call
+    // would only allocate afresh, never alias them.
+    let mut scratch = SCRATCH.with(|s| std::mem::take(&mut *s.borrow_mut()));
+    let result = direct_with(tr, weight, hit, coef, rng, &mut scratch);
+    SCRATCH.with(|s| *s.borrow_mut() = scratch);
+    result
+}
+
+fn direct_with(
+    tr: &Tracer,
+    weight: f64,
+    hit: &Hit,
+    coef: &dyn Fn(DVec3, f64) -> Color,
+    rng: &mut Sampler,
+    scratch: &mut Scratch,
+) -> Color {
+    let lights = tr.lights;
     let p = hit.point;
     let params = tr.params;
-    let mut samples: Vec<SourceSample> = Vec::new();
+    let samples = &mut scratch.samples;
+    samples.clear();
     for si in 0..lights.sources.len() {
-        lights.sample(
-            tr.scene,
-            si,
-            p,
-            weight,
-            params.ds,
-            params.dj,
-            rng,
-            &mut samples,
-        );
+        lights.sample(tr.scene, si, p, weight, params.ds, params.dj, rng, samples);
     }
     // Potentials.
-    let mut cands: Vec<(f64, Color, usize)> = Vec::with_capacity(samples.len());
+    let cands = &mut scratch.cands;
+    cands.clear();
     for (k, s) in samples.iter().enumerate() {
         let c = coef(s.dir, s.omega) * s.radiance;
         let b = bright(c);
@@ -53,7 +75,8 @@ pub fn direct(
     if cands.is_empty() {
         return Color::ZERO;
     }
-    cands.sort_by(|a, b| b.0.total_cmp(&a.0).then(a.2.cmp(&b.2)));
+    // A strict total order (indices are unique), so the unstable sort gives the same order.
+    cands.sort_unstable_by(|a, b| b.0.total_cmp(&a.0).then(a.2.cmp(&b.2)));
     let n = cands.len();
     let nshadcheck = ((n as f64).powf(params.dc).ceil() as usize).max(1);
     let thresh = if params.dt > 0.0 {
@@ -63,7 +86,9 @@ pub fn direct(
     };
     let mut result = Color::ZERO;
     // Per-source visibility statistics from this point's tests.
-    let mut stats: Vec<(f64, u32)> = vec![(0.0, 0); lights.sources.len()];
+    let stats = &mut scratch.stats;
+    stats.clear();
+    stats.resize(lights.sources.len(), (0.0, 0));
     let mut untested_from = n;
     for (tested, i) in (0..n).enumerate() {
         if thresh > 0.0 && tested >= MIN_SHADOW_TESTS {
