@@ -400,8 +400,14 @@ impl LightSet {
                 let c = *corner + (*eu + *ev) * 0.5;
                 let d = (c - q).length().max(FTINY);
                 let (nu, nv) = partitions(eu.length() / d, ev.length() / d, ds, weight);
-                let cell = eu.cross(*ev).length() / (nu * nv) as f64;
+                let rect_area = eu.cross(*ev).length();
+                let cell = rect_area / (nu * nv) as f64;
                 let obj = src.obj.map(|i| &scene.objects[i].surface);
+                // A quadrilateral with the area of its bounding rectangle IS that rectangle:
+                // every sample lies on it, so the per-sample inside test is skipped.
+                let fills_rect = matches!(obj, Some(Surface::Polygon(pg))
+                    if pg.verts.len() == 4 && (pg.area - rect_area).abs() <= 1e-9 * pg.area);
+                let obj = if fills_rect { None } else { obj };
                 for i in 0..nu {
                     for j in 0..nv {
                         let s = *corner + *eu * strat(i, nu, dj, rng) + *ev * strat(j, nv, dj, rng);
