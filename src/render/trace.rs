@@ -23,6 +23,19 @@ pub struct Tracer<'a> {
     pub lights: &'a LightSet,
 }
 
+/// How far a shadow ray toward a sample at distance `dist` needs to look: the sample lies on
+/// (or, for cylinders, behind) the source surface, so nothing beyond it can matter; the slack
+/// covers rounding. Bounding the ray lets the BVH prune everything behind the source.
+/// Distant sources (`dist` infinite) keep an unbounded ray.
+#[inline]
+fn shadow_reach(dist: f64) -> f64 {
+    if dist.is_finite() {
+        dist * (1.0 + 1e-6) + 16.0 * FTINY
+    } else {
+        f64::INFINITY
+    }
+}
+
 /// Largest colour component (Radiance's `intens`).
 #[inline]
 fn intens(c: Color) -> f64 {
@@ -386,6 +399,7 @@ impl<'a> Tracer<'a> {
             // First leg: to the mirror.
             let mut ray = Ray::shadow(org, dir);
             ray.antimatter = antimatter;
+            ray.tmax = shadow_reach(dist);
             let mut t = Color::ONE;
             for _ in 0..64 {
                 rng.rays += 1;
@@ -409,6 +423,7 @@ impl<'a> Tracer<'a> {
                 t *= tr;
                 ray.org = hit.point;
                 ray.antimatter = hit.antimatter;
+                ray.tmax -= hit.t;
             }
             return Color::ZERO;
         }
@@ -419,7 +434,7 @@ impl<'a> Tracer<'a> {
         &self,
         org: DVec3,
         dir: DVec3,
-        _dist: f64,
+        dist: f64,
         si: usize,
         am: [Option<MatId>; MAX_ANTIMATTER],
         rng: &mut Sampler,
@@ -427,6 +442,7 @@ impl<'a> Tracer<'a> {
         let src = &self.lights.sources[si];
         let mut ray = Ray::shadow(org, dir);
         ray.antimatter = am;
+        ray.tmax = shadow_reach(dist);
         let mut t = Color::ONE;
         for _ in 0..64 {
             rng.rays += 1;
@@ -449,6 +465,7 @@ impl<'a> Tracer<'a> {
                     t *= tr;
                     ray.org = hit.point;
                     ray.antimatter = hit.antimatter;
+                    ray.tmax -= hit.t;
                 }
             }
         }
