@@ -15,6 +15,7 @@
 #   TESSERA_RADIANCE_BIN    folder holding rpict and oconv (else PATH, else pyradiance)
 #   TSV=FILE                also write the raw numbers as tab-separated values
 #   NO_BUILD=1              skip `cargo build --release`
+#   TPICT=path              benchmark this tpict binary instead (implies NO_BUILD)
 #
 # Usage: bench/run.sh            (from anywhere; see docs/benchmarks.md)
 set -euo pipefail
@@ -51,11 +52,12 @@ export PATH="$RADBIN:$PATH"
 export RAYPATH=".:$(dirname "$RADBIN")/lib"
 
 # --- Build tpict ---------------------------------------------------------------------------
-if [[ -z "${NO_BUILD:-}" ]]; then
+if [[ -z "${NO_BUILD:-}" && -z "${TPICT:-}" ]]; then
     echo "bench: cargo build --release" >&2
     (cd "$ROOT" && cargo build --release --quiet --bin tpict)
 fi
-TPICT="$ROOT/target/release/tpict"
+TPICT=${TPICT:-"$ROOT/target/release/tpict"}
+[[ $TPICT == /* ]] || TPICT="$PWD/$TPICT"
 [[ -x "$TPICT" ]] || { echo "bench: $TPICT missing" >&2; exit 1; }
 
 TMP=$(mktemp -d "${TMPDIR:-/tmp}/tessera-bench.XXXXXX")
