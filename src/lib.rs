@@ -13,6 +13,7 @@
 //! - [`image`]: pictures in memory and the `hdr`, `exr` and `png` formats.
 //! - [`tpict`]: the rpict-compatible driver behind the `tpict` binary.
 
+pub mod ambient;
 pub mod color;
 pub mod geometry;
 pub mod image;

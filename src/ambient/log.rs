@@ -1,0 +1,1 @@
+//! Tessera's ambient log (under construction)

@@ -1,0 +1,69 @@
+//! Indirect irradiance ("ambient") values and their stores.
+//!
+//! - [`AmbRecord`]: one cached irradiance value, as Radiance's AMBVAL plus a stable id.
+//! - [`radfile`]: Radiance's own ambient file format (`-af`, read by `lookamb`).
+//! - [`log`]: Tessera's append-only, CRC-framed log for sharing values between processes.
+
+pub mod log;
+pub mod radfile;
+
+use glam::DVec3;
+
+/// A stable identity for an ambient value: the process (or worker) that made it and a
+/// sequence number within that origin, so that merged stores can deduplicate.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash, PartialOrd, Ord)]
+pub struct ValueId {
+    /// Identifier of the producing process/worker (e.g. a hash of host, pid and start time).
+    pub origin: u64,
+    /// Sequence number within the origin.
+    pub seq: u64,
+}
+
+/// One indirect irradiance value (Radiance's AMBVAL fields plus an id).
+/// Positions and directions are in absolute scene coordinates (not relative to a scene
+/// origin), so stores are independent of how a renderer chose its origin.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct AmbRecord {
+    /// Stable identity (0/0 for values read from Radiance files).
+    pub id: ValueId,
+    /// Position.
+    pub pos: DVec3,
+    /// Unit surface normal (unperturbed, facing the ray side).
+    pub ndir: DVec3,
+    /// Unit first principal direction (tangent); the second is `ndir × udir`.
+    pub udir: DVec3,
+    /// Ambient bounce level of the parent ray.
+    pub lvl: u8,
+    /// Weight of the parent ray (0 < weight <= 1).
+    pub weight: f32,
+    /// Anisotropic radii along u and v (rad[0] <= rad[1]).
+    pub rad: [f32; 2],
+    /// Positional gradient along u and v.
+    pub gpos: [f32; 2],
+    /// Rotational gradient about u and v.
+    pub gdir: [f32; 2],
+    /// 32 azimuth-sector light-leak flags.
+    pub corral: u32,
+    /// Irradiance-like value (RGB).
+    pub val: [f32; 3],
+}
+
+impl AmbRecord {
+    /// Radiance's `ambvalOK` checks: finite values of sane magnitude, non-zero directions,
+    /// 0 < weight <= 1, 0 < rad0 <= rad1 (+tolerance), non-negative value.
+    pub fn is_valid(&self) -> bool {
+        let fin = |v: f64| v.is_finite() && v.abs() < 1e10;
+        let fin32 = |v: f32| v.is_finite() && v.abs() < 1e10;
+        self.pos.to_array().iter().all(|&v| fin(v))
+            && self.ndir.length_squared() > 0.25
+            && self.udir.length_squared() > 0.25
+            && self.weight > 0.0
+            && self.weight <= 1.0
+            && self.rad[0] > 0.0
+            && self.rad[0] <= self.rad[1] + 1e-6
+            && self.rad.iter().all(|&v| fin32(v))
+            && self.gpos.iter().all(|&v| fin32(v))
+            && self.gdir.iter().all(|&v| fin32(v))
+            && self.val.iter().all(|&v| fin32(v) && v >= 0.0)
+    }
+}

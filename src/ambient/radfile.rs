@@ -1,0 +1,1 @@
+//! Radiance's ambient file format (under construction)
