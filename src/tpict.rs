@@ -1,5 +1,6 @@
 //! The `tpict` driver: rpict's command line in, Radiance pictures out.
 
+use crate::ambient::Ambient;
 use crate::image::{output, write_picture, Header, Image};
 use crate::light::LightSet;
 use crate::radopt::{defaults_text, parse_rpict_args, Command, RpictOptions};
@@ -147,17 +148,19 @@ pub fn load_scene(opts: &RpictOptions, log: &Log) -> Result<(Scene, LightSet)> {
 }
 
 fn render_command(args: &[String], opts: &RpictOptions, log: &Log) -> Result<()> {
-    if opts.params.ab > 0 {
-        bail!(
-            "-ab {}: indirect lighting (the irradiance cache) is not implemented yet; \
-             use -ab 0 with a constant ambient -av",
-            opts.params.ab
-        );
+    if opts.params.af.is_some() {
+        bail!("-af: ambient files are not implemented yet (the cache lives in memory only)");
     }
     if opts.pm != 0.0 || opts.pd != 0.0 {
         bail!("-pm (motion blur) and -pd (depth of field) are not supported yet; use -pm 0 -pd 0");
     }
     let (scene, lights) = load_scene(opts, log)?;
+    let ambient = Ambient::new(&opts.params, scene.size, process_origin_id());
+    let ctx = RenderCtx {
+        scene: &scene,
+        lights: &lights,
+        ambient: ambient.as_ref(),
+    };
     let threads = thread_count(opts.threads);
     let pool = rayon::ThreadPoolBuilder::new()
         .num_threads(threads)
@@ -170,11 +173,14 @@ fn render_command(args: &[String], opts: &RpictOptions, log: &Log) -> Result<()>
         ..RunStats::default()
     });
     let started = Instant::now();
-    let result = render_frames(opts, &scene, &lights, &pool, &command_line, log, &stats);
+    let result = render_frames(opts, &ctx, &pool, &command_line, log, &stats);
     if let Some(path) = &opts.stats_file {
         let mut st = stats.into_inner().unwrap_or_default();
         st.wall_seconds = started.elapsed().as_secs_f64();
         st.cpu_seconds = process_cpu_seconds();
+        if let Some(a) = &ambient {
+            st.ambient = Some(AmbientReport::from_stats(&a.stats, a.cache.len()));
+        }
         st.rays_per_second = if st.wall_seconds > 0.0 {
             st.total_rays as f64 / st.wall_seconds
         } else {
@@ -185,6 +191,74 @@ fn render_command(args: &[String], opts: &RpictOptions, log: &Log) -> Result<()>
             .with_context(|| format!("cannot write statistics file {path}"))?;
     }
     result
+}
+
+/// What every frame of a run shares: the scene, its lights and the irradiance cache.
+pub struct RenderCtx<'a> {
+    /// The scene.
+    pub scene: &'a Scene,
+    /// Its light sources.
+    pub lights: &'a LightSet,
+    /// The irradiance cache (`-ab` > 0), kept across frames.
+    pub ambient: Option<&'a Ambient>,
+}
+
+/// An id for this process's ambient values: a hash of host name, process id and start time.
+pub fn process_origin_id() -> u64 {
+    let host = std::fs::read_to_string("/proc/sys/kernel/hostname").unwrap_or_default();
+    let t = std::time::SystemTime::now()
+        .duration_since(std::time::UNIX_EPOCH)
+        .map(|d| d.as_nanos() as u64)
+        .unwrap_or(0);
+    let mut h: u64 = 0xcbf2_9ce4_8422_2325;
+    for b in host
+        .trim()
+        .bytes()
+        .chain(std::process::id().to_le_bytes())
+        .chain(t.to_le_bytes())
+    {
+        h ^= b as u64;
+        h = h.wrapping_mul(0x0100_0000_01b3);
+    }
+    h
+}
+
+/// Ambient counters in `--stats` output.
+#[derive(Debug, Default, serde::Serialize)]
+pub struct AmbientReport {
+    /// Cache lookups.
+    pub lookups: u64,
+    /// Lookups answered by interpolation.
+    pub hits: u64,
+    /// New values by ambient level.
+    pub new_values_by_level: Vec<u64>,
+    /// Values in the cache at the end.
+    pub cached_values: u64,
+    /// Hemisphere sample rays.
+    pub sample_rays: u64,
+    /// Seconds spent computing new values (the seed paper's T_amb, summed over threads).
+    pub ambient_seconds: f64,
+}
+
+impl AmbientReport {
+    fn from_stats(s: &crate::ambient::compute::AmbientStats, cached: u64) -> AmbientReport {
+        let mut levels: Vec<u64> = s
+            .new_values
+            .iter()
+            .map(|v| v.load(Ordering::Relaxed))
+            .collect();
+        while levels.last() == Some(&0) {
+            levels.pop();
+        }
+        AmbientReport {
+            lookups: s.lookups.load(Ordering::Relaxed),
+            hits: s.hits.load(Ordering::Relaxed),
+            new_values_by_level: levels,
+            cached_values: cached,
+            sample_rays: s.sample_rays.load(Ordering::Relaxed),
+            ambient_seconds: s.amb_nanos.load(Ordering::Relaxed) as f64 * 1e-9,
+        }
+    }
 }
 
 /// Statistics written by `--stats FILE` (JSON).
@@ -204,6 +278,8 @@ pub struct RunStats {
     pub cpu_seconds: Option<f64>,
     /// `total_rays / wall_seconds`.
     pub rays_per_second: f64,
+    /// Irradiance-cache counters (with `-ab` > 0).
+    pub ambient: Option<AmbientReport>,
 }
 
 /// Statistics of one frame.
@@ -235,14 +311,12 @@ pub fn process_cpu_seconds() -> Option<f64> {
 #[allow(clippy::too_many_arguments)]
 fn render_frames(
     opts: &RpictOptions,
-    scene: &Scene,
-    lights: &LightSet,
+    ctx: &RenderCtx,
     pool: &rayon::ThreadPool,
     command_line: &str,
     log: &Log,
     stats: &Mutex<RunStats>,
 ) -> Result<()> {
-    let (scene, lights) = (scene, lights);
     let command_line = command_line.to_string();
     match opts.sequence_start {
         None => {
@@ -251,8 +325,7 @@ fn render_frames(
                     bail!("cannot open output file \"{o}\": File exists");
                 }
             }
-            let mut img =
-                pool.install(|| render_view(scene, lights, opts, &opts.view, 0, log, stats))?;
+            let mut img = pool.install(|| render_view(ctx, opts, &opts.view, 0, log, stats))?;
             img.header.commands.push(command_line);
             match &opts.output {
                 Some(o) => {
@@ -293,7 +366,7 @@ fn render_frames(
                             Err(e) => bail!("cannot create output file \"{name}\": {e}"),
                         }
                         let rendered =
-                            pool.install(|| render_view(scene, lights, opts, &view, n, log, stats));
+                            pool.install(|| render_view(ctx, opts, &view, n, log, stats));
                         let mut img = match rendered {
                             Ok(img) => img,
                             Err(e) => {
@@ -310,8 +383,8 @@ fn render_frames(
                         }
                     }
                     None => {
-                        let mut img = pool
-                            .install(|| render_view(scene, lights, opts, &view, n, log, stats))?;
+                        let mut img =
+                            pool.install(|| render_view(ctx, opts, &view, n, log, stats))?;
                         img.header.commands.push(command_line.clone());
                         img.header.frame = Some(n);
                         write_picture(None, &img)?;
@@ -394,8 +467,7 @@ pub fn frame_name(pattern: &str, n: u32) -> Result<String> {
 
 /// Render one view at the options' resolution into a picture with its header.
 pub fn render_view(
-    scene: &Scene,
-    lights: &LightSet,
+    ctx: &RenderCtx,
     opts: &RpictOptions,
     view: &View,
     frame: u32,
@@ -409,7 +481,7 @@ pub fn render_view(
     if x == 0 || y == 0 {
         bail!("resolution {x}x{y} is empty");
     }
-    let tracer = Tracer::new(scene, &opts.params, lights);
+    let tracer = Tracer::new(ctx.scene, &opts.params, ctx.lights).with_ambient(ctx.ambient);
     let fs = FrameSetup {
         view: &vf,
         xres: x,

@@ -357,15 +357,17 @@ fn inline_command_runs_with_flag_or_env() {
 // Options
 
 #[test]
-fn ambient_bounces_are_refused_not_ignored() {
+fn ambient_files_are_refused_not_ignored() {
     let t = workdir();
     let err = fails(
         tpict_in(t.path())
-            .args(["-vf", "room.vf", "-x", "16", "-y", "16", "-ab", "1"])
+            .args([
+                "-vf", "room.vf", "-x", "16", "-y", "16", "-ab", "1", "-af", "x.amb",
+            ])
             .args(["-o", "out.hdr", "room.rad"]),
     );
     let line = one_line(&err);
-    assert!(line.contains("-ab"), "{line}");
+    assert!(line.contains("-af"), "{line}");
     assert!(line.contains("not implemented"), "{line}");
     assert!(!t.path().join("out.hdr").exists());
 }

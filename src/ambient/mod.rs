@@ -1,11 +1,17 @@
 //! Indirect irradiance ("ambient") values and their stores.
 //!
+//! - [`compute`]: new values (hemisphere sampling, gradients, radii) and interpolation.
+//! - [`cache`]: the in-memory cache shared by render threads.
 //! - [`AmbRecord`]: one cached irradiance value, as Radiance's AMBVAL plus a stable id.
 //! - [`radfile`]: Radiance's own ambient file format (`-af`, read by `lookamb`).
 //! - [`log`]: Tessera's append-only, CRC-framed log for sharing values between processes.
 
+pub mod cache;
+pub mod compute;
 pub mod log;
 pub mod radfile;
+
+pub use compute::Ambient;
 
 use glam::DVec3;
 

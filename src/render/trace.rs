@@ -3,6 +3,7 @@
 
 use super::ray::{Hit, Ray, RayKind, MAX_ANTIMATTER};
 use super::sampler::Sampler;
+use crate::ambient::Ambient;
 use crate::color::{sanitize, Color};
 use crate::light::direct::direct;
 use crate::light::source::LightSet;
@@ -21,6 +22,8 @@ pub struct Tracer<'a> {
     pub params: &'a RenderParams,
     /// Light sources (real and virtual).
     pub lights: &'a LightSet,
+    /// The irradiance cache (None: constant `-av` ambient only).
+    pub ambient: Option<&'a Ambient>,
 }
 
 /// How far a shadow ray toward a sample at distance `dist` needs to look: the sample lies on
@@ -49,6 +52,7 @@ impl<'a> Tracer<'a> {
             scene,
             params,
             lights,
+            ambient: None,
         }
     }
 
@@ -368,18 +372,29 @@ impl<'a> Tracer<'a> {
         direct(self, ray.weight, hit, coef, rng)
     }
 
-    /// Indirect (ambient) light reflected with coefficient `refl` about `normal`.
-    /// Until the irradiance cache lands this is the constant `-av` radiance.
+    /// Use an irradiance cache for indirect light.
+    pub fn with_ambient(mut self, ambient: Option<&'a Ambient>) -> Tracer<'a> {
+        self.ambient = ambient;
+        self
+    }
+
+    /// Indirect (ambient) light reflected with coefficient `refl` about `normal` (facing the
+    /// ray): the irradiance cache when `-ab` > 0, else the constant `-av` radiance.
     pub fn ambient(
         &self,
-        _ray: &Ray,
-        _hit: &Hit,
+        ray: &Ray,
+        hit: &Hit,
         refl: Color,
-        _normal: DVec3,
-        _rng: &mut Sampler,
+        normal: DVec3,
+        rng: &mut Sampler,
     ) -> Color {
-        let av = self.params.av;
-        refl * DVec3::new(av[0], av[1], av[2])
+        match self.ambient {
+            Some(a) => a.reflected(self, ray, hit, refl, normal, rng),
+            None => {
+                let av = self.params.av;
+                refl * DVec3::new(av[0], av[1], av[2])
+            }
+        }
     }
 
     /// Transmission of a shadow ray from `org` in direction `dir` toward source `si` at

@@ -1,0 +1,174 @@
+//! The in-memory irradiance cache shared by all render threads.
+//!
+//! Values are kept in a multi-level hashed grid: a value of radius `r` lives at the level
+//! whose cell size is the smallest power-of-two multiple of the base size that is at least
+//! twice its reach (`aa·r`), in the cell containing its position. A lookup at point P checks,
+//! per level in use, the 2×2×2 cells nearest P — every value whose reach covers P is there.
+//! The grid is split into shards, each behind its own `RwLock`: lookups only take short read
+//! locks on the shards they touch (no global lock), inserts a write lock on one shard.
+
+use super::ValueId;
+use crate::color::Color;
+use glam::DVec3;
+use std::collections::HashMap;
+use std::sync::atomic::{AtomicU32, AtomicU64, Ordering};
+use std::sync::RwLock;
+
+const SHARDS: usize = 64;
+const MAX_LEVELS: u32 = 40;
+
+/// One cached value in the renderer's frame (relative to the scene origin).
+#[derive(Clone, Copy, Debug)]
+pub struct CachedValue {
+    /// Identity.
+    pub id: ValueId,
+    /// Position (relative frame).
+    pub pos: DVec3,
+    /// Unit normal.
+    pub n: DVec3,
+    /// Unit first tangent (second is `n × u`).
+    pub u: DVec3,
+    /// Ambient level.
+    pub lvl: u32,
+    /// Parent ray weight.
+    pub weight: f64,
+    /// Radii along u and v.
+    pub rad: [f64; 2],
+    /// Positional gradient along u and v (per channel-independent scale: relative to `val`).
+    pub gpos: [f64; 2],
+    /// Rotational gradient about u and v (relative to `val`).
+    pub gdir: [f64; 2],
+    /// Value (mean incoming radiance over the cosine-weighted hemisphere).
+    pub val: Color,
+}
+
+type Key = (u32, i64, i64, i64);
+
+/// The shared cache.
+pub struct AmbientCache {
+    base: f64,
+    aa: f64,
+    shards: Vec<RwLock<HashMap<Key, Vec<CachedValue>>>>,
+    levels_used: AtomicU64,
+    count: AtomicU64,
+    seq: AtomicU64,
+    origin_id: u64,
+    max_level_seen: AtomicU32,
+}
+
+fn shard_of(k: &Key) -> usize {
+    let h = (k.0 as u64)
+        .wrapping_mul(0x9E37_79B9_7F4A_7C15)
+        .wrapping_add((k.1 as u64).wrapping_mul(0xC2B2_AE3D_27D4_EB4F))
+        .wrapping_add((k.2 as u64).wrapping_mul(0x1656_67B1_9E37_79F9))
+        .wrapping_add((k.3 as u64).wrapping_mul(0x27D4_EB2F_1656_67C5));
+    ((h >> 32) as usize) % SHARDS
+}
+
+impl AmbientCache {
+    /// A cache for values with radii of at least `minrad`, accuracy `aa`; `origin_id`
+    /// identifies this process in value ids.
+    pub fn new(minrad: f64, aa: f64, origin_id: u64) -> AmbientCache {
+        let base = (2.0 * aa * minrad).max(1e-9);
+        AmbientCache {
+            base,
+            aa,
+            shards: (0..SHARDS).map(|_| RwLock::new(HashMap::new())).collect(),
+            levels_used: AtomicU64::new(0),
+            count: AtomicU64::new(0),
+            seq: AtomicU64::new(0),
+            origin_id,
+            max_level_seen: AtomicU32::new(0),
+        }
+    }
+
+    /// Number of values held.
+    pub fn len(&self) -> u64 {
+        self.count.load(Ordering::Relaxed)
+    }
+
+    /// True when empty.
+    pub fn is_empty(&self) -> bool {
+        self.len() == 0
+    }
+
+    /// A fresh value id of this process.
+    pub fn next_id(&self) -> ValueId {
+        ValueId {
+            origin: self.origin_id,
+            seq: self.seq.fetch_add(1, Ordering::Relaxed),
+        }
+    }
+
+    fn level_for(&self, rad1: f64) -> u32 {
+        let reach = 2.0 * self.aa * rad1;
+        let mut l = 0;
+        let mut size = self.base;
+        while size < reach && l < MAX_LEVELS - 1 {
+            size *= 2.0;
+            l += 1;
+        }
+        l
+    }
+
+    fn cell_size(&self, level: u32) -> f64 {
+        self.base * (1u64 << level) as f64
+    }
+
+    /// Insert a value.
+    pub fn insert(&self, v: CachedValue) {
+        let l = self.level_for(v.rad[1].max(v.rad[0]));
+        let s = self.cell_size(l);
+        let key = (
+            l,
+            (v.pos.x / s).floor() as i64,
+            (v.pos.y / s).floor() as i64,
+            (v.pos.z / s).floor() as i64,
+        );
+        if let Ok(mut shard) = self.shards[shard_of(&key)].write() {
+            shard.entry(key).or_default().push(v);
+        }
+        self.levels_used.fetch_or(1u64 << l, Ordering::Relaxed);
+        self.max_level_seen.fetch_max(l, Ordering::Relaxed);
+        self.count.fetch_add(1, Ordering::Relaxed);
+    }
+
+    /// Call `f` for every value whose cell could reach point `p`.
+    pub fn for_each_near(&self, p: DVec3, mut f: impl FnMut(&CachedValue)) {
+        let used = self.levels_used.load(Ordering::Relaxed);
+        let top = self.max_level_seen.load(Ordering::Relaxed);
+        for l in 0..=top {
+            if used & (1u64 << l) == 0 {
+                continue;
+            }
+            let s = self.cell_size(l);
+            let q = p / s - DVec3::splat(0.5);
+            let (x0, y0, z0) = (q.x.floor() as i64, q.y.floor() as i64, q.z.floor() as i64);
+            for dx in 0..2 {
+                for dy in 0..2 {
+                    for dz in 0..2 {
+                        let key = (l, x0 + dx, y0 + dy, z0 + dz);
+                        if let Ok(shard) = self.shards[shard_of(&key)].read() {
+                            if let Some(list) = shard.get(&key) {
+                                list.iter().for_each(&mut f);
+                            }
+                        }
+                    }
+                }
+            }
+        }
+    }
+
+    /// Every value (for saving), in no particular order.
+    pub fn all(&self) -> Vec<CachedValue> {
+        let mut out = Vec::with_capacity(self.len() as usize);
+        for s in &self.shards {
+            if let Ok(shard) = s.read() {
+                for list in shard.values() {
+                    out.extend_from_slice(list);
+                }
+            }
+        }
+        out
+    }
+}

@@ -1,0 +1,127 @@
+//! The irradiance (ambient) calculation: furnace tests against the analytic series,
+//! interpolation converging to the uncached result, and thread sharing.
+
+mod common;
+
+use common::*;
+use std::path::Path;
+use tessera::image::read_picture;
+
+/// A closed diffuse shell (reflectance ρ, radius R) around a glowing sphere (radiance Le,
+/// radius r, radius 0 = never a light source, so all of its light arrives through ambient
+/// rays). With s = (r/R)², the shell's radiance after k bounces is
+/// ρ·Le·s·Σ_{i<k} (ρ(1−s))^i.
+const FURNACE: &str = "void plastic grey 0 0 5 .5 .5 .5 0 0\n\
+void glow inner 0 0 4 1 1 1 0\n\
+grey bubble shell 0 0 4 0 0 0 1\n\
+inner sphere core 0 0 4 0 0 0 .5\n";
+
+fn furnace_expected(k: i32) -> f64 {
+    let (rho, le, s): (f64, f64, f64) = (0.5, 1.0, 0.25);
+    rho * le * s * (0..k).map(|i| (rho * (1.0 - s)).powi(i)).sum::<f64>()
+}
+
+fn mean_red(dir: &Path, args: &[&str]) -> (f64, serde_json::Value) {
+    let out = dir.join("p.hdr");
+    let _ = std::fs::remove_file(&out);
+    let stats = dir.join("s.json");
+    run_ok(
+        std::process::Command::new(tpict_bin())
+            .current_dir(dir)
+            .args(args)
+            .args(["-w-", "--stats", "s.json", "-o", "p.hdr", "scene.rad"]),
+    );
+    let img = read_picture(&out).unwrap();
+    assert_finite(&img);
+    let m = img.pixels.iter().map(|p| p[0] as f64).sum::<f64>() / img.pixels.len() as f64;
+    let st: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(stats).unwrap()).unwrap();
+    (m, st)
+}
+
+const VIEW: &[&str] = &[
+    "-vtv", "-vp", ".75", "0", "0", "-vd", "1", "0", "0", "-vu", "0", "0", "1", "-vh", "20", "-vv",
+    "20", "-x", "16", "-y", "16",
+];
+
+fn furnace_dir() -> tempfile::TempDir {
+    let t = tempfile::tempdir().unwrap();
+    std::fs::write(t.path().join("scene.rad"), FURNACE).unwrap();
+    t
+}
+
+#[test]
+fn furnace_matches_the_analytic_series() {
+    let t = furnace_dir();
+    for (ab, aa) in [(1, "0"), (1, ".1"), (2, ".1"), (6, ".2")] {
+        let mut args: Vec<&str> = VIEW.to_vec();
+        let abs = ab.to_string();
+        args.extend(["-ab", &abs, "-aa", aa, "-ad", "256", "-as", "0"]);
+        let (m, _) = mean_red(t.path(), &args);
+        let want = furnace_expected(ab);
+        let rel = (m - want).abs() / want;
+        eprintln!(
+            "furnace -ab {ab} -aa {aa}: {m:.5} vs {want:.5} ({:.2}%)",
+            100.0 * rel
+        );
+        assert!(rel < 0.02, "-ab {ab} -aa {aa}: {m} vs analytic {want}");
+    }
+}
+
+#[test]
+fn cache_is_used_and_counted() {
+    let t = furnace_dir();
+    let mut args: Vec<&str> = VIEW.to_vec();
+    args.extend(["-ab", "1", "-aa", ".1", "-ad", "256"]);
+    let (_, st) = mean_red(t.path(), &args);
+    let amb = &st["ambient"];
+    let lookups = amb["lookups"].as_u64().unwrap();
+    let hits = amb["hits"].as_u64().unwrap();
+    let new0 = amb["new_values_by_level"][0].as_u64().unwrap();
+    assert!(lookups > 0 && hits > 0, "{amb}");
+    // Most lookups are answered by interpolation, and every miss made a value.
+    assert!(hits * 2 > lookups, "{amb}");
+    assert_eq!(lookups - hits, new0, "{amb}");
+}
+
+/// At -aa → small, the cached result converges to the uncached (-aa 0) one.
+#[test]
+fn interpolation_converges_to_uncached() {
+    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/scenes");
+    let t = tempfile::tempdir().unwrap();
+    let render = |aa: &str, name: &str| {
+        let out = t.path().join(name);
+        run_ok(
+            std::process::Command::new(tpict_bin())
+                .current_dir(&dir)
+                .args([
+                    "-vf",
+                    "spheres.vf",
+                    "-x",
+                    "48",
+                    "-y",
+                    "48",
+                    "-ps",
+                    "1",
+                    "-pj",
+                    "0",
+                ])
+                .args(["-ab", "1", "-ad", "128", "-as", "0", "-aa", aa, "-w-", "-o"])
+                .arg(&out)
+                .arg("spheres.rad"),
+        );
+        let img = read_picture(&out).unwrap();
+        assert_finite(&img);
+        img.pixels_f64()
+    };
+    let reference = render("0", "ref.hdr");
+    let coarse = compare(&render(".3", "coarse.hdr"), &reference, 0.01);
+    let fine = compare(&render(".08", "fine.hdr"), &reference, 0.01);
+    eprintln!("coarse {coarse:?}\nfine {fine:?}");
+    assert!(fine.mean_lum < 0.03, "{fine:?}");
+    assert!(fine.rms < 0.15, "{fine:?}");
+    assert!(
+        fine.rms <= coarse.rms * 1.05,
+        "finer -aa should not be worse: {fine:?} {coarse:?}"
+    );
+}
