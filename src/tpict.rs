@@ -148,14 +148,23 @@ pub fn load_scene(opts: &RpictOptions, log: &Log) -> Result<(Scene, LightSet)> {
 }
 
 fn render_command(args: &[String], opts: &RpictOptions, log: &Log) -> Result<()> {
-    if opts.params.af.is_some() {
-        bail!("-af: ambient files are not implemented yet (the cache lives in memory only)");
-    }
     if opts.pm != 0.0 || opts.pd != 0.0 {
         bail!("-pm (motion blur) and -pd (depth of field) are not supported yet; use -pm 0 -pd 0");
     }
     let (scene, lights) = load_scene(opts, log)?;
     let ambient = Ambient::new(&opts.params, scene.size, process_origin_id());
+    let my_origin = ambient.as_ref().map(|a| a.cache.next_id().origin);
+    let amb_file = match (&ambient, &opts.params.af) {
+        (Some(_), Some(_)) if opts.params.aa <= 0.0 => {
+            log.warn("-aa 0 disables the cache: the ambient file is not used");
+            None
+        }
+        (Some(a), Some(af)) => {
+            load_ambient_file(a, Path::new(af), scene.origin, log)?;
+            Some(af.clone())
+        }
+        _ => None,
+    };
     let ctx = RenderCtx {
         scene: &scene,
         lights: &lights,
@@ -174,6 +183,9 @@ fn render_command(args: &[String], opts: &RpictOptions, log: &Log) -> Result<()>
     });
     let started = Instant::now();
     let result = render_frames(opts, &ctx, &pool, &command_line, log, &stats);
+    if let (Some(a), Some(af), Some(me)) = (&ambient, &amb_file, my_origin) {
+        save_ambient_file(a, Path::new(af), scene.origin, me, &opts.params)?;
+    }
     if let Some(path) = &opts.stats_file {
         let mut st = stats.into_inner().unwrap_or_default();
         st.wall_seconds = started.elapsed().as_secs_f64();
@@ -191,6 +203,78 @@ fn render_command(args: &[String], opts: &RpictOptions, log: &Log) -> Result<()>
             .with_context(|| format!("cannot write statistics file {path}"))?;
     }
     result
+}
+
+/// Load the values of a Radiance ambient file (`-af`) into the cache, if the file exists.
+pub fn load_ambient_file(a: &Ambient, path: &Path, origin: glam::DVec3, log: &Log) -> Result<()> {
+    if !path.exists() {
+        return Ok(());
+    }
+    let (_, records, report) = crate::ambient::radfile::read_file(path)
+        .with_context(|| format!("cannot read ambient file {}", path.display()))?;
+    for r in &records {
+        a.cache
+            .insert(crate::ambient::cache::CachedValue::from_record(r, origin));
+    }
+    if report.invalid > 0 || report.trailing_bytes > 0 {
+        log.warn(&format!(
+            "ambient file {}: ignored {} invalid records and {} trailing bytes",
+            path.display(),
+            report.invalid,
+            report.trailing_bytes
+        ));
+    }
+    Ok(())
+}
+
+/// Append this process's new values to a Radiance ambient file (`-af`), creating it with a
+/// header when it does not exist. The new values go out in one write.
+pub fn save_ambient_file(
+    a: &Ambient,
+    path: &Path,
+    origin: glam::DVec3,
+    my_origin: u64,
+    params: &crate::radopt::RenderParams,
+) -> Result<()> {
+    use crate::ambient::radfile;
+    let mine: Vec<_> = a
+        .cache
+        .all()
+        .into_iter()
+        .filter(|v| v.id.origin == my_origin)
+        .map(|v| v.to_record(origin))
+        .collect();
+    let mut bytes = Vec::with_capacity(mine.len() * radfile::RECORD_SIZE);
+    for r in &mine {
+        radfile::write_record(&mut bytes, r)?;
+    }
+    if path.exists() {
+        let mut f = std::fs::OpenOptions::new()
+            .append(true)
+            .open(path)
+            .with_context(|| format!("cannot append to ambient file {}", path.display()))?;
+        f.write_all(&bytes)
+            .with_context(|| format!("cannot append to ambient file {}", path.display()))?;
+    } else {
+        let line = format!(
+            "tpict -av {} {} {} -aw {} -ab {} -aa {} -ad {} -as {} -ar {}",
+            params.av[0],
+            params.av[1],
+            params.av[2],
+            params.aw,
+            params.ab,
+            params.aa,
+            params.ad,
+            params.as_,
+            params.ar
+        );
+        let mut out = Vec::new();
+        radfile::write_header(&mut out, &line, SOFTWARE)?;
+        out.extend_from_slice(&bytes);
+        output::write_atomic(path, |f| f.write_all(&out))
+            .with_context(|| format!("cannot write ambient file {}", path.display()))?;
+    }
+    Ok(())
 }
 
 /// What every frame of a run shares: the scene, its lights and the irradiance cache.

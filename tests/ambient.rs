@@ -125,3 +125,121 @@ fn interpolation_converges_to_uncached() {
         "finer -aa should not be worse: {fine:?} {coarse:?}"
     );
 }
+
+fn spheres_run(dir: &Path, extra: &[&str], stats: &Path) -> serde_json::Value {
+    let scenes = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/scenes");
+    let out = dir.join("out.hdr");
+    let _ = std::fs::remove_file(&out);
+    run_ok(
+        std::process::Command::new(tpict_bin())
+            .current_dir(&scenes)
+            .args([
+                "-vf",
+                "spheres.vf",
+                "-x",
+                "48",
+                "-y",
+                "48",
+                "-ab",
+                "1",
+                "-aa",
+                ".15",
+            ])
+            .args(["-ad", "128", "-w-"])
+            .args(extra)
+            .arg("--stats")
+            .arg(stats)
+            .arg("-o")
+            .arg(&out)
+            .arg("spheres.rad"),
+    );
+    serde_json::from_str(&std::fs::read_to_string(stats).unwrap()).unwrap()
+}
+
+fn new_values(st: &serde_json::Value) -> u64 {
+    st["ambient"]["new_values_by_level"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|v| v.as_u64().unwrap())
+        .sum()
+}
+
+/// `-af`: values saved in Radiance's format are reused by the next render, and Radiance's
+/// `lookamb` reads them.
+#[test]
+fn ambient_file_is_reused_and_read_by_lookamb() {
+    let t = tempfile::tempdir().unwrap();
+    let amb = t.path().join("s.amb");
+    let amb_s = amb.to_str().unwrap();
+    let first = spheres_run(t.path(), &["-af", amb_s], &t.path().join("1.json"));
+    let second = spheres_run(t.path(), &["-af", amb_s], &t.path().join("2.json"));
+    let n1 = new_values(&first);
+    let n2 = new_values(&second);
+    eprintln!("first run {n1} new values, second run {n2}");
+    assert!(n1 > 50, "{first}");
+    assert!(
+        n2 * 10 < n1,
+        "a pre-filled file should spare most values: {n1} then {n2}"
+    );
+    let size = std::fs::metadata(&amb).unwrap().len();
+    let Some(bin) = radiance_bin() else { return };
+    let listing = run_ok(radiance(&bin, "lookamb").args(["-h", "-d"]).arg(&amb));
+    let lines = String::from_utf8_lossy(&listing).lines().count() as u64;
+    assert_eq!(lines, n1 + n2, "lookamb sees every saved value");
+    assert!(size > 67 * (n1 + n2));
+}
+
+/// A file written by real `rpict -af` is loaded and used.
+#[test]
+fn rpict_ambient_file_is_used() {
+    let Some(bin) = radiance_bin() else { return };
+    let scenes = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/scenes");
+    let t = tempfile::tempdir().unwrap();
+    let oct = t.path().join("s.oct");
+    std::fs::write(
+        &oct,
+        run_ok(
+            radiance(&bin, "oconv")
+                .current_dir(&scenes)
+                .arg("spheres.rad"),
+        ),
+    )
+    .unwrap();
+    let amb = t.path().join("r.amb");
+    run_ok(
+        radiance(&bin, "rpict")
+            .current_dir(&scenes)
+            .args([
+                "-vf",
+                "spheres.vf",
+                "-x",
+                "48",
+                "-y",
+                "48",
+                "-ab",
+                "1",
+                "-aa",
+                ".15",
+            ])
+            .args(["-ad", "128", "-af"])
+            .arg(&amb)
+            .arg(&oct),
+    );
+    let listing = run_ok(radiance(&bin, "lookamb").args(["-h", "-d"]).arg(&amb));
+    let rpict_count = String::from_utf8_lossy(&listing).lines().count();
+    let (_, records, _) = tessera::ambient::radfile::read_file(&amb).unwrap();
+    assert_eq!(records.len(), rpict_count);
+    let without = spheres_run(t.path(), &[], &t.path().join("a.json"));
+    let with = spheres_run(
+        t.path(),
+        &["-af", amb.to_str().unwrap()],
+        &t.path().join("b.json"),
+    );
+    let (a, b) = (new_values(&without), new_values(&with));
+    eprintln!("rpict file: {rpict_count} values; tpict new values {a} without, {b} with it");
+    assert!(
+        b * 2 < a,
+        "values from rpict's file should be used: {a} vs {b}"
+    );
+}

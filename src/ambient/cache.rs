@@ -172,3 +172,41 @@ impl AmbientCache {
         out
     }
 }
+
+impl CachedValue {
+    /// The portable record of this value (absolute coordinates: `origin` is added).
+    pub fn to_record(&self, origin: DVec3) -> super::AmbRecord {
+        let f = |v: f64| v as f32;
+        super::AmbRecord {
+            id: self.id,
+            pos: self.pos + origin,
+            ndir: self.n,
+            udir: self.u,
+            lvl: self.lvl.min(255) as u8,
+            weight: f(self.weight.clamp(1e-6, 1.0)),
+            rad: [f(self.rad[0]), f(self.rad[1])],
+            gpos: [f(self.gpos[0]), f(self.gpos[1])],
+            gdir: [f(self.gdir[0]), f(self.gdir[1])],
+            corral: 0,
+            val: [f(self.val.x), f(self.val.y), f(self.val.z)],
+        }
+    }
+
+    /// A cached value from a record (relative coordinates: `origin` is subtracted).
+    pub fn from_record(r: &super::AmbRecord, origin: DVec3) -> CachedValue {
+        let n = r.ndir.normalize_or_zero();
+        let u = (r.udir - r.udir.dot(n) * n).normalize_or_zero();
+        CachedValue {
+            id: r.id,
+            pos: r.pos - origin,
+            n,
+            u,
+            lvl: r.lvl as u32,
+            weight: r.weight as f64,
+            rad: [r.rad[0] as f64, r.rad[1] as f64],
+            gpos: [r.gpos[0] as f64, r.gpos[1] as f64],
+            gdir: [r.gdir[0] as f64, r.gdir[1] as f64],
+            val: Color::new(r.val[0] as f64, r.val[1] as f64, r.val[2] as f64),
+        }
+    }
+}
