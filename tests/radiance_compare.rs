@@ -17,6 +17,8 @@ struct Case<'a> {
     opts: &'a [&'a str],
     /// Extra options for tpict only (after `opts`).
     ours_extra: &'a [&'a str],
+    /// Picture size (before reduction to 128×128).
+    res: &'a str,
 }
 
 fn check(case: &Case) {
@@ -28,7 +30,7 @@ fn check(case: &Case) {
     let oct = tmp.path().join("scene.oct");
     let octdata = run_ok(radiance(&bin, "oconv").current_dir(&dir).args(case.files));
     std::fs::write(&oct, octdata).unwrap();
-    let mut common_args: Vec<&str> = vec!["-vf", case.view, "-x", RES, "-y", RES];
+    let mut common_args: Vec<&str> = vec!["-vf", case.view, "-x", case.res, "-y", case.res];
     common_args.extend_from_slice(case.opts);
     let reff = tmp.path().join("ref.hdr");
     let data = run_ok(
@@ -105,6 +107,7 @@ fn spheres_plastic_metal_sphere_and_polygon_lights() {
         view: "spheres.vf",
         opts: &["-ab", "0", "-av", ".05", ".05", ".05", "-ps", "1"],
         ours_extra: &[],
+        res: RES,
     });
 }
 
@@ -116,6 +119,7 @@ fn curved_cones_cups_tubes_rings_and_concave_polygon() {
         view: "curved.vf",
         opts: &["-ab", "0", "-av", ".05", ".05", ".05", "-ps", "1"],
         ours_extra: &[],
+        res: RES,
     });
 }
 
@@ -127,6 +131,7 @@ fn glassy_glass_trans_dielectric_interface_sun_and_sky() {
         view: "glassy.vf",
         opts: &["-ab", "0", "-av", ".05", ".05", ".05", "-ps", "1"],
         ours_extra: &[],
+        res: RES,
     });
 }
 
@@ -138,6 +143,7 @@ fn mirrors_virtual_sources_illum_spotlight_glow() {
         view: "mirrors.vf",
         opts: &["-ab", "0", "-av", ".05", ".05", ".05", "-ps", "1"],
         ours_extra: &[],
+        res: RES,
     });
 }
 
@@ -149,6 +155,7 @@ fn aniso_plastic2_metal2_antimatter_genbox_xform() {
         view: "aniso.vf",
         opts: &["-ab", "0", "-av", ".05", ".05", ".05", "-ps", "1"],
         ours_extra: &[],
+        res: RES,
     });
 }
 
@@ -160,6 +167,7 @@ fn examp_shared_scene_with_builtin_genbox() {
         view: "examp.vp",
         opts: &["-ab", "0", "-av", ".5", ".5", ".5", "-ps", "1"],
         ours_extra: &[],
+        res: RES,
     });
 }
 
@@ -171,6 +179,7 @@ fn daffodil_shared_scene_flat() {
         view: "daffodil.vp",
         opts: &["-ab", "0", "-av", ".2", ".2", ".2", "-ps", "1"],
         ours_extra: &[],
+        res: RES,
     });
 }
 
@@ -185,5 +194,43 @@ fn adaptive_sampling_default_ps_matches_every_pixel_rpict() {
         view: "curved.vf",
         opts: &["-ab", "0", "-av", ".05", ".05", ".05", "-ps", "1"],
         ours_extra: &["-ps", "4", "-pt", ".05"],
+        res: RES,
     });
+}
+
+/// Indirect light (the irradiance cache) against rpict's, at `-ab 1` and `-ab 2` with
+/// rpict's default ambient settings (`-aa .2 -ad 512 -as 128 -ar 64`).
+fn ambient_case(dir: &str, files: &[&str], view: &str, ab: &str) {
+    check(&Case {
+        dir,
+        files,
+        view,
+        opts: &["-ab", ab, "-av", ".05", ".05", ".05", "-ps", "1"],
+        ours_extra: &[],
+        res: RES,
+    });
+}
+
+#[test]
+fn ambient_interior_with_area_lights() {
+    ambient_case("", &["spheres.rad"], "spheres.vf", "1");
+    ambient_case("", &["spheres.rad"], "spheres.vf", "2");
+}
+
+#[test]
+fn ambient_window_with_sun_and_glow_sky() {
+    ambient_case("", &["glassy.rad"], "glassy.vf", "1");
+    ambient_case("", &["glassy.rad"], "glassy.vf", "2");
+}
+
+#[test]
+fn ambient_specular_mirror_and_spot() {
+    ambient_case("", &["mirrors.rad"], "mirrors.vf", "1");
+    ambient_case("", &["mirrors.rad"], "mirrors.vf", "2");
+}
+
+#[test]
+fn ambient_curved_surfaces() {
+    ambient_case("", &["curved.rad"], "curved.vf", "1");
+    ambient_case("", &["curved.rad"], "curved.vf", "2");
 }
