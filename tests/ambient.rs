@@ -243,3 +243,45 @@ fn rpict_ambient_file_is_used() {
         "values from rpict's file should be used: {a} vs {b}"
     );
 }
+
+/// Rendering with 2 threads shares one cache: the picture matches 1 thread within noise and
+/// computes no more than 5% more new values.
+#[test]
+fn two_threads_share_one_cache() {
+    let t = tempfile::tempdir().unwrap();
+    let scenes = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/scenes");
+    let run = |n: &str| {
+        let out = t.path().join(format!("n{n}.hdr"));
+        let stats = t.path().join(format!("n{n}.json"));
+        run_ok(
+            std::process::Command::new(tpict_bin())
+                .current_dir(&scenes)
+                .args([
+                    "-vf",
+                    "curved.vf",
+                    "-x",
+                    "96",
+                    "-y",
+                    "96",
+                    "-ab",
+                    "1",
+                    "-ad",
+                    "256",
+                ])
+                .args(["-w-", "-n", n, "--stats"])
+                .arg(&stats)
+                .arg("-o")
+                .arg(&out)
+                .arg("curved.rad"),
+        );
+        let st: serde_json::Value =
+            serde_json::from_str(&std::fs::read_to_string(stats).unwrap()).unwrap();
+        (read_picture(&out).unwrap().pixels_f64(), new_values(&st))
+    };
+    let (p1, v1) = run("1");
+    let (p2, v2) = run("2");
+    let c = compare(&p2, &p1, 0.01);
+    eprintln!("-n 1: {v1} values, -n 2: {v2} values, {c:?}");
+    assert!(v2 as f64 <= v1 as f64 * 1.05, "{v1} vs {v2}");
+    assert!(c.rms < 0.1 && c.mean_lum < 0.02, "{c:?}");
+}
