@@ -612,6 +612,12 @@ pub struct RpictOptions {
     pub allow_commands: bool,
     /// `--stats FILE`: write render statistics.
     pub stats_file: Option<String>,
+    /// `--amb-log FILE`: Tessera's append-only ambient log (shared between processes).
+    pub amb_log: Option<String>,
+    /// `--amb-flush N`: append new ambient values to the log every N values.
+    pub amb_flush: usize,
+    /// `--amb-force`: use an ambient log whose fingerprint does not match.
+    pub amb_force: bool,
     /// Scene files (after the options); `-` is stdin. Empty input means `["-"]`.
     pub scene_files: Vec<String>,
 }
@@ -638,6 +644,9 @@ impl Default for RpictOptions {
             error_file: None,
             allow_commands: false,
             stats_file: None,
+            amb_log: None,
+            amb_flush: 128,
+            amb_force: false,
             scene_files: Vec::new(),
         }
     }
@@ -773,6 +782,27 @@ fn apply_rpict_option(
         "--stats" => {
             o.stats_file = Some(arg(words, 1, "a file name")?.clone());
             2
+        }
+        "--amb-log" => {
+            o.amb_log = Some(arg(words, 1, "a file name")?.clone());
+            2
+        }
+        "--amb-flush" => {
+            let v = arg(words, 1, "a count")?;
+            o.amb_flush = match v.parse::<usize>() {
+                Ok(n) if n > 0 => n,
+                _ => {
+                    return Err(OptError::BadValue {
+                        option: w.to_string(),
+                        reason: format!("expected a positive count, got '{v}'"),
+                    })
+                }
+            };
+            2
+        }
+        "--amb-force" => {
+            o.amb_force = true;
+            1
         }
         "-z" => return Err(unsupported(w, "depth buffer output is not implemented")),
         "-P" | "-PP" => {
@@ -1017,6 +1047,15 @@ pub fn to_args(opts: &RpictOptions) -> Vec<String> {
     }
     if let Some(f) = &opts.stats_file {
         w.extend(["--stats".into(), f.clone()]);
+    }
+    if let Some(f) = &opts.amb_log {
+        w.extend(["--amb-log".into(), f.clone()]);
+    }
+    if opts.amb_flush != 128 {
+        w.extend(["--amb-flush".into(), opts.amb_flush.to_string()]);
+    }
+    if opts.amb_force {
+        w.push("--amb-force".into());
     }
     w
 }

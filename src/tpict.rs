@@ -121,7 +121,7 @@ pub fn thread_count(opt: Option<usize>) -> usize {
 }
 
 /// Load and build the scene named by the options.
-pub fn load_scene(opts: &RpictOptions, log: &Log) -> Result<(Scene, LightSet)> {
+pub fn load_scene(opts: &RpictOptions, log: &Log) -> Result<(Scene, LightSet, [u8; 32])> {
     let mut ro = ReadOptions::from_env();
     ro.allow_commands |= opts.allow_commands;
     let files = if opts.scene_files.is_empty() {
@@ -133,6 +133,7 @@ pub fn load_scene(opts: &RpictOptions, log: &Log) -> Result<(Scene, LightSet)> {
         opts.scene_files.clone()
     };
     let prims = read_scene_files(&files, &ro)?;
+    let fp = crate::ambient::fingerprint::fingerprint(&prims, &opts.params);
     let scene = Scene::build(&prims)?;
     for w in &scene.warnings {
         log.warn(w);
@@ -144,14 +145,14 @@ pub fn load_scene(opts: &RpictOptions, log: &Log) -> Result<(Scene, LightSet)> {
     if lights.sources.is_empty() {
         log.warn("no light sources found");
     }
-    Ok((scene, lights))
+    Ok((scene, lights, fp))
 }
 
 fn render_command(args: &[String], opts: &RpictOptions, log: &Log) -> Result<()> {
     if opts.pm != 0.0 || opts.pd != 0.0 {
         bail!("-pm (motion blur) and -pd (depth of field) are not supported yet; use -pm 0 -pd 0");
     }
-    let (scene, lights) = load_scene(opts, log)?;
+    let (scene, lights, fingerprint) = load_scene(opts, log)?;
     let ambient = Ambient::new(&opts.params, scene.size, process_origin_id());
     let my_origin = ambient.as_ref().map(|a| a.cache.next_id().origin);
     let amb_file = match (&ambient, &opts.params.af) {
@@ -162,6 +163,20 @@ fn render_command(args: &[String], opts: &RpictOptions, log: &Log) -> Result<()>
         (Some(a), Some(af)) => {
             load_ambient_file(a, Path::new(af), scene.origin, log)?;
             Some(af.clone())
+        }
+        _ => None,
+    };
+    let log_sink = match (&ambient, &opts.amb_log) {
+        (Some(a), Some(path)) => Some(open_ambient_log(
+            a,
+            Path::new(path),
+            fingerprint,
+            opts,
+            scene.origin,
+        )?),
+        (None, Some(_)) => {
+            log.warn("--amb-log has no effect without -ab > 0");
+            None
         }
         _ => None,
     };
@@ -183,6 +198,9 @@ fn render_command(args: &[String], opts: &RpictOptions, log: &Log) -> Result<()>
     });
     let started = Instant::now();
     let result = render_frames(opts, &ctx, &pool, &command_line, log, &stats);
+    if let Some(sink) = &log_sink {
+        sink.finish()?;
+    }
     if let (Some(a), Some(af), Some(me)) = (&ambient, &amb_file, my_origin) {
         save_ambient_file(a, Path::new(af), scene.origin, me, &opts.params)?;
     }
@@ -203,6 +221,78 @@ fn render_command(args: &[String], opts: &RpictOptions, log: &Log) -> Result<()>
             .with_context(|| format!("cannot write statistics file {path}"))?;
     }
     result
+}
+
+/// Appends this process's new ambient values to a Tessera ambient log, one write per
+/// `--amb-flush` values.
+pub struct LogSink {
+    writer: Mutex<crate::ambient::log::LogWriter>,
+    every: usize,
+    origin: glam::DVec3,
+    error: Mutex<Option<String>>,
+}
+
+impl LogSink {
+    /// Flush what is pending and report the first error met while rendering.
+    pub fn finish(&self) -> Result<()> {
+        if let Ok(mut w) = self.writer.lock() {
+            w.flush().map_err(|e| anyhow!("ambient log: {e}"))?;
+        }
+        match self.error.lock().ok().and_then(|mut e| e.take()) {
+            Some(e) => Err(anyhow!("ambient log: {e}")),
+            None => Ok(()),
+        }
+    }
+}
+
+impl crate::ambient::cache::ValueSink for std::sync::Arc<LogSink> {
+    fn accept(&self, v: &crate::ambient::cache::CachedValue) {
+        if let Ok(mut w) = self.writer.lock() {
+            w.push(&v.to_record(self.origin));
+            if w.pending() >= self.every {
+                if let Err(e) = w.flush() {
+                    if let Ok(mut slot) = self.error.lock() {
+                        slot.get_or_insert(e.to_string());
+                    }
+                }
+            }
+        }
+    }
+}
+
+/// Open (or create) a Tessera ambient log: refuse it when its fingerprint does not match
+/// the scene and ambient options (unless `--amb-force`), load its values into the cache and
+/// append this process's new values to it.
+pub fn open_ambient_log(
+    a: &Ambient,
+    path: &Path,
+    fingerprint: [u8; 32],
+    opts: &RpictOptions,
+    origin: glam::DVec3,
+) -> Result<std::sync::Arc<LogSink>> {
+    use crate::ambient::log::{LogHeader, LogReader, LogWriter};
+    let header = LogHeader::new(
+        fingerprint,
+        &crate::ambient::fingerprint::options_text(&opts.params),
+    );
+    if path.exists() {
+        let mut r = LogReader::open(path, Some(&fingerprint), opts.amb_force)?;
+        for rec in r.read_available()? {
+            a.cache
+                .insert(crate::ambient::cache::CachedValue::from_record(
+                    &rec, origin,
+                ));
+        }
+    }
+    let writer = LogWriter::open(path, &header, opts.amb_force)?;
+    let sink = std::sync::Arc::new(LogSink {
+        writer: Mutex::new(writer),
+        every: opts.amb_flush.max(1),
+        origin,
+        error: Mutex::new(None),
+    });
+    a.cache.set_sink(Box::new(sink.clone()));
+    Ok(sink)
 }
 
 /// Load the values of a Radiance ambient file (`-af`) into the cache, if the file exists.

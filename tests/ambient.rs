@@ -285,3 +285,70 @@ fn two_threads_share_one_cache() {
     assert!(v2 as f64 <= v1 as f64 * 1.05, "{v1} vs {v2}");
     assert!(c.rms < 0.1 && c.mean_lum < 0.02, "{c:?}");
 }
+
+/// `--amb-log`: Tessera's own log is reused by a later render with the same scene and
+/// options, and refused (unless `--amb-force`) when they differ.
+#[test]
+fn ambient_log_reused_and_stale_fingerprint_refused() {
+    let t = tempfile::tempdir().unwrap();
+    let logf = t.path().join("amb.log");
+    let l = logf.to_str().unwrap();
+    let first = spheres_run(
+        t.path(),
+        &["--amb-log", l, "--amb-flush", "16"],
+        &t.path().join("1.json"),
+    );
+    let second = spheres_run(t.path(), &["--amb-log", l], &t.path().join("2.json"));
+    let (n1, n2) = (new_values(&first), new_values(&second));
+    eprintln!("log: {n1} then {n2} new values");
+    assert!(n1 > 50 && n2 * 10 < n1, "{n1} then {n2}");
+    let mut reader = tessera::ambient::log::LogReader::open(&logf, None, false).unwrap();
+    assert_eq!(reader.read_available().unwrap().len() as u64, n1 + n2);
+    // Different ambient options: refused with a clear message, accepted with --amb-force.
+    let scenes = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/scenes");
+    let out = std::process::Command::new(tpict_bin())
+        .current_dir(&scenes)
+        .args([
+            "-vf",
+            "spheres.vf",
+            "-x",
+            "16",
+            "-y",
+            "16",
+            "-ab",
+            "1",
+            "-ad",
+            "64",
+        ])
+        .args(["--amb-log", l, "-o"])
+        .arg(t.path().join("x.hdr"))
+        .arg("spheres.rad")
+        .output()
+        .unwrap();
+    assert!(!out.status.success());
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        err.contains("fingerprint") && err.contains("force"),
+        "{err}"
+    );
+    assert!(!t.path().join("x.hdr").exists());
+    run_ok(
+        std::process::Command::new(tpict_bin())
+            .current_dir(&scenes)
+            .args([
+                "-vf",
+                "spheres.vf",
+                "-x",
+                "16",
+                "-y",
+                "16",
+                "-ab",
+                "1",
+                "-ad",
+                "64",
+            ])
+            .args(["--amb-log", l, "--amb-force", "-w-", "-o"])
+            .arg(t.path().join("y.hdr"))
+            .arg("spheres.rad"),
+    );
+}

@@ -12,7 +12,13 @@ use crate::color::Color;
 use glam::DVec3;
 use std::collections::HashMap;
 use std::sync::atomic::{AtomicU32, AtomicU64, Ordering};
-use std::sync::RwLock;
+use std::sync::{OnceLock, RwLock};
+
+/// Receives every value this process computes (e.g. to append it to a shared log).
+pub trait ValueSink: Send + Sync {
+    /// Called once per new value, from the thread that computed it.
+    fn accept(&self, v: &CachedValue);
+}
 
 const SHARDS: usize = 64;
 const MAX_LEVELS: u32 = 40;
@@ -54,6 +60,7 @@ pub struct AmbientCache {
     seq: AtomicU64,
     origin_id: u64,
     max_level_seen: AtomicU32,
+    sink: OnceLock<Box<dyn ValueSink>>,
 }
 
 fn shard_of(k: &Key) -> usize {
@@ -79,7 +86,18 @@ impl AmbientCache {
             seq: AtomicU64::new(0),
             origin_id,
             max_level_seen: AtomicU32::new(0),
+            sink: OnceLock::new(),
         }
+    }
+
+    /// Send every value this process computes from now on to `sink` (set once).
+    pub fn set_sink(&self, sink: Box<dyn ValueSink>) -> bool {
+        self.sink.set(sink).is_ok()
+    }
+
+    /// The id origin of values computed by this process.
+    pub fn origin_id(&self) -> u64 {
+        self.origin_id
     }
 
     /// Number of values held.
@@ -131,6 +149,11 @@ impl AmbientCache {
         self.levels_used.fetch_or(1u64 << l, Ordering::Relaxed);
         self.max_level_seen.fetch_max(l, Ordering::Relaxed);
         self.count.fetch_add(1, Ordering::Relaxed);
+        if v.id.origin == self.origin_id {
+            if let Some(s) = self.sink.get() {
+                s.accept(&v);
+            }
+        }
     }
 
     /// Call `f` for every value whose cell could reach point `p`.

@@ -8,6 +8,7 @@
 
 pub mod cache;
 pub mod compute;
+pub mod fingerprint;
 pub mod log;
 pub mod radfile;
 

@@ -1,0 +1,164 @@
+//! The fingerprint of a scene and the options that change ambient values: a store made for
+//! one fingerprint is refused for another (unless forced), so stale values are never reused.
+//!
+//! Covered: every primitive in order (modifier, type, identifier, all arguments — so any
+//! change of geometry or material changes it) and `-ab -aa -ar -ad -as -av -aw` and the
+//! `-ae/-ai` lists. Not covered: the view, resolution and pixel options, which do not change
+//! ambient values. The digest is 256 bits from four independently seeded 64-bit FNV-1a
+//! streams with a final avalanche mix (a content check, not a cryptographic hash).
+
+use crate::radopt::RenderParams;
+use crate::scene::Primitive;
+
+struct Hasher([u64; 4]);
+
+impl Hasher {
+    fn new() -> Hasher {
+        Hasher([
+            0xcbf2_9ce4_8422_2325,
+            0x8422_2325_cbf2_9ce4,
+            0x9e37_79b9_7f4a_7c15,
+            0xd6e8_feb8_6659_fd93,
+        ])
+    }
+    fn bytes(&mut self, b: &[u8]) {
+        for (i, h) in self.0.iter_mut().enumerate() {
+            for &x in b {
+                *h ^= x as u64 ^ (i as u64) << 8;
+                *h = h.wrapping_mul(0x0100_0000_01b3);
+            }
+        }
+    }
+    fn str(&mut self, s: &str) {
+        self.bytes(&(s.len() as u64).to_le_bytes());
+        self.bytes(s.as_bytes());
+    }
+    fn f64(&mut self, v: f64) {
+        // -0.0 and 0.0 hash alike.
+        let v = if v == 0.0 { 0.0 } else { v };
+        self.bytes(&v.to_bits().to_le_bytes());
+    }
+    fn finish(self) -> [u8; 32] {
+        let mut out = [0u8; 32];
+        for (i, mut h) in self.0.into_iter().enumerate() {
+            h ^= h >> 33;
+            h = h.wrapping_mul(0xff51_afd7_ed55_8ccd);
+            h ^= h >> 33;
+            h = h.wrapping_mul(0xc4ce_b9fe_1a85_ec53);
+            h ^= h >> 33;
+            out[i * 8..i * 8 + 8].copy_from_slice(&h.to_le_bytes());
+        }
+        out
+    }
+}
+
+/// Fingerprint of a scene's primitives and the ambient-relevant options.
+pub fn fingerprint(prims: &[Primitive], params: &RenderParams) -> [u8; 32] {
+    let mut h = Hasher::new();
+    h.str("tessera-ambient-v1");
+    h.bytes(&(prims.len() as u64).to_le_bytes());
+    for p in prims {
+        h.str(&p.modifier);
+        h.str(&p.ptype);
+        h.str(&p.name);
+        h.bytes(&(p.sargs.len() as u64).to_le_bytes());
+        for s in &p.sargs {
+            h.str(s);
+        }
+        h.bytes(&(p.iargs.len() as u64).to_le_bytes());
+        for i in &p.iargs {
+            h.bytes(&i.to_le_bytes());
+        }
+        h.bytes(&(p.rargs.len() as u64).to_le_bytes());
+        for r in &p.rargs {
+            h.f64(*r);
+        }
+    }
+    h.bytes(&params.ab.to_le_bytes());
+    h.f64(params.aa);
+    h.bytes(&params.ar.to_le_bytes());
+    h.bytes(&params.ad.to_le_bytes());
+    h.bytes(&params.as_.to_le_bytes());
+    for v in params.av {
+        h.f64(v);
+    }
+    h.bytes(&params.aw.to_le_bytes());
+    h.str("ae");
+    for m in &params.ae {
+        h.str(m);
+    }
+    h.str("ai");
+    for m in &params.ai {
+        h.str(m);
+    }
+    h.finish()
+}
+
+/// The options text stored (informationally) with a store.
+pub fn options_text(params: &RenderParams) -> String {
+    let mut s = format!(
+        "-ab {} -aa {} -ar {} -ad {} -as {} -av {} {} {} -aw {}",
+        params.ab,
+        params.aa,
+        params.ar,
+        params.ad,
+        params.as_,
+        params.av[0],
+        params.av[1],
+        params.av[2],
+        params.aw
+    );
+    for m in &params.ae {
+        s.push_str(&format!(" -ae {m}"));
+    }
+    for m in &params.ai {
+        s.push_str(&format!(" -ai {m}"));
+    }
+    s
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::scene::Location;
+
+    fn prim(r: f64) -> Primitive {
+        Primitive {
+            modifier: "void".into(),
+            ptype: "plastic".into(),
+            name: "m".into(),
+            sargs: vec![],
+            iargs: vec![],
+            rargs: vec![r, 0.5, 0.5, 0.0, 0.0],
+            loc: Location::new("x", 1),
+        }
+    }
+
+    #[test]
+    fn changes_with_geometry_materials_and_ambient_options() {
+        let p = RenderParams::default();
+        let base = fingerprint(&[prim(0.5)], &p);
+        assert_eq!(base, fingerprint(&[prim(0.5)], &p));
+        assert_ne!(base, fingerprint(&[prim(0.51)], &p));
+        assert_ne!(base, fingerprint(&[prim(0.5), prim(0.5)], &p));
+        for change in [
+            |p: &mut RenderParams| p.ab = 3,
+            |p: &mut RenderParams| p.aa = 0.1,
+            |p: &mut RenderParams| p.ar = 128,
+            |p: &mut RenderParams| p.ad = 1024,
+            |p: &mut RenderParams| p.as_ = 0,
+            |p: &mut RenderParams| p.av = [0.1, 0.1, 0.1],
+            |p: &mut RenderParams| p.aw = 2,
+            |p: &mut RenderParams| p.ae = vec!["glass".into()],
+        ] {
+            let mut q = RenderParams::default();
+            change(&mut q);
+            assert_ne!(base, fingerprint(&[prim(0.5)], &q));
+        }
+        // View and pixel options do not matter.
+        let mut q = RenderParams::default();
+        q.dj = 0.7;
+        q.ss = 4.0;
+        assert_eq!(base, fingerprint(&[prim(0.5)], &q));
+    }
+}
