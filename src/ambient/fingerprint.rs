@@ -156,9 +156,11 @@ mod tests {
             assert_ne!(base, fingerprint(&[prim(0.5)], &q));
         }
         // View and pixel options do not matter.
-        let mut q = RenderParams::default();
-        q.dj = 0.7;
-        q.ss = 4.0;
+        let q = RenderParams {
+            dj: 0.7,
+            ss: 4.0,
+            ..RenderParams::default()
+        };
         assert_eq!(base, fingerprint(&[prim(0.5)], &q));
     }
 }
