@@ -399,6 +399,9 @@ prop_compose! {
         error_file in proptest::option::of(name()),
         allow_commands in any::<bool>(),
         stats_file in proptest::option::of(name()),
+        amb_log in proptest::option::of(name()),
+        amb_flush in 1usize..1000,
+        amb_force in any::<bool>(),
         p in any_params(),
     ) -> RpictOptions {
         RpictOptions {
@@ -406,6 +409,7 @@ prop_compose! {
                          vh, vv, vo, va, vs, vl },
             params: p, x, y, pa, pj, pm, pd, ps, pt, report_interval: t as f64, warnings,
             threads, output, sequence_start: seq, error_file, allow_commands, stats_file,
+            amb_log, amb_flush, amb_force,
             scene_files: vec!["scene.rad".into()],
         }
     }
