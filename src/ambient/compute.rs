@@ -170,7 +170,8 @@ impl Ambient {
             if d <= 0.0 {
                 return;
             }
-            let dr2 = 2.0 - 2.0 * d;
+            // Rounding can make d exceed 1 for equal normals: keep the angle term real.
+            let dr2 = (2.0 - 2.0 * d).max(0.0);
             if dr2 >= maxangle * maxangle {
                 return;
             }
