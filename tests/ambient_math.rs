@@ -1,0 +1,293 @@
+//! The ambient calculation's mathematics: the Hessian estimator and radii, super-sampling and
+//! gradient extrapolation, measured through the library against `-aa 0` references.
+
+use glam::DVec3;
+use std::f64::consts::PI;
+use std::path::{Path, PathBuf};
+use std::sync::atomic::Ordering;
+use tessera::ambient::compute::{cell_variances, hessian, hessian_radii, Ambient};
+use tessera::light::LightSet;
+use tessera::radopt::RenderParams;
+use tessera::render::{render_region, FrameSetup, RenderProgress, Tracer};
+use tessera::scene::{read_scene_files, ReadOptions, Scene};
+use tessera::view::{normaspect, read_view_file, View};
+
+fn scenes() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/scenes")
+}
+
+/// A loaded scene with its view.
+struct Setup {
+    scene: Scene,
+    lights: LightSet,
+    view: View,
+}
+
+fn load(rad: &str, vf: &str) -> Setup {
+    let dir = scenes();
+    let prims = read_scene_files(
+        &[dir.join(rad).to_string_lossy().into_owned()],
+        &ReadOptions::from_env(),
+    )
+    .unwrap();
+    let scene = Scene::build(&prims).unwrap();
+    let lights = LightSet::collect(&scene, RenderParams::default().dr);
+    let view = read_view_file(&dir.join(vf), &View::default()).unwrap();
+    Setup {
+        scene,
+        lights,
+        view,
+    }
+}
+
+/// Options for one render.
+#[derive(Clone, Copy)]
+struct Opts {
+    res: usize,
+    ab: i32,
+    aa: f64,
+    ad: i32,
+    as_: i32,
+    gradients: bool,
+    hessian: bool,
+    frame: u32,
+}
+
+impl Default for Opts {
+    fn default() -> Opts {
+        Opts {
+            res: 48,
+            ab: 1,
+            aa: 0.15,
+            ad: 128,
+            as_: 0,
+            gradients: true,
+            hessian: true,
+            frame: 0,
+        }
+    }
+}
+
+/// Render through the library (one thread, `-ps 1 -pj 0`); pixels and new-value count.
+fn render(s: &Setup, o: Opts) -> (Vec<[f64; 3]>, u64) {
+    let params = RenderParams {
+        ab: o.ab,
+        aa: o.aa,
+        ad: o.ad,
+        as_: o.as_,
+        ..RenderParams::default()
+    };
+    let mut amb = Ambient::new(&params, s.scene.size, 1).unwrap();
+    amb.use_gradients = o.gradients;
+    amb.use_hessian = o.hessian;
+    let vf = s.view.frame().unwrap();
+    let (mut x, mut y, mut pa) = (o.res, o.res, 1.0);
+    normaspect(vf.aspect(), &mut pa, &mut x, &mut y);
+    let tracer = Tracer::new(&s.scene, &params, &s.lights).with_ambient(Some(&amb));
+    let fs = FrameSetup {
+        view: &vf,
+        xres: x,
+        yres: y,
+        pj: 0.0,
+        ps: 1,
+        pt: 0.05,
+        frame: o.frame,
+        irradiance: false,
+    };
+    let px = render_region(&tracer, &fs, 0, 0, x, y, &RenderProgress::default());
+    let nv = amb
+        .stats
+        .new_values
+        .iter()
+        .map(|v| v.load(Ordering::Relaxed))
+        .sum();
+    (
+        px.iter()
+            .map(|p| [p[0] as f64, p[1] as f64, p[2] as f64])
+            .collect(),
+        nv,
+    )
+}
+
+/// RMS relative luminance-ish error (channel mean), floored at 1% like radcompare.
+fn rms(a: &[[f64; 3]], b: &[[f64; 3]]) -> f64 {
+    let mut s = 0.0;
+    for (p, q) in a.iter().zip(b) {
+        let x = (p[0] + p[1] + p[2]) / 3.0;
+        let y = (q[0] + q[1] + q[2]) / 3.0;
+        let den = (0.25 * (x + y) * (x + y)).max(1e-4);
+        s += (x - y) * (x - y) / den;
+    }
+    (s / a.len() as f64).sqrt()
+}
+
+/// A high-sample `-aa 0` reference (averaged over frames).
+fn reference(s: &Setup, res: usize, ad: i32, frames: u32) -> Vec<[f64; 3]> {
+    let mut acc = vec![[0.0; 3]; 0];
+    for f in 0..frames {
+        let (p, _) = render(
+            s,
+            Opts {
+                res,
+                aa: 0.0,
+                ad,
+                frame: 1000 + f,
+                ..Opts::default()
+            },
+        );
+        if acc.is_empty() {
+            acc = vec![[0.0; 3]; p.len()];
+        }
+        for (a, q) in acc.iter_mut().zip(&p) {
+            for c in 0..3 {
+                a[c] += q[c] / frames as f64;
+            }
+        }
+    }
+    acc
+}
+
+/// Mean error and new-value count over `frames` seeds.
+fn mean_err(s: &Setup, reference: &[[f64; 3]], o: Opts, frames: u32) -> (f64, f64) {
+    let mut e = 0.0;
+    let mut n = 0.0;
+    for f in 0..frames {
+        let (p, nv) = render(s, Opts { frame: f, ..o });
+        e += rms(&p, reference);
+        n += nv as f64;
+    }
+    (e / frames as f64, n / frames as f64)
+}
+
+/// The hemisphere mesh of a point at height `h` under an infinite uniform plane: the
+/// irradiance does not change under tangential displacement, so the Hessian is ~0 and the
+/// radii are huge. A sphere-like cap (a spot of brightness) gives a finite radius.
+#[test]
+fn hessian_of_a_plane_is_nearly_zero() {
+    let (m, nphi) = (12, 38);
+    let (n, u, v) = (DVec3::Z, DVec3::X, DVec3::Y);
+    let h = 2.0;
+    let mut pts = Vec::new();
+    for j in 0..m {
+        for k in 0..nphi {
+            let s2 = (j as f64 + 0.5) / m as f64;
+            let (st, ct) = (s2.sqrt(), (1.0 - s2).sqrt());
+            let phi = 2.0 * PI * (k as f64 + 0.5) / nphi as f64;
+            let d = DVec3::new(st * phi.cos(), st * phi.sin(), ct);
+            pts.push(d * (h / ct));
+        }
+    }
+    let b = vec![1.0; m * nphi];
+    let hp = hessian(&pts, &b, m, nphi, n, u, v).unwrap();
+    eprintln!("plane Hessian {hp:?}");
+    // Against the scale of a surface at distance h: 1/h².
+    assert!(hp.iter().all(|x| x.abs() < 0.05 / (h * h)), "{hp:?}");
+    // A bright band on one side (x > 0): the irradiance changes along x, not y.
+    let b2: Vec<f64> = pts
+        .iter()
+        .map(|p| if p.x > 0.0 { 1.0 } else { 0.01 })
+        .collect();
+    let hb = hessian(&pts, &b2, m, nphi, n, u, v).unwrap();
+    let (ang, r0, r1) = hessian_radii(&hb).unwrap();
+    eprintln!("half-bright Hessian {hb:?}: angle {ang}, radii {r0} {r1}");
+    assert!(r0 <= r1 && r0.is_finite() && r0 > 0.0);
+    // Nearer surfaces curve irradiance more: halving the distance shrinks the radius.
+    let near: Vec<DVec3> = pts.iter().map(|p| *p * 0.5).collect();
+    let hn = hessian(&near, &b2, m, nphi, n, u, v).unwrap();
+    let (_, rn0, _) = hessian_radii(&hn).unwrap();
+    assert!(rn0 < r0, "{rn0} vs {r0}");
+    // Radii follow (4/|λ|)^¼.
+    let (_, a, b) = hessian_radii(&[4.0, 0.0, 0.25]).unwrap();
+    assert!((a - 1.0).abs() < 1e-12 && (b - 2.0).abs() < 1e-12);
+    let (ang, _, _) = hessian_radii(&[0.25, 0.0, 4.0]).unwrap();
+    assert!(
+        (ang.sin().abs() - 1.0).abs() < 1e-9,
+        "first eigenvector along v: {ang}"
+    );
+    assert!(hessian_radii(&[0.0, 0.0, 0.0]).is_none());
+}
+
+#[test]
+fn cell_variance_wraps_in_phi() {
+    let (m, nphi) = (3, 4);
+    let mut b = vec![0.0; m * nphi];
+    b[nphi] = 1.0; // ring 1, column 0: its neighbours include column 3 (wrapped).
+    let v = cell_variances(&b, m, nphi);
+    assert!(v[nphi + 3] > 0.0 && v[nphi + 1] > 0.0 && v[2 * nphi + 3] > 0.0);
+    assert_eq!(v[nphi + 2], 0.0);
+    assert!(v[nphi] > 0.0);
+}
+
+/// Gradient extrapolation reduces the error of the cached picture against an uncached
+/// (`-aa 0`) reference at the same `-aa` (spheres scene, 48×48, -ab 1, averaged over seeds).
+#[test]
+fn gradients_reduce_interpolation_error() {
+    let s = load("spheres.rad", "spheres.vf");
+    let reference = reference(&s, 48, 512, 2);
+    let base = Opts {
+        aa: 0.25,
+        ..Opts::default()
+    };
+    let (with, n1) = mean_err(&s, &reference, base, 3);
+    let (without, n2) = mean_err(
+        &s,
+        &reference,
+        Opts {
+            gradients: false,
+            ..base
+        },
+        3,
+    );
+    eprintln!("gradients on: rms {with:.4} ({n1} values); off: rms {without:.4} ({n2} values)");
+    assert!(with < without, "gradients should help: {with} vs {without}");
+}
+
+/// Measurements for the report (run with `--ignored --nocapture`): error against an `-aa 0`
+/// reference and new-value counts with the isotropic and Hessian radii, with and without
+/// super-sampling.
+#[test]
+#[ignore]
+fn measure_radii_and_supersampling() {
+    for (rad, vf) in [("spheres.rad", "spheres.vf"), ("curved.rad", "curved.vf")] {
+        let s = load(rad, vf);
+        let t0 = std::time::Instant::now();
+        let reference = reference(&s, 48, 1024, 2);
+        eprintln!("{rad}: reference in {:?}", t0.elapsed());
+        for aa in [0.1, 0.15, 0.25] {
+            for hessian in [false, true] {
+                for as_ in [0, 128] {
+                    let t = std::time::Instant::now();
+                    let (e, n) = mean_err(
+                        &s,
+                        &reference,
+                        Opts {
+                            aa,
+                            hessian,
+                            as_,
+                            ..Opts::default()
+                        },
+                        2,
+                    );
+                    eprintln!(
+                        "{rad} -aa {aa} hessian {hessian} -as {as_}: rms {e:.4}, {n} values, {:.2}s",
+                        t.elapsed().as_secs_f64() / 2.0
+                    );
+                }
+            }
+        }
+        // Uncached: does super-sampling help the Monte Carlo estimate itself?
+        for as_ in [0, 128] {
+            let (e, _) = mean_err(
+                &s,
+                &reference,
+                Opts {
+                    aa: 0.0,
+                    as_,
+                    ..Opts::default()
+                },
+                1,
+            );
+            eprintln!("{rad} -aa 0 -as {as_}: rms {e:.4}");
+        }
+    }
+}
