@@ -1,0 +1,163 @@
+#!/usr/bin/env bash
+# Speed against error for the indirect (ambient) calculation: tpict vs Radiance's rpict.
+#
+# For every scene and every -ab level:
+#   1. two converged references with pure Monte Carlo sampling (no irradiance cache):
+#        rpict -aa 0 -ad REF_AD -as 0   and   tpict -aa 0 -ad REF_AD -as 0
+#      their agreement (relative RMS, mean luminance) goes to references.tsv;
+#      the reference used for the sweep is their average (pcomb), reduced like the runs.
+#   2. a sweep over -aa x -ad x -as for both renderers, single-threaded (tpict -n 1),
+#      recording CPU time (user+sys, /usr/bin/time) and the error against the reference.
+# Pictures are RES x RES with -ps 1 -pj 0 (no pixel-sampling noise), then reduced with
+# `pfilt -1 -r 1 -x RED -y RED`. The error is the relative RMS of per-pixel brightness
+# (pvalue -b): sqrt(mean(((b - ref) / max(ref, FLOOR*mean(ref)))^2)), like radcompare's
+# per-pixel relative difference, with a floor so near-black pixels do not dominate.
+# Each run's error is also recorded against each renderer's own reference alone.
+#
+# Environment:
+#   SCENES="spheres curved glassy mirrors"   AB_LIST="1"   RES=128   RED=64
+#   AA_LIST="0.3 0.2 0.15 0.1"  AD_LIST="128 512 1024"  AS_LIST="0 128"
+#   REF_AD=2048            divisions of the references
+#   FLOOR=0.01             relative floor of the error denominator (x mean reference)
+#   OUT=docs/benchmarks-ambient   where runs.tsv and references.tsv go (TAG=x -> runs-x.tsv)
+#   TESSERA_RADIANCE_BIN   folder holding rpict, oconv, pfilt, pvalue, pcomb
+#   NO_BUILD=1 / TPICT=path
+# Combinations with -as > -ad / 2 are skipped (super-sampling more than half the divisions).
+#
+# Usage: bench/ambient.sh   then   python3 bench/plot_ambient.py   (see docs/benchmarks.md)
+set -euo pipefail
+
+ROOT=$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)
+SCENES=${SCENES:-"spheres curved glassy mirrors"}
+AB_LIST=${AB_LIST:-"1"}
+RES=${RES:-128}
+RED=${RED:-64}
+AA_LIST=${AA_LIST:-"0.3 0.2 0.15 0.1"}
+AD_LIST=${AD_LIST:-"128 512 1024"}
+AS_LIST=${AS_LIST:-"0 128"}
+REF_AD=${REF_AD:-2048}
+FLOOR=${FLOOR:-0.01}
+OUT=${OUT:-"$ROOT/docs/benchmarks-ambient"}
+TAG=${TAG:-}
+[[ $OUT == /* ]] || OUT="$PWD/$OUT"
+mkdir -p "$OUT"
+RUNS="$OUT/runs${TAG:+-$TAG}.tsv"
+REFS="$OUT/references${TAG:+-$TAG}.tsv"
+
+# --- Locate Radiance as tests/common/mod.rs does -------------------------------------------
+find_radiance() {
+    if [[ -n "${TESSERA_RADIANCE_BIN:-}" && -x "$TESSERA_RADIANCE_BIN/rpict" ]]; then
+        echo "$TESSERA_RADIANCE_BIN"
+        return
+    fi
+    local p
+    if p=$(command -v rpict 2>/dev/null); then
+        dirname "$p"
+        return
+    fi
+    p=/opt/radvenv/lib/python3.11/site-packages/pyradiance/bin
+    if [[ -x "$p/rpict" ]]; then
+        echo "$p"
+        return
+    fi
+    return 1
+}
+RADBIN=$(find_radiance) || {
+    echo "ambient: Radiance not found (set TESSERA_RADIANCE_BIN to the folder holding rpict)" >&2
+    exit 1
+}
+export PATH="$RADBIN:$PATH"
+export RAYPATH=".:$(dirname "$RADBIN")/lib"
+
+if [[ -z "${NO_BUILD:-}" && -z "${TPICT:-}" ]]; then
+    echo "ambient: cargo build --release" >&2
+    (cd "$ROOT" && cargo build --release --quiet --bin tpict)
+fi
+TPICT=${TPICT:-"$ROOT/target/release/tpict"}
+[[ $TPICT == /* ]] || TPICT="$PWD/$TPICT"
+[[ -x "$TPICT" ]] || { echo "ambient: $TPICT missing" >&2; exit 1; }
+[[ -x /usr/bin/time ]] || { echo "ambient: /usr/bin/time (GNU time) needed" >&2; exit 1; }
+
+TMP=$(mktemp -d "${TMPDIR:-/tmp}/tessera-ambient.XXXXXX")
+cleanup() { rm -rf "$TMP"; }
+trap cleanup EXIT
+trap 'exit 130' INT TERM
+
+# cpu_run OUT cmd... : run cmd (stdout to OUT); prints CPU seconds (user+sys).
+cpu_run() {
+    local out=$1
+    shift
+    /usr/bin/time -f "%U %S" -o "$TMP/time" "$@" >"$out" 2>"$TMP/err" || {
+        echo "ambient: failed: $*" >&2
+        cat "$TMP/err" >&2
+        exit 1
+    }
+    [[ -s "$out" ]] || { echo "ambient: no picture from: $*" >&2; exit 1; }
+    awk '{ printf "%.2f\n", $1 + $2 }' "$TMP/time"
+}
+
+# bright PIC OUT : reduce PIC to RED x RED and write one brightness value per pixel.
+bright() {
+    pfilt -1 -r 1 -x "$RED" -y "$RED" "$1" | pvalue -h -H -o -b -d >"$2"
+}
+
+# relrms TEST REF : relative RMS error of brightness files.
+relrms() {
+    paste "$1" "$2" | awk -v f="$FLOOR" '
+        { t[NR] = $1; r[NR] = $2; s += $2 }
+        END {
+            fl = f * s / NR
+            for (i = 1; i <= NR; i++) { d = r[i] > fl ? r[i] : fl; e += ((t[i] - r[i]) / d) ^ 2 }
+            printf "%.5f\n", sqrt(e / NR)
+        }'
+}
+mean_of() { awk '{ s += $1 } END { printf "%.6g\n", s / NR }' "$1"; }
+
+printf 'ambient: %s; %sx%s -> %sx%s; Radiance in %s; %s cores\n' \
+    "$("$TPICT" -version 2>/dev/null | head -1)" "$RES" "$RES" "$RED" "$RED" "$RADBIN" "$(nproc)" >&2
+
+printf 'scene\tab\trpict_ref_cpu\ttpict_ref_cpu\trpict_ref_mean\ttpict_ref_mean\trelrms_tpict_vs_rpict\trelrms_rpict_vs_tpict\n' >"$REFS"
+printf 'scene\tab\trenderer\taa\tad\tas\tcpu_s\terr_avgref\terr_rpictref\terr_tpictref\tmean\n' >"$RUNS"
+
+for s in $SCENES; do
+    sdir="$ROOT/tests/scenes"
+    oct="$TMP/$s.oct"
+    (cd "$sdir" && oconv "$s.rad" >"$oct")
+    for ab in $AB_LIST; do
+        common=(-vf "$s.vf" -x "$RES" -y "$RES" -ps 1 -pj 0 -ab "$ab")
+        cd "$sdir"
+        # --- references ---
+        rc=$(cpu_run "$TMP/rref.hdr" rpict "${common[@]}" -aa 0 -ad "$REF_AD" -as 0 "$oct")
+        tc=$(cpu_run "$TMP/tref.hdr" "$TPICT" -n 1 "${common[@]}" -aa 0 -ad "$REF_AD" -as 0 "$s.rad")
+        pcomb -e 'ro=(ri(1)+ri(2))/2;go=(gi(1)+gi(2))/2;bo=(bi(1)+bi(2))/2' \
+            -o "$TMP/rref.hdr" -o "$TMP/tref.hdr" >"$TMP/aref.hdr"
+        bright "$TMP/rref.hdr" "$TMP/rref.b"
+        bright "$TMP/tref.hdr" "$TMP/tref.b"
+        bright "$TMP/aref.hdr" "$TMP/aref.b"
+        row="$s	$ab	$rc	$tc	$(mean_of "$TMP/rref.b")	$(mean_of "$TMP/tref.b")	$(relrms "$TMP/tref.b" "$TMP/rref.b")	$(relrms "$TMP/rref.b" "$TMP/tref.b")"
+        echo "$row" >>"$REFS"
+        echo "ambient: reference $row" >&2
+        # --- sweep ---
+        for aa in $AA_LIST; do
+            for ad in $AD_LIST; do
+                for as in $AS_LIST; do
+                    ((as * 2 <= ad)) || continue
+                    amb=(-aa "$aa" -ad "$ad" -as "$as")
+                    for r in rpict tpict; do
+                        if [[ $r == rpict ]]; then
+                            c=$(cpu_run "$TMP/run.hdr" rpict "${common[@]}" "${amb[@]}" "$oct")
+                        else
+                            c=$(cpu_run "$TMP/run.hdr" "$TPICT" -n 1 "${common[@]}" "${amb[@]}" "$s.rad")
+                        fi
+                        bright "$TMP/run.hdr" "$TMP/run.b"
+                        row="$s	$ab	$r	$aa	$ad	$as	$c	$(relrms "$TMP/run.b" "$TMP/aref.b")	$(relrms "$TMP/run.b" "$TMP/rref.b")	$(relrms "$TMP/run.b" "$TMP/tref.b")	$(mean_of "$TMP/run.b")"
+                        echo "$row" >>"$RUNS"
+                        echo "ambient: $row" >&2
+                    done
+                done
+            done
+        done
+        cd "$ROOT"
+    done
+done
+echo "ambient: wrote $RUNS and $REFS" >&2

@@ -1,0 +1,176 @@
+#!/usr/bin/env python3
+"""Plot error against CPU time for bench/ambient.sh results and compute time ratios.
+
+Reads every runs*.tsv in the results folder (default docs/benchmarks-ambient), writes
+  error-vs-cpu-<scene>-ab<N>.png   one log-log chart per scene and -ab level
+  ratios.tsv / ratios.md           rpict CPU time / tpict CPU time at matched error
+Each renderer's Pareto front (runs no cheaper run beats in error) is interpolated
+piecewise-linearly in log(error)-log(time); a ratio is given only where the error level
+lies inside both fronts (no extrapolation).
+
+Usage: python3 bench/plot_ambient.py [RESULTS_DIR] [--err err_avgref]
+Installs matplotlib and numpy into a venv ($TESSERA_VENV, default
+~/.cache/tessera-bench-venv) when the running Python lacks them.
+"""
+import os
+import subprocess
+import sys
+
+VENV = os.environ.get("TESSERA_VENV", os.path.expanduser("~/.cache/tessera-bench-venv"))
+
+
+def ensure_deps():
+    try:
+        import matplotlib  # noqa: F401
+        import numpy  # noqa: F401
+        return
+    except ImportError:
+        pass
+    py = os.path.join(VENV, "bin", "python")
+    if os.path.realpath(sys.executable) == os.path.realpath(py) and os.environ.get("_TESSERA_REEXEC"):
+        sys.exit("plot_ambient: matplotlib/numpy still missing in " + VENV)
+    if not os.path.exists(py):
+        print(f"plot_ambient: creating venv {VENV}", file=sys.stderr)
+        subprocess.check_call([sys.executable, "-m", "venv", VENV])
+    subprocess.check_call([py, "-m", "pip", "install", "-q", "matplotlib", "numpy"])
+    os.environ["_TESSERA_REEXEC"] = "1"
+    os.execv(py, [py] + sys.argv)
+
+
+ensure_deps()
+
+import csv  # noqa: E402
+import glob  # noqa: E402
+
+import matplotlib  # noqa: E402
+import matplotlib.ticker  # noqa: E402
+
+matplotlib.use("Agg")
+import matplotlib.pyplot as plt  # noqa: E402
+import numpy as np  # noqa: E402
+
+LEVELS = [0.03, 0.05, 0.1, 0.2, 0.3]
+COLORS = {"rpict": "tab:blue", "tpict": "tab:orange"}
+
+
+def pareto(points):
+    """points: list of (cpu, err, label). Returns the front sorted by cpu ascending."""
+    front = []
+    best = float("inf")
+    for p in sorted(points, key=lambda p: (p[0], p[1])):
+        if p[1] < best:
+            front.append(p)
+            best = p[1]
+    return front
+
+
+def time_at(front, err):
+    """CPU time at which the front reaches `err` (log-log interpolation), or None."""
+    if not front:
+        return None
+    errs = [p[1] for p in front]
+    if err > errs[0] or err < errs[-1]:
+        if err > errs[0]:
+            return None  # coarser than the cheapest run: not measured
+        return None
+    for a, b in zip(front, front[1:]):
+        if b[1] <= err <= a[1]:
+            if a[1] == b[1]:
+                return a[0]
+            t = (np.log(err) - np.log(a[1])) / (np.log(b[1]) - np.log(a[1]))
+            return float(np.exp(np.log(a[0]) + t * (np.log(b[0]) - np.log(a[0]))))
+    return front[0][0] if err == errs[0] else None
+
+
+def main():
+    args = [a for a in sys.argv[1:] if not a.startswith("--")]
+    errcol = "err_avgref"
+    if "--err" in sys.argv:
+        errcol = sys.argv[sys.argv.index("--err") + 1]
+        args = [a for a in args if a != errcol]
+    root = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+    out = args[0] if args else os.path.join(root, "docs", "benchmarks-ambient")
+    rows = []
+    for f in sorted(glob.glob(os.path.join(out, "runs*.tsv"))):
+        with open(f) as fh:
+            rows += list(csv.DictReader(fh, delimiter="\t"))
+    if not rows:
+        sys.exit(f"plot_ambient: no runs*.tsv in {out}")
+    refnoise = {}
+    for f in sorted(glob.glob(os.path.join(out, "references*.tsv"))):
+        with open(f) as fh:
+            for r in csv.DictReader(fh, delimiter="\t"):
+                # Two independent references differ by sqrt(2) sigma; their average has
+                # sigma / sqrt(2): about half their relative RMS difference.
+                refnoise[(r["scene"], r["ab"])] = float(r["relrms_tpict_vs_rpict"]) / 2
+    groups = {}
+    for r in rows:
+        groups.setdefault((r["scene"], r["ab"]), []).append(r)
+
+    ratio_rows = []
+    for (scene, ab), rs in sorted(groups.items()):
+        fig, ax = plt.subplots(figsize=(5.2, 4.0), dpi=80)
+        fronts = {}
+        for ren in ("rpict", "tpict"):
+            pts = [(float(r["cpu_s"]), float(r[errcol]), f'{r["aa"]}/{r["ad"]}/{r["as"]}')
+                   for r in rs if r["renderer"] == ren and float(r["cpu_s"]) > 0]
+            if not pts:
+                continue
+            front = pareto(pts)
+            fronts[ren] = front
+            ax.scatter([p[0] for p in pts], [p[1] for p in pts], s=14, alpha=0.45,
+                       color=COLORS[ren])
+            ax.plot([p[0] for p in front], [p[1] for p in front], "-o", ms=4,
+                    color=COLORS[ren], label=f"{ren} (Pareto front)")
+        if (scene, ab) in refnoise:
+            ax.axhline(refnoise[(scene, ab)], color="gray", ls="--", lw=1,
+                       label="noise of the averaged reference")
+        ax.set_xscale("log")
+        ax.set_yscale("log")
+        ax.xaxis.set_minor_formatter(matplotlib.ticker.NullFormatter())
+        ax.yaxis.set_minor_formatter(matplotlib.ticker.NullFormatter())
+        ax.set_xlabel("CPU seconds (user+sys, 1 thread)")
+        ax.set_ylabel("relative RMS error")
+        ax.set_title(f"{scene}, -ab {ab}: error vs CPU time")
+        ax.grid(True, which="both", alpha=0.3)
+        ax.legend(fontsize=8)
+        fig.tight_layout()
+        png = os.path.join(out, f"error-vs-cpu-{scene}-ab{ab}.png")
+        fig.savefig(png, dpi=80)
+        plt.close(fig)
+        print(f"plot_ambient: wrote {png}", file=sys.stderr)
+        rf, tf = fronts.get("rpict", []), fronts.get("tpict", [])
+        for lev in LEVELS:
+            tr, tt = time_at(rf, lev), time_at(tf, lev)
+            ratio_rows.append((scene, ab, lev, tr, tt, tr / tt if tr and tt else None))
+        # At rpict's best (lowest) error on its front.
+        if rf:
+            lev = rf[-1][1]
+            tr, tt = rf[-1][0], time_at(tf, lev)
+            ratio_rows.append((scene, ab, f"rpict best {lev:.3f}", tr, tt, tr / tt if tt else None))
+
+    fmt = lambda v: "—" if v is None else (f"{v:.2f}" if isinstance(v, float) else str(v))  # noqa: E731
+    with open(os.path.join(out, "ratios.tsv"), "w") as fh:
+        fh.write("scene\tab\terror\trpict_cpu_s\ttpict_cpu_s\trpict_over_tpict\n")
+        for r in ratio_rows:
+            fh.write("\t".join(fmt(v) for v in r) + "\n")
+    # Markdown: one row per scene/ab, one column per error level.
+    md = ["| scene | -ab | " + " | ".join(f"err {l:g}" for l in LEVELS) + " | at rpict's best error |",
+          "|---|---|" + "---|" * (len(LEVELS) + 1)]
+    for (scene, ab) in sorted(groups):
+        cells = [fmt(r[5]) for r in ratio_rows if r[0] == scene and r[1] == ab and not isinstance(r[2], str)]
+        best = [r for r in ratio_rows if r[0] == scene and r[1] == ab and isinstance(r[2], str)]
+        b = f"{fmt(best[0][5])} ({best[0][2].split()[-1]})" if best else "—"
+        md.append(f"| {scene} | {ab} | " + " | ".join(cells) + f" | {b} |")
+    ratios = [r[5] for r in ratio_rows if r[5] and not isinstance(r[2], str)]
+    if ratios:
+        md.append("")
+        md.append(f"Geometric mean over {len(ratios)} matched levels: "
+                  f"{float(np.exp(np.mean(np.log(ratios)))):.2f} (min {min(ratios):.2f}, max {max(ratios):.2f}).")
+    with open(os.path.join(out, "ratios.md"), "w") as fh:
+        fh.write("\n".join(md) + "\n")
+    print("\n".join(md))
+
+
+if __name__ == "__main__":
+    main()
