@@ -357,18 +357,16 @@ fn inline_command_runs_with_flag_or_env() {
 // Options
 
 #[test]
-fn ambient_files_are_refused_not_ignored() {
+fn motion_blur_is_refused_not_ignored() {
     let t = workdir();
     let err = fails(
         tpict_in(t.path())
-            .args([
-                "-vf", "room.vf", "-x", "16", "-y", "16", "-ab", "1", "-af", "x.amb",
-            ])
+            .args(["-vf", "room.vf", "-x", "16", "-y", "16", "-pm", ".5"])
             .args(["-o", "out.hdr", "room.rad"]),
     );
     let line = one_line(&err);
-    assert!(line.contains("-af"), "{line}");
-    assert!(line.contains("not implemented"), "{line}");
+    assert!(line.contains("-pm"), "{line}");
+    assert!(line.contains("not supported"), "{line}");
     assert!(!t.path().join("out.hdr").exists());
 }
 
