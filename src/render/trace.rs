@@ -411,36 +411,25 @@ impl<'a> Tracer<'a> {
     ) -> Color {
         let src = &self.lights.sources[si];
         if let Some(relay) = &src.relay {
-            // First leg: to the mirror.
-            let mut ray = Ray::shadow(org, dir);
-            ray.antimatter = antimatter;
-            ray.tmax = shadow_reach(dist);
-            let mut t = Color::ONE;
-            for _ in 0..64 {
-                rng.rays += 1;
-                let Some(hit) = self.intersect(&ray) else {
-                    return Color::ZERO;
-                };
-                if hit.obj == relay.obj {
-                    if hit.back || hit.t > dist {
-                        return Color::ZERO;
-                    }
-                    let rdir = crate::material::reflect(dir, relay.normal);
-                    let rest = if dist.is_finite() { dist - hit.t } else { dist };
-                    let real =
-                        self.shadow_real(hit.point, rdir, rest, relay.real, hit.antimatter, rng);
-                    return t * relay.color * real;
-                }
-                let tr = self.shadow_transmission(&hit, dir);
-                if tr.max_element() <= 0.0 {
-                    return Color::ZERO;
-                }
-                t *= tr;
-                ray.org = hit.point;
-                ray.antimatter = hit.antimatter;
-                ray.tmax -= hit.t;
+            // First leg: to the mirror, which must be hit from its front.
+            let (t, hit) = self.shadow_walk(org, dir, dist, antimatter, rng, |h| {
+                h.obj == relay.obj
+            });
+            let Some(hit) = hit else {
+                return Color::ZERO;
+            };
+            let travelled = (hit.point - org).length();
+            if hit.back || travelled > dist {
+                return Color::ZERO;
             }
-            return Color::ZERO;
+            let rdir = crate::material::reflect(dir, relay.normal);
+            let rest = if dist.is_finite() {
+                dist - travelled
+            } else {
+                dist
+            };
+            let real = self.shadow_real(hit.point, rdir, rest, relay.real, hit.antimatter, rng);
+            return t * relay.color * real;
         }
         self.shadow_real(org, dir, dist, si, antimatter, rng)
     }
@@ -455,36 +444,51 @@ impl<'a> Tracer<'a> {
         rng: &mut Sampler,
     ) -> Color {
         let src = &self.lights.sources[si];
+        let (t, hit) = self.shadow_walk(org, dir, dist, am, rng, |h| src.obj == Some(h.obj));
+        match hit {
+            // Flat sources emit from their front only.
+            Some(h) if h.back && h.flat => Color::ZERO,
+            Some(_) => t,
+            // Left the scene: reached a distant source, missed a local one.
+            None if src.distant.is_some() => t,
+            None => Color::ZERO,
+        }
+    }
+
+    /// Walk a shadow ray through transparent surfaces (multiplying their transmission) until
+    /// `is_target` accepts a hit. Returns the transmission so far and that hit; or the
+    /// transmission and None when the ray leaves the scene (zero when blocked first).
+    fn shadow_walk(
+        &self,
+        org: DVec3,
+        dir: DVec3,
+        dist: f64,
+        am: [Option<MatId>; MAX_ANTIMATTER],
+        rng: &mut Sampler,
+        is_target: impl Fn(&Hit) -> bool,
+    ) -> (Color, Option<Hit>) {
         let mut ray = Ray::shadow(org, dir);
         ray.antimatter = am;
         ray.tmax = shadow_reach(dist);
         let mut t = Color::ONE;
         for _ in 0..64 {
             rng.rays += 1;
-            match self.intersect(&ray) {
-                None => {
-                    return if src.distant.is_some() {
-                        t
-                    } else {
-                        Color::ZERO
-                    }
-                }
-                Some(hit) => {
-                    if src.obj == Some(hit.obj) {
-                        return if hit.back && hit.flat { Color::ZERO } else { t };
-                    }
-                    let tr = self.shadow_transmission(&hit, dir);
-                    if tr.max_element() <= 0.0 {
-                        return Color::ZERO;
-                    }
-                    t *= tr;
-                    ray.org = hit.point;
-                    ray.antimatter = hit.antimatter;
-                    ray.tmax -= hit.t;
-                }
+            let Some(hit) = self.intersect(&ray) else {
+                return (t, None);
+            };
+            if is_target(&hit) {
+                return (t, Some(hit));
             }
+            let tr = self.shadow_transmission(&hit, dir);
+            if tr.max_element() <= 0.0 {
+                return (Color::ZERO, None);
+            }
+            t *= tr;
+            ray.org = hit.point;
+            ray.antimatter = hit.antimatter;
+            ray.tmax -= hit.t;
         }
-        Color::ZERO
+        (Color::ZERO, None)
     }
 
     /// What a shadow ray keeps when it crosses a (non-target) hit.
