@@ -1,7 +1,6 @@
 //! Tests for tpict's (rpict's) command line: parsing, errors, `@file`/`$VAR` expansion,
 //! `-vf`, `-defaults` text (checked against real rpict when installed) and round trips.
 
-use std::path::PathBuf;
 use std::process::Command as Proc;
 
 use glam::DVec3;
@@ -12,30 +11,8 @@ use tessera::radopt::{
 };
 use tessera::view::{View, ViewType};
 
-const DEFAULT_BIN: &str = "/opt/radvenv/lib/python3.11/site-packages/pyradiance/bin";
-
-/// Locate Radiance's bin directory: `TESSERA_RADIANCE_BIN`, else `rpict` on PATH, else the
-/// pyradiance install.
-fn radiance_bin() -> Option<PathBuf> {
-    if let Ok(p) = std::env::var("TESSERA_RADIANCE_BIN") {
-        let p = PathBuf::from(p);
-        let dir = if p.is_file() {
-            p.parent().map(PathBuf::from)?
-        } else {
-            p
-        };
-        return dir.join("rpict").exists().then_some(dir);
-    }
-    if let Some(path) = std::env::var_os("PATH") {
-        for d in std::env::split_paths(&path) {
-            if d.join("rpict").is_file() {
-                return Some(d);
-            }
-        }
-    }
-    let d = PathBuf::from(DEFAULT_BIN);
-    d.join("rpict").is_file().then_some(d)
-}
+mod common;
+use common::radiance_bin;
 
 fn w(s: &str) -> Vec<String> {
     s.split_whitespace().map(String::from).collect()

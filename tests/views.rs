@@ -1,7 +1,6 @@
 //! Tests for views: ray generation (checked against Radiance's `vwrays` when installed),
 //! the inverse mapping, normaspect, cropview, view files and picture headers.
 
-use std::path::PathBuf;
 use std::process::Command;
 
 use glam::DVec3;
@@ -9,30 +8,8 @@ use proptest::prelude::*;
 use tessera::radopt::OptError;
 use tessera::view::{normaspect, parse_view_line, read_view_file, View, ViewType};
 
-const DEFAULT_BIN: &str = "/opt/radvenv/lib/python3.11/site-packages/pyradiance/bin";
-
-/// Locate Radiance's bin directory: `TESSERA_RADIANCE_BIN`, else `rpict` on PATH, else the
-/// pyradiance install.
-fn radiance_bin() -> Option<PathBuf> {
-    if let Ok(p) = std::env::var("TESSERA_RADIANCE_BIN") {
-        let p = PathBuf::from(p);
-        let dir = if p.is_file() {
-            p.parent().map(PathBuf::from)?
-        } else {
-            p
-        };
-        return dir.join("rpict").exists().then_some(dir);
-    }
-    if let Some(path) = std::env::var_os("PATH") {
-        for d in std::env::split_paths(&path) {
-            if d.join("rpict").is_file() {
-                return Some(d);
-            }
-        }
-    }
-    let d = PathBuf::from(DEFAULT_BIN);
-    d.join("rpict").is_file().then_some(d)
-}
+mod common;
+use common::radiance_bin;
 
 fn words(s: &str) -> Vec<String> {
     s.split_whitespace().map(String::from).collect()

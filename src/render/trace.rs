@@ -412,9 +412,8 @@ impl<'a> Tracer<'a> {
         let src = &self.lights.sources[si];
         if let Some(relay) = &src.relay {
             // First leg: to the mirror, which must be hit from its front.
-            let (t, hit) = self.shadow_walk(org, dir, dist, antimatter, rng, |h| {
-                h.obj == relay.obj
-            });
+            let (t, hit) =
+                self.shadow_walk(org, dir, dist, antimatter, rng, |h| h.obj == relay.obj);
             let Some(hit) = hit else {
                 return Color::ZERO;
             };
