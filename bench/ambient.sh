@@ -44,38 +44,9 @@ mkdir -p "$OUT"
 RUNS="$OUT/runs${TAG:+-$TAG}.tsv"
 REFS="$OUT/references${TAG:+-$TAG}.tsv"
 
-# --- Locate Radiance as tests/common/mod.rs does -------------------------------------------
-find_radiance() {
-    if [[ -n "${TESSERA_RADIANCE_BIN:-}" && -x "$TESSERA_RADIANCE_BIN/rpict" ]]; then
-        echo "$TESSERA_RADIANCE_BIN"
-        return
-    fi
-    local p
-    if p=$(command -v rpict 2>/dev/null); then
-        dirname "$p"
-        return
-    fi
-    p=/opt/radvenv/lib/python3.11/site-packages/pyradiance/bin
-    if [[ -x "$p/rpict" ]]; then
-        echo "$p"
-        return
-    fi
-    return 1
-}
-RADBIN=$(find_radiance) || {
-    echo "ambient: Radiance not found (set TESSERA_RADIANCE_BIN to the folder holding rpict)" >&2
-    exit 1
-}
-export PATH="$RADBIN:$PATH"
-export RAYPATH=".:$(dirname "$RADBIN")/lib"
-
-if [[ -z "${NO_BUILD:-}" && -z "${TPICT:-}" ]]; then
-    echo "ambient: cargo build --release" >&2
-    (cd "$ROOT" && cargo build --release --quiet --bin tpict)
-fi
-TPICT=${TPICT:-"$ROOT/target/release/tpict"}
-[[ $TPICT == /* ]] || TPICT="$PWD/$TPICT"
-[[ -x "$TPICT" ]] || { echo "ambient: $TPICT missing" >&2; exit 1; }
+NAME=ambient
+# shellcheck source=bench/common.sh
+source "$ROOT/bench/common.sh"
 [[ -x /usr/bin/time ]] || { echo "ambient: /usr/bin/time (GNU time) needed" >&2; exit 1; }
 
 TMP=$(mktemp -d "${TMPDIR:-/tmp}/tessera-ambient.XXXXXX")

@@ -26,39 +26,9 @@ REPEAT=${REPEAT:-3}
 SCENES=${SCENES:-"spheres curved glassy mirrors aniso examp daffodil"}
 PS_LIST=${PS_LIST:-"default 1"}
 
-# --- Locate Radiance as tests/common/mod.rs does -------------------------------------------
-find_radiance() {
-    if [[ -n "${TESSERA_RADIANCE_BIN:-}" && -x "$TESSERA_RADIANCE_BIN/rpict" ]]; then
-        echo "$TESSERA_RADIANCE_BIN"
-        return
-    fi
-    local p
-    if p=$(command -v rpict 2>/dev/null); then
-        dirname "$p"
-        return
-    fi
-    p=/opt/radvenv/lib/python3.11/site-packages/pyradiance/bin
-    if [[ -x "$p/rpict" ]]; then
-        echo "$p"
-        return
-    fi
-    return 1
-}
-RADBIN=$(find_radiance) || {
-    echo "bench: Radiance not found (set TESSERA_RADIANCE_BIN to the folder holding rpict)" >&2
-    exit 1
-}
-export PATH="$RADBIN:$PATH"
-export RAYPATH=".:$(dirname "$RADBIN")/lib"
-
-# --- Build tpict ---------------------------------------------------------------------------
-if [[ -z "${NO_BUILD:-}" && -z "${TPICT:-}" ]]; then
-    echo "bench: cargo build --release" >&2
-    (cd "$ROOT" && cargo build --release --quiet --bin tpict)
-fi
-TPICT=${TPICT:-"$ROOT/target/release/tpict"}
-[[ $TPICT == /* ]] || TPICT="$PWD/$TPICT"
-[[ -x "$TPICT" ]] || { echo "bench: $TPICT missing" >&2; exit 1; }
+NAME=bench
+# shellcheck source=bench/common.sh
+source "$ROOT/bench/common.sh"
 
 TMP=$(mktemp -d "${TMPDIR:-/tmp}/tessera-bench.XXXXXX")
 cleanup() { rm -rf "$TMP"; }

@@ -1,0 +1,35 @@
+# Shared by the bench scripts (source it after setting ROOT and NAME):
+# locates Radiance as tests/common/mod.rs does (TESSERA_RADIANCE_BIN, PATH, pyradiance),
+# exports PATH and RAYPATH, builds tpict unless NO_BUILD or TPICT is set, and sets TPICT.
+
+find_radiance() {
+    if [[ -n "${TESSERA_RADIANCE_BIN:-}" && -x "$TESSERA_RADIANCE_BIN/rpict" ]]; then
+        echo "$TESSERA_RADIANCE_BIN"
+        return
+    fi
+    local p
+    if p=$(command -v rpict 2>/dev/null); then
+        dirname "$p"
+        return
+    fi
+    p=/opt/radvenv/lib/python3.11/site-packages/pyradiance/bin
+    if [[ -x "$p/rpict" ]]; then
+        echo "$p"
+        return
+    fi
+    return 1
+}
+RADBIN=$(find_radiance) || {
+    echo "$NAME: Radiance not found (set TESSERA_RADIANCE_BIN to the folder holding rpict)" >&2
+    exit 1
+}
+export PATH="$RADBIN:$PATH"
+export RAYPATH=".:$(dirname "$RADBIN")/lib"
+
+if [[ -z "${NO_BUILD:-}" && -z "${TPICT:-}" ]]; then
+    echo "$NAME: cargo build --release" >&2
+    (cd "$ROOT" && cargo build --release --quiet --bin tpict)
+fi
+TPICT=${TPICT:-"$ROOT/target/release/tpict"}
+[[ $TPICT == /* ]] || TPICT="$PWD/$TPICT"
+[[ -x "$TPICT" ]] || { echo "$NAME: $TPICT missing" >&2; exit 1; }
