@@ -704,7 +704,7 @@ pub fn render_view(
                     && last.elapsed().as_secs_f64() >= opts.report_interval
                 {
                     last = Instant::now();
-                    log.say(&report_line(&progress, pct, start));
+                    log.say(&report_line(&progress, pct, start, ctx.ambient));
                 }
             }
         });
@@ -718,7 +718,7 @@ pub fn render_view(
         b.finish_and_clear();
     }
     if opts.report_interval > 0.0 {
-        log.say(&report_line(&progress, 100.0, start));
+        log.say(&report_line(&progress, 100.0, start, ctx.ambient));
     }
     if let Ok(mut st) = stats.lock() {
         let rays = progress.rays.load(Ordering::Relaxed);
@@ -748,13 +748,25 @@ pub fn render_view(
     Ok(img)
 }
 
-fn report_line(p: &RenderProgress, pct: f64, start: Instant) -> String {
+fn report_line(p: &RenderProgress, pct: f64, start: Instant, amb: Option<&Ambient>) -> String {
     let hours = start.elapsed().as_secs_f64() / 3600.0;
-    format!(
+    let mut line = format!(
         "tpict: {} rays, {:.2}% after {:.3}r hours (PID {})",
         p.rays.load(Ordering::Relaxed),
         pct,
         hours,
         std::process::id()
-    )
+    );
+    if let Some(a) = amb {
+        let s = &a.stats;
+        let made: u64 = s.new_values.iter().map(|v| v.load(Ordering::Relaxed)).sum();
+        line.push_str(&format!(
+            "; ambient: {} lookups, {} interpolated, {} new values, {:.1}s making them",
+            s.lookups.load(Ordering::Relaxed),
+            s.hits.load(Ordering::Relaxed),
+            made,
+            s.amb_nanos.load(Ordering::Relaxed) as f64 * 1e-9
+        ));
+    }
+    line
 }

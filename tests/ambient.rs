@@ -352,3 +352,33 @@ fn ambient_log_reused_and_stale_fingerprint_refused() {
             .arg("spheres.rad"),
     );
 }
+
+/// `-t` reports show the ambient counters.
+#[test]
+fn progress_report_shows_ambient_counters() {
+    let scenes = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/scenes");
+    let out = std::process::Command::new(tpict_bin())
+        .current_dir(&scenes)
+        .args([
+            "-vf",
+            "spheres.vf",
+            "-x",
+            "24",
+            "-y",
+            "24",
+            "-ab",
+            "1",
+            "-ad",
+            "64",
+        ])
+        .args(["-t", "1", "-w-", "spheres.rad"])
+        .output()
+        .unwrap();
+    assert!(out.status.success());
+    let err = String::from_utf8_lossy(&out.stderr);
+    let last = err.lines().last().unwrap_or_default();
+    assert!(
+        last.contains("100.00%") && last.contains("ambient:") && last.contains("new values"),
+        "{err}"
+    );
+}
