@@ -149,12 +149,6 @@ pub fn load_scene(opts: &RpictOptions, log: &Log) -> Result<(Scene, LightSet, [u
 }
 
 fn render_command(args: &[String], opts: &RpictOptions, log: &Log) -> Result<()> {
-    if opts.params.aw > 0 && opts.params.ab > 0 {
-        bail!(
-            "-aw {}: the moving average of the ambient value is not supported yet; use -aw 0",
-            opts.params.aw
-        );
-    }
     if opts.pm != 0.0 || opts.pd != 0.0 {
         bail!("-pm (motion blur) and -pd (depth of field) are not supported yet; use -pm 0 -pd 0");
     }

@@ -382,3 +382,24 @@ fn progress_report_shows_ambient_counters() {
         "{err}"
     );
 }
+
+/// `-aw N`: the constant ambient moves (log-average, weight N for `-av`) toward the values
+/// computed, times 1 − AVGREFL. In the furnace the shell
+/// value v = s·Le + (1−s)·ρ·(0.5·v), so the pixel ρ·v tends to 0.1538 from the `-aw 0` picture
+/// (0.18125 with `-av .3`) the more the values outweigh `-av`.
+#[test]
+fn ambient_weight_moves_the_fallback_toward_the_values() {
+    let t = furnace_dir();
+    let run = |aw: &str| {
+        let mut args: Vec<&str> = VIEW.to_vec();
+        args.extend([
+            "-ab", "1", "-aa", ".1", "-ad", "256", "-av", ".3", ".3", ".3", "-aw", aw,
+        ]);
+        mean_red(t.path(), &args).0
+    };
+    let (fixed, light, strong) = (run("0"), run("16"), run("1"));
+    eprintln!("-aw 0: {fixed:.4}, -aw 16: {light:.4}, -aw 1: {strong:.4}");
+    assert!((fixed - 0.18125).abs() < 0.01 * 0.18125, "{fixed}");
+    assert!(strong < light && light < fixed, "{strong} {light} {fixed}");
+    assert!(strong > 0.1538 * 0.98, "{strong}");
+}

@@ -59,6 +59,10 @@ pub struct Ambient {
     /// Anisotropic radii from the Hessian (default true; else the harmonic mean distance).
     pub use_hessian: bool,
     av: Color,
+    /// `-aw`: weight of `-av` in the moving log-average (0: `-av` stays fixed).
+    aw: f64,
+    /// Σ ln(brightness) of the new values and their count, for `-aw`.
+    log_sum: std::sync::Mutex<(f64, u64)>,
     exclude: HashSet<String>,
     include: Option<HashSet<String>>,
 }
@@ -97,6 +101,8 @@ impl Ambient {
             maxarad,
             max_dist: 10.0 * size + 1000.0,
             av: Color::new(params.av[0], params.av[1], params.av[2]),
+            aw: params.aw.max(0) as f64,
+            log_sum: std::sync::Mutex::new((0.0, 0)),
             exclude: params.ae.iter().cloned().collect(),
             include: if params.ai.is_empty() {
                 None
@@ -122,8 +128,22 @@ impl Ambient {
         }
         match self.value(tr, ray, hit, n, rng) {
             Outcome::Value(v) => refl * v,
-            Outcome::Fallback => refl * self.av,
+            Outcome::Fallback => refl * self.fallback(),
         }
+    }
+
+    /// The ambient value used when no value is computed: `-av`, or with `-aw N` > 0 a moving
+    /// log-average in which `-av` weighs N and each new value (times 1 − AVGREFL, the light
+    /// left after one more reflection) weighs 1; the colour of `-av` is kept.
+    pub fn fallback(&self) -> Color {
+        let b0 = bright(self.av);
+        if self.aw <= 0.0 || b0 <= 0.0 {
+            return self.av;
+        }
+        let (sum, n) = self.log_sum.lock().map(|g| *g).unwrap_or((0.0, 0));
+        let n = n as f64;
+        let lb = (b0.ln() * self.aw + sum + n * (1.0 - AVGREFL).ln()) / (self.aw + n);
+        self.av * (lb.exp() / b0)
     }
 
     fn excluded(&self, tr: &Tracer, hit: &Hit) -> bool {
@@ -299,6 +319,12 @@ impl Ambient {
         let val = lval.iter().fold(Color::ZERO, |a, c| a + *c) / count;
         let rsum: f64 = dist.iter().map(|d| 1.0 / d).sum();
         let b = bright(val);
+        if self.aw > 0.0 && b > 0.0 && b.is_finite() {
+            if let Ok(mut g) = self.log_sum.lock() {
+                g.0 += b.ln();
+                g.1 += 1;
+            }
+        }
         let lb: Vec<f64> = lval.iter().map(|c| bright(*c)).collect();
         // Gradients (Ward & Heckbert 1992) of the brightness, relative to the value.
         let (gpos, gdir) = if b > FTINY && m > 1 && nphi > 1 {
