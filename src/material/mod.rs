@@ -92,46 +92,6 @@ pub const MATERIAL_TYPES: &[&str] = &[
     "antimatter",
 ];
 
-/// Radiance types that exist but are not implemented yet (patterns, textures, mixtures, data
-/// materials, BSDFs): a scene using them gets a clear "unsupported" error.
-pub const UNSUPPORTED_TYPES: &[&str] = &[
-    "trans2",
-    "plasfunc",
-    "metfunc",
-    "transfunc",
-    "BRTDfunc",
-    "BSDF",
-    "aBSDF",
-    "WGMDfunc",
-    "plasdata",
-    "metdata",
-    "transdata",
-    "prism1",
-    "prism2",
-    "ashik2",
-    "mist",
-    "brightfunc",
-    "brightdata",
-    "brighttext",
-    "colorpict",
-    "colorfunc",
-    "colordata",
-    "colortext",
-    "spectrum",
-    "specfile",
-    "specfunc",
-    "specdata",
-    "specpict",
-    "texfunc",
-    "texdata",
-    "mixfunc",
-    "mixdata",
-    "mixtext",
-    "mixpict",
-    "instance",
-    "mesh",
-];
-
 impl Material {
     /// Parse a material primitive's arguments.
     pub fn parse(

@@ -6,7 +6,8 @@ use super::primitive::{Location, Primitive};
 use crate::geometry::bvh::Bvh;
 use crate::geometry::source::DistantSource;
 use crate::geometry::Surface;
-use crate::material::{MatId, Material, MaterialLookup, MATERIAL_TYPES, UNSUPPORTED_TYPES};
+use crate::material::{MatId, Material, MaterialLookup, MATERIAL_TYPES};
+use crate::scene::reader::KNOWN_TYPES;
 use glam::DVec3;
 use std::collections::HashMap;
 
@@ -240,7 +241,9 @@ impl Scene {
                 mods.current.insert(p.name.clone(), Some(id));
                 continue;
             }
-            if UNSUPPORTED_TYPES.contains(&t) {
+            // Every other type Radiance knows (patterns, textures, mixtures, BSDFs, instances,
+            // ...) is not implemented yet.
+            if KNOWN_TYPES.contains(&t) {
                 return Err(err(
                     p,
                     format!(
