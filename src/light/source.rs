@@ -411,16 +411,9 @@ impl LightSet {
                 for i in 0..nu {
                     for j in 0..nv {
                         let s = *corner + *eu * strat(i, nu, dj, rng) + *ev * strat(j, nv, dj, rng);
-                        let w = s - q;
-                        let dist = w.length();
-                        if dist <= FTINY {
+                        let Some((dir, dist, cos_s)) = toward_front(q, s, *normal) else {
                             continue;
-                        }
-                        let dir = w / dist;
-                        let cos_s = -dir.dot(*normal);
-                        if cos_s <= FTINY {
-                            continue;
-                        }
+                        };
                         // Keep only aim points that lie on the polygon.
                         if let Some(surf) = obj {
                             match surf.intersect(q, dir, dist * (1.0 + 1e-9) + FTINY) {
@@ -456,16 +449,9 @@ impl LightSet {
                             (1.0, 0.0)
                         };
                         let s = *center + u * (r * c) + v * (r * sn);
-                        let w = s - q;
-                        let dist = w.length();
-                        if dist <= FTINY {
+                        let Some((dir, dist, cos_s)) = toward_front(q, s, *normal) else {
                             continue;
-                        }
-                        let dir = w / dist;
-                        let cos_s = -dir.dot(*normal);
-                        if cos_s <= FTINY {
-                            continue;
-                        }
+                        };
                         push(dir, dist, cell * cos_s / (dist * dist), s);
                     }
                 }
@@ -552,6 +538,20 @@ impl LightSet {
             }
         }
     }
+}
+
+/// Direction and distance from `q` to a point `s` of a flat emitter with front normal
+/// `normal`, and the cosine at the emitter; None when `s` is at `q` or seen from behind.
+#[inline]
+fn toward_front(q: DVec3, s: DVec3, normal: DVec3) -> Option<(DVec3, f64, f64)> {
+    let w = s - q;
+    let dist = w.length();
+    if dist <= FTINY {
+        return None;
+    }
+    let dir = w / dist;
+    let cos_s = -dir.dot(normal);
+    (cos_s > FTINY).then_some((dir, dist, cos_s))
 }
 
 /// Centre of a source shape.

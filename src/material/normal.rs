@@ -350,14 +350,7 @@ impl NormalMat {
     }
 }
 
-/// A unit vector perpendicular to the unit vector `n`.
+/// A unit vector perpendicular to the unit vector `n` (the geometry's tangent frame, reversed).
 pub fn any_perpendicular(n: DVec3) -> DVec3 {
-    let a = if n.x.abs() < 0.6 {
-        DVec3::X
-    } else if n.y.abs() < 0.6 {
-        DVec3::Y
-    } else {
-        DVec3::Z
-    };
-    n.cross(a).normalize()
+    -crate::geometry::perp_frame(n).0
 }
