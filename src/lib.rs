@@ -12,11 +12,13 @@
 //! - [`render`]: the ray tracer, per-pixel sampling and the pixel loop.
 //! - [`image`]: pictures in memory and the `hdr`, `exr` and `png` formats.
 //! - [`tpict`]: the rpict-compatible driver behind the `tpict` binary.
+//! - [`job`]: the batch toolkit's job directory: plan, workers, merge, assembly, status.
 
 pub mod ambient;
 pub mod color;
 pub mod geometry;
 pub mod image;
+pub mod job;
 pub mod light;
 pub mod material;
 pub mod radopt;
