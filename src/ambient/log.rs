@@ -402,6 +402,17 @@ fn push_frame(buf: &mut Vec<u8>, r: &AmbRecord) {
     buf.extend_from_slice(&payload);
 }
 
+/// A whole log file's bytes: `header` then one frame per record (for stores written at
+/// once, e.g. by `tmerge`).
+pub fn encode_log(header: &LogHeader, records: &[AmbRecord]) -> Vec<u8> {
+    let mut b = header.to_bytes();
+    b.reserve(records.len() * (FRAME_PREFIX + PAYLOAD_SIZE));
+    for r in records {
+        push_frame(&mut b, r);
+    }
+    b
+}
+
 /// The writer of one ambient log: owns the file and appends batches of records.
 #[derive(Debug)]
 pub struct LogWriter {

@@ -1,0 +1,90 @@
+//! `tassemble`: a frame's picture from its tile results.
+
+use super::manifest::Manifest;
+use super::{task_name, tile, JobDir};
+use crate::image::{Header, Image};
+use anyhow::{anyhow, Result};
+
+/// A tile that could not be used, and why.
+#[derive(Clone, Debug, PartialEq)]
+pub struct MissingTile {
+    /// Task name.
+    pub task: String,
+    /// Why (absent, damaged, from another plan).
+    pub reason: String,
+}
+
+/// Assemble frame `frame`. Returns the picture and the tiles that were missing or invalid
+/// (filled black). The caller decides whether a partial picture is acceptable.
+pub fn assemble_frame(
+    job: &JobDir,
+    m: &Manifest,
+    frame: u32,
+    command: &str,
+) -> Result<(Image, Vec<MissingTile>)> {
+    let fp = m
+        .frame(frame)
+        .ok_or_else(|| anyhow!("the job has no frame {frame}"))?;
+    let mut img = Image::new(fp.xres, fp.yres);
+    let mut missing = Vec::new();
+    for (i, rect) in fp.tiles.iter().enumerate() {
+        let name = task_name(frame, i);
+        let path = job.tile_file(&name);
+        if !path.exists() {
+            missing.push(MissingTile {
+                task: name,
+                reason: "no result".into(),
+            });
+            continue;
+        }
+        let (meta, px) = match tile::read(&path) {
+            Ok(t) => t,
+            Err(e) => {
+                missing.push(MissingTile {
+                    task: name,
+                    reason: format!("{e:#}"),
+                });
+                continue;
+            }
+        };
+        if (meta.x0, meta.y0, meta.w, meta.h) != (rect.x0, rect.y0, rect.w, rect.h)
+            || meta.frame != frame
+            || meta.fingerprint != m.fingerprint
+        {
+            missing.push(MissingTile {
+                task: name,
+                reason: "result belongs to another plan or scene".into(),
+            });
+            continue;
+        }
+        for row in 0..rect.h {
+            let dst = (rect.y0 + row) * fp.xres + rect.x0;
+            img.pixels[dst..dst + rect.w].copy_from_slice(&px[row * rect.w..(row + 1) * rect.w]);
+        }
+    }
+    img.header = Header {
+        software: Some(crate::tpict::SOFTWARE.to_string()),
+        view: Some(fp.view.to_radiance_string()),
+        pixaspect: if (0.995..=1.005).contains(&fp.pixaspect) {
+            None
+        } else {
+            Some(fp.pixaspect)
+        },
+        exposure: 1.0,
+        format: "32-bit_rle_rgbe".to_string(),
+        frame: (m.frames.len() > 1).then_some(frame),
+        commands: vec![m.command.clone(), command.to_string()],
+        ..Header::default()
+    };
+    if !missing.is_empty() {
+        img.header.extra.push((
+            "TESSERA_MISSING_TILES".into(),
+            missing
+                .iter()
+                .map(|t| t.task.clone())
+                .collect::<Vec<_>>()
+                .join(" "),
+        ));
+    }
+    Ok((img, missing))
+}

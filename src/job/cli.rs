@@ -1,0 +1,393 @@
+//! Command lines of the toolkit's binaries (clap, `--long` options). Each `*_main` returns
+//! the process exit status; errors are printed as `<program>: error: ...`.
+
+use super::manifest::{create_job, Manifest, PlanRequest};
+use super::share::FlushPolicy;
+use super::worker::{run_worker, WorkerOptions};
+use super::JobDir;
+use anyhow::{anyhow, bail, Result};
+use clap::Parser;
+use std::path::PathBuf;
+
+fn finish(program: &str, r: Result<i32>) -> i32 {
+    match r {
+        Ok(code) => code,
+        Err(e) => {
+            eprintln!("{program}: error: {e:#}");
+            1
+        }
+    }
+}
+
+fn command_line() -> String {
+    let args: Vec<String> = std::env::args().collect();
+    let mut line = args
+        .first()
+        .map(|a| {
+            std::path::Path::new(a)
+                .file_name()
+                .map(|f| f.to_string_lossy().into_owned())
+                .unwrap_or_default()
+        })
+        .unwrap_or_default();
+    for a in args.iter().skip(1) {
+        line.push(' ');
+        line.push_str(a);
+    }
+    line
+}
+
+/// `tplan`: make a job directory.
+#[derive(Parser, Debug)]
+#[command(
+    name = "tplan",
+    version,
+    about = "Make a Tessera job directory: the scene, the options and the tile plan",
+    after_help = "Example: tplan --workers 8 -o job -- -vf view.vf -x 1024 -y 768 -ab 2 scene.rad"
+)]
+struct TplanArgs {
+    /// Tiles per frame (default: 20 per expected worker).
+    #[arg(long, conflicts_with = "tile_size")]
+    tiles: Option<usize>,
+    /// Fixed tile size WxH (in reading order instead of largest first).
+    #[arg(long, value_name = "WxH")]
+    tile_size: Option<String>,
+    /// Workers the plan is made for.
+    #[arg(long, default_value_t = 4)]
+    workers: usize,
+    /// View file with one view per line: one frame per view (each on top of the previous).
+    #[arg(long, value_name = "VIEWFILE")]
+    frames: Option<PathBuf>,
+    /// Seconds a claimed tile's worker may stay silent before another worker takes it over.
+    #[arg(long, value_name = "SECONDS")]
+    lease: Option<f64>,
+    /// Seed the job's ambient store from a Tessera store/log or a Radiance ambient file.
+    #[arg(long, value_name = "FILE")]
+    ambient: Option<PathBuf>,
+    /// Accept an ambient store made for another scene or other options.
+    #[arg(long)]
+    amb_force: bool,
+    /// The job directory to create (must not exist, or be empty).
+    #[arg(short = 'o', long = "output", value_name = "JOBDIR")]
+    output: PathBuf,
+    /// rpict options and scene files (after `--`).
+    #[arg(last = true, required = true, value_name = "RPICT-OPTIONS-AND-SCENE")]
+    rest: Vec<String>,
+}
+
+/// Entry point of `tplan`.
+pub fn tplan_main() -> i32 {
+    let a = TplanArgs::parse();
+    finish("tplan", tplan(a))
+}
+
+fn parse_size(s: &str) -> Result<(usize, usize)> {
+    let (w, h) = s
+        .split_once(['x', 'X'])
+        .ok_or_else(|| anyhow!("--tile-size '{s}': expected WxH, e.g. 64x48"))?;
+    let p = |v: &str| {
+        v.trim()
+            .parse::<usize>()
+            .ok()
+            .filter(|n| *n > 0)
+            .ok_or_else(|| anyhow!("--tile-size '{s}': '{v}' is not a positive integer"))
+    };
+    Ok((p(w)?, p(h)?))
+}
+
+fn tplan(a: TplanArgs) -> Result<i32> {
+    if a.workers == 0 {
+        bail!("--workers must be at least 1");
+    }
+    if a.tiles == Some(0) {
+        bail!("--tiles must be at least 1");
+    }
+    let req = PlanRequest {
+        tiles: a.tiles,
+        tile_size: a.tile_size.as_deref().map(parse_size).transpose()?,
+        workers: Some(a.workers),
+        frames: a.frames.map(|p| p.display().to_string()),
+        lease: a.lease,
+        ambient: a.ambient.map(|p| p.display().to_string()),
+        amb_force: a.amb_force,
+        args: a.rest,
+        command: command_line(),
+    };
+    let m = create_job(&a.output, &req)?;
+    let tiles: usize = m.frames.iter().map(|f| f.tiles.len()).sum();
+    let f0 = &m.frames[0];
+    eprintln!(
+        "tplan: job {}: {} frame(s) of {}x{}, {} tiles, {} primitives, lease {} s",
+        a.output.display(),
+        m.frames.len(),
+        f0.xres,
+        f0.yres,
+        tiles,
+        m.primitives,
+        m.lease_seconds
+    );
+    Ok(0)
+}
+
+/// `tpiece`: a worker.
+#[derive(Parser, Debug)]
+#[command(
+    name = "tpiece",
+    version,
+    about = "Render a Tessera job's tiles until none is left (run as many as you like)"
+)]
+struct TpieceArgs {
+    /// The job directory.
+    job: PathBuf,
+    /// Worker id (default: $SLURM_ARRAY_JOB_ID-$SLURM_ARRAY_TASK_ID, else host-pid).
+    #[arg(long)]
+    worker_id: Option<String>,
+    /// Ambient values per log write (N_A), or `auto` to adapt it at run time.
+    #[arg(long, default_value = "20", value_name = "N|auto")]
+    amb_flush: String,
+    /// Render threads (default: $SLURM_CPUS_PER_TASK, else every core).
+    #[arg(long)]
+    threads: Option<usize>,
+    /// Exit when nothing is claimable instead of waiting for (and, if they die, re-claiming)
+    /// tiles other workers hold.
+    #[arg(long)]
+    no_wait: bool,
+    /// No per-tile lines.
+    #[arg(long, short)]
+    quiet: bool,
+}
+
+/// Entry point of `tpiece`.
+pub fn tpiece_main() -> i32 {
+    let a = TpieceArgs::parse();
+    finish("tpiece", tpiece(a))
+}
+
+fn tpiece(a: TpieceArgs) -> Result<i32> {
+    let amb_flush = match a.amb_flush.as_str() {
+        "auto" => FlushPolicy::Auto,
+        n => {
+            FlushPolicy::Fixed(n.parse::<usize>().ok().filter(|n| *n > 0).ok_or_else(|| {
+                anyhow!("--amb-flush '{n}': expected a positive number or 'auto'")
+            })?)
+        }
+    };
+    if a.threads == Some(0) {
+        bail!("--threads must be at least 1");
+    }
+    let wo = WorkerOptions {
+        worker_id: a.worker_id,
+        amb_flush,
+        threads: a.threads,
+        wait: !a.no_wait,
+        verbose: !a.quiet,
+    };
+    let s = run_worker(&JobDir::new(a.job), &wo)?;
+    if !a.quiet {
+        eprintln!(
+            "tpiece {}: finished, {} tiles rendered ({} re-claimed)",
+            s.owner, s.tiles, s.reclaimed
+        );
+    }
+    Ok(0)
+}
+
+/// `tmerge`: merge ambient logs.
+#[derive(Parser, Debug)]
+#[command(
+    name = "tmerge",
+    version,
+    about = "Merge a job's ambient logs into its store (safe while workers run)"
+)]
+struct TmergeArgs {
+    /// The job directory.
+    job: PathBuf,
+    /// Also write the merged values in Radiance's ambient format (for rpict -af).
+    #[arg(long, value_name = "FILE")]
+    export_radiance: Option<PathBuf>,
+    /// Print the report as JSON.
+    #[arg(long)]
+    json: bool,
+}
+
+/// Entry point of `tmerge`.
+pub fn tmerge_main() -> i32 {
+    let a = TmergeArgs::parse();
+    finish("tmerge", tmerge(a))
+}
+
+fn tmerge(a: TmergeArgs) -> Result<i32> {
+    let job = JobDir::new(&a.job);
+    let m = Manifest::load(&job)?;
+    let fp = m.fingerprint_bytes();
+    let opts = crate::ambient::fingerprint::options_text(&m.options.params);
+    let r = super::merge::merge(&job, &fp, &opts)?;
+    if a.json {
+        println!("{}", serde_json::to_string_pretty(&r)?);
+    } else {
+        eprintln!(
+            "tmerge: {} logs, {} values added ({} duplicates), {} in the store{}",
+            r.logs,
+            r.added,
+            r.duplicates,
+            r.total,
+            if r.written.is_none() {
+                " (unchanged)"
+            } else {
+                ""
+            }
+        );
+        for t in &r.torn {
+            eprintln!("tmerge: {t}: incomplete last record left for the next merge");
+        }
+        for c in &r.corrupt {
+            eprintln!("tmerge: warning - damaged record, log read up to it: {c}");
+        }
+        for c in &r.refused {
+            eprintln!("tmerge: warning - log refused: {c}");
+        }
+    }
+    if let Some(path) = &a.export_radiance {
+        let store = super::merge::load_store(&job, &fp, false)?;
+        let recs = store.map(|s| s.records).unwrap_or_default();
+        let p = &m.options.params;
+        let line = format!(
+            "tmerge -av {} {} {} -aw {} -ab {} -aa {} -ad {} -as {} -ar {}",
+            p.av[0], p.av[1], p.av[2], p.aw, p.ab, p.aa, p.ad, p.as_, p.ar
+        );
+        super::merge::export_radiance(path, &recs, &line)?;
+        eprintln!(
+            "tmerge: {} values written to {} (Radiance format)",
+            recs.len(),
+            path.display()
+        );
+    }
+    Ok(0)
+}
+
+/// `tassemble`: build pictures from tiles.
+#[derive(Parser, Debug)]
+#[command(
+    name = "tassemble",
+    version,
+    about = "Assemble a job's frame from its tiles (.hdr, .exr or .png; stdout: Radiance)"
+)]
+struct TassembleArgs {
+    /// The job directory.
+    job: PathBuf,
+    /// Frame number.
+    #[arg(long, default_value_t = 0, conflicts_with = "all_frames")]
+    frame: u32,
+    /// Assemble every frame; -o is then a pattern with a printf-style %d (e.g. f%04d.hdr).
+    #[arg(long)]
+    all_frames: bool,
+    /// Output picture (format from the extension); default: Radiance picture on stdout.
+    #[arg(short = 'o', long = "output")]
+    output: Option<PathBuf>,
+    /// Fill missing tiles with black (and say so) instead of failing.
+    #[arg(long)]
+    partial: bool,
+}
+
+/// Entry point of `tassemble`.
+pub fn tassemble_main() -> i32 {
+    let a = TassembleArgs::parse();
+    finish("tassemble", tassemble(a))
+}
+
+fn tassemble(a: TassembleArgs) -> Result<i32> {
+    let job = JobDir::new(&a.job);
+    let m = Manifest::load(&job)?;
+    let cmd = command_line();
+    let frames: Vec<u32> = if a.all_frames {
+        m.frames.iter().map(|f| f.index).collect()
+    } else {
+        vec![a.frame]
+    };
+    if a.all_frames && a.output.is_none() {
+        bail!("--all-frames needs -o PATTERN with a %d");
+    }
+    let mut failed = false;
+    for f in frames {
+        let (img, missing) = super::assemble::assemble_frame(&job, &m, f, &cmd)?;
+        if !missing.is_empty() {
+            let list: Vec<String> = missing
+                .iter()
+                .map(|t| format!("{} ({})", t.task, t.reason))
+                .collect();
+            if !a.partial {
+                eprintln!(
+                    "tassemble: frame {f}: {} of {} tiles missing or invalid: {}",
+                    missing.len(),
+                    m.frame(f).map(|p| p.tiles.len()).unwrap_or(0),
+                    list.join(", ")
+                );
+                failed = true;
+                continue;
+            }
+            eprintln!(
+                "tassemble: warning - frame {f}: {} tiles filled black: {}",
+                missing.len(),
+                list.join(", ")
+            );
+        }
+        let path = match &a.output {
+            None => None,
+            Some(p) if a.all_frames => Some(PathBuf::from(crate::tpict::frame_name(
+                &p.display().to_string(),
+                f,
+            )?)),
+            Some(p) => Some(p.clone()),
+        };
+        crate::image::write_picture(path.as_deref(), &img)?;
+    }
+    Ok(if failed { 1 } else { 0 })
+}
+
+/// `tstat`: progress and metrics.
+#[derive(Parser, Debug)]
+#[command(
+    name = "tstat",
+    version,
+    about = "Progress and metrics of a Tessera job"
+)]
+struct TstatArgs {
+    /// The job directory.
+    job: PathBuf,
+    /// JSON output.
+    #[arg(long)]
+    json: bool,
+    /// A one-worker job of the same plan: report speed-up and efficiency against it.
+    #[arg(long, value_name = "JOBDIR")]
+    baseline: Option<PathBuf>,
+    /// Print the measured per-tile costs of a frame (JSON, for bench/tilesim).
+    #[arg(long, value_name = "FRAME")]
+    costs: Option<u32>,
+}
+
+/// Entry point of `tstat`.
+pub fn tstat_main() -> i32 {
+    let a = TstatArgs::parse();
+    finish("tstat", tstat(a))
+}
+
+fn tstat(a: TstatArgs) -> Result<i32> {
+    let job = JobDir::new(&a.job);
+    if let Some(f) = a.costs {
+        println!(
+            "{}",
+            serde_json::to_string_pretty(&super::status::costs(&job, f)?)?
+        );
+        return Ok(0);
+    }
+    let mut st = super::status::status(&job)?;
+    if let Some(b) = &a.baseline {
+        st = super::status::with_baseline(st, &JobDir::new(b))?;
+    }
+    if a.json {
+        println!("{}", serde_json::to_string_pretty(&st)?);
+    } else {
+        print!("{}", super::status::render_text(&st));
+    }
+    Ok(0)
+}

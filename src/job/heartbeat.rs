@@ -1,0 +1,169 @@
+//! Worker heartbeats (`workers/<owner>.json`) and the lease rule.
+//!
+//! Each worker rewrites its file atomically every lease/8 seconds (at most every 10 s), with
+//! a beat counter that grows by one each time, its state and its counters. A claimed tile is
+//! stale when another worker has seen its owner's beat **unchanged for the lease** on its own
+//! monotonic clock: nothing compares clocks of different hosts and nothing reads file
+//! modification times, so NFS attribute caching, coarse mtimes and skewed clocks cannot make a
+//! live worker look dead. (The wall-clock times in the file are for people and `tstat`.)
+
+use serde::{Deserialize, Serialize};
+use std::collections::HashMap;
+use std::path::Path;
+use std::sync::atomic::{AtomicU64, Ordering};
+use std::time::{Duration, Instant};
+
+/// A worker's heartbeat file.
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub struct WorkerRecord {
+    /// Worker id (shared by incarnations, e.g. a requeued SLURM task).
+    pub worker_id: String,
+    /// `<worker-id>.<nonce>`.
+    pub owner: String,
+    /// Host name.
+    pub host: String,
+    /// Process id.
+    pub pid: u32,
+    /// `running`, `idle` (waiting for other workers' tiles), `finished` or `failed`.
+    pub state: String,
+    /// Grows by one at every heartbeat.
+    pub beat: u64,
+    /// Wall clock at start (Unix seconds; informational).
+    pub started_unix: f64,
+    /// Wall clock at this beat (Unix seconds; informational).
+    pub updated_unix: f64,
+    /// Render threads.
+    pub threads: usize,
+    /// Tiles rendered (results written).
+    pub tiles_done: u64,
+    /// Seconds rendering tiles (wall clock).
+    pub t_render: f64,
+    /// The seed paper's T_spec: rendering time not spent making ambient values.
+    pub t_spec: f64,
+    /// The seed paper's T_amb: time making new ambient values (thread-seconds / threads).
+    pub t_amb: f64,
+    /// The seed paper's T_idle: waiting with nothing to claim.
+    pub t_idle: f64,
+    /// Time writing and reading ambient logs.
+    pub t_sync: f64,
+    /// Extensive ambient computations (new values).
+    pub new_values: u64,
+    /// Values read from other workers' logs and the merged store.
+    pub shared_in: u64,
+    /// Values appended to this worker's log.
+    pub shared_out: u64,
+    /// Current N_A (values per log write).
+    pub amb_flush: u64,
+    /// Rays traced.
+    pub rays: u64,
+    /// CPU seconds of the process.
+    pub cpu_seconds: f64,
+    /// Error that ended the worker, if any.
+    pub error: Option<String>,
+}
+
+/// Counters a worker updates while it runs (read by its heartbeat thread).
+#[derive(Debug, Default)]
+pub struct Counters {
+    /// Tiles written.
+    pub tiles_done: AtomicU64,
+    /// Nanoseconds rendering.
+    pub render_ns: AtomicU64,
+    /// Nanoseconds idle.
+    pub idle_ns: AtomicU64,
+    /// Nanoseconds syncing ambient logs.
+    pub sync_ns: AtomicU64,
+    /// Values read from others.
+    pub shared_in: AtomicU64,
+    /// Values written to the own log.
+    pub shared_out: AtomicU64,
+    /// Current N_A.
+    pub amb_flush: AtomicU64,
+    /// Rays traced.
+    pub rays: AtomicU64,
+}
+
+/// Add a duration to a nanosecond counter.
+pub fn add_time(c: &AtomicU64, d: Duration) {
+    c.fetch_add(d.as_nanos() as u64, Ordering::Relaxed);
+}
+
+/// How often a worker with lease `lease` beats.
+pub fn beat_interval(lease: f64) -> Duration {
+    Duration::from_secs_f64((lease / 8.0).clamp(0.05, 10.0))
+}
+
+/// Read a heartbeat file (None when missing or unreadable, e.g. being replaced).
+pub fn read_record(path: &Path) -> Option<WorkerRecord> {
+    let text = std::fs::read_to_string(path).ok()?;
+    serde_json::from_str(&text).ok()
+}
+
+/// What a worker has seen of other workers' beats.
+#[derive(Debug)]
+pub struct StaleWatcher {
+    lease: Duration,
+    seen: HashMap<String, (Option<(u64, String)>, Instant)>,
+}
+
+impl StaleWatcher {
+    /// A watcher for a lease of `lease` seconds.
+    pub fn new(lease: f64) -> StaleWatcher {
+        StaleWatcher {
+            lease: Duration::from_secs_f64(lease),
+            seen: HashMap::new(),
+        }
+    }
+
+    /// Observe `owner`'s heartbeat (`None` when its file is missing or unreadable) and
+    /// return whether its claims are stale: its beat has not changed for a whole lease since
+    /// this watcher first saw that beat, or its state is `finished`/`failed` (a worker that
+    /// ended cannot hold a tile).
+    pub fn is_stale(&mut self, owner: &str, rec: Option<&WorkerRecord>) -> bool {
+        if let Some(r) = rec {
+            if r.state == "finished" || r.state == "failed" {
+                return true;
+            }
+        }
+        let key = rec.map(|r| (r.beat, r.state.clone()));
+        let now = Instant::now();
+        let entry = self
+            .seen
+            .entry(owner.to_string())
+            .or_insert((key.clone(), now));
+        if entry.0 != key {
+            *entry = (key, now);
+            return false;
+        }
+        now.duration_since(entry.1) >= self.lease
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn stale_only_after_a_full_unchanged_lease() {
+        let mut w = StaleWatcher::new(0.2);
+        let mut r = WorkerRecord {
+            state: "running".into(),
+            beat: 1,
+            ..Default::default()
+        };
+        assert!(!w.is_stale("a", Some(&r)));
+        std::thread::sleep(Duration::from_millis(120));
+        r.beat = 2; // it beats: the clock starts again
+        assert!(!w.is_stale("a", Some(&r)));
+        std::thread::sleep(Duration::from_millis(120));
+        assert!(!w.is_stale("a", Some(&r)));
+        std::thread::sleep(Duration::from_millis(120));
+        assert!(w.is_stale("a", Some(&r)));
+        // A missing file counts from when it was first seen missing.
+        assert!(!w.is_stale("b", None));
+        std::thread::sleep(Duration::from_millis(220));
+        assert!(w.is_stale("b", None));
+        r.state = "finished".into();
+        assert!(w.is_stale("c", Some(&r)));
+    }
+}

@@ -1,0 +1,435 @@
+//! The job manifest (`manifest.json`) and job creation (`tplan`).
+
+use super::plan::{check_cover, plan_fixed, plan_tiles, TileRect, TILES_PER_WORKER};
+use super::{hex32, parse_hex32, task_name, JobDir};
+use crate::radopt::{parse_rpict_args, Command, RpictOptions};
+use crate::scene::{read_scene_files, Primitive, ReadOptions, Scene};
+use crate::view::{normaspect, parse_view_line, View};
+use anyhow::{anyhow, bail, Context, Result};
+use serde::{Deserialize, Serialize};
+use std::path::Path;
+
+/// The manifest's `format` value.
+pub const FORMAT: &str = "tessera-job";
+/// The manifest version written and read by this code.
+pub const VERSION: u32 = 1;
+/// Default lease: a claimed tile whose worker's heartbeat has not changed for this long (as
+/// seen by another worker's own clock) may be re-claimed.
+pub const DEFAULT_LEASE: f64 = 180.0;
+/// Largest picture side accepted.
+const MAX_RES: usize = 1 << 15;
+/// Most frames and tiles per frame (task names have five digits).
+const MAX_INDEX: usize = 99_999;
+
+/// One frame of a job.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct FramePlan {
+    /// Frame number (seeds the frame's random numbers; tasks are named after it).
+    pub index: u32,
+    /// The view.
+    pub view: View,
+    /// Picture width (after `-pa` adjustment).
+    pub xres: usize,
+    /// Picture height.
+    pub yres: usize,
+    /// Pixel aspect ratio written to the picture header.
+    pub pixaspect: f64,
+    /// The tiles, in the order workers take them.
+    pub tiles: Vec<TileRect>,
+}
+
+/// The job manifest.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Manifest {
+    /// Always [`FORMAT`].
+    pub format: String,
+    /// [`VERSION`].
+    pub version: u32,
+    /// The program that made the job.
+    pub software: String,
+    /// The `tplan` command line (for picture headers).
+    pub command: String,
+    /// Render options (rpict's meaning). The scene is `scene_file`; options that make no
+    /// sense in a job (`-o`, `-S`, `-af`, `--stats`, `--amb-log`) are cleared.
+    pub options: RpictOptions,
+    /// The flattened scene, a file name in the job directory.
+    pub scene_file: String,
+    /// The scene files as given to tplan (informational).
+    pub scene_sources: Vec<String>,
+    /// Number of primitives in the flattened scene.
+    pub primitives: usize,
+    /// Fingerprint of the scene and the options that change ambient values (hex).
+    pub fingerprint: String,
+    /// Lease in seconds (see [`DEFAULT_LEASE`]).
+    pub lease_seconds: f64,
+    /// Workers the plan was made for.
+    pub workers_expected: usize,
+    /// The frames.
+    pub frames: Vec<FramePlan>,
+}
+
+impl Manifest {
+    /// Read and validate `JOB/manifest.json`.
+    pub fn load(job: &JobDir) -> Result<Manifest> {
+        let path = job.manifest();
+        let text = std::fs::read_to_string(&path)
+            .with_context(|| format!("cannot read job manifest {}", path.display()))?;
+        let m: Manifest = serde_json::from_str(&text).map_err(|e| {
+            anyhow!(
+                "{}:{}:{}: bad job manifest: {e}",
+                path.display(),
+                e.line(),
+                e.column()
+            )
+        })?;
+        m.validate()
+            .map_err(|e| anyhow!("{}: invalid job manifest: {e}", path.display()))?;
+        Ok(m)
+    }
+
+    /// Check everything a hand-edited or hostile manifest could get wrong.
+    pub fn validate(&self) -> Result<()> {
+        if self.format != FORMAT {
+            bail!("format is '{}', expected '{FORMAT}'", self.format);
+        }
+        if self.version != VERSION {
+            bail!(
+                "version {} (this program reads version {VERSION})",
+                self.version
+            );
+        }
+        check_plain_name(&self.scene_file).context("scene_file")?;
+        if parse_hex32(&self.fingerprint).is_none() {
+            bail!("fingerprint must be 64 hex digits");
+        }
+        if !(self.lease_seconds.is_finite() && self.lease_seconds > 0.0) {
+            bail!("lease_seconds must be a positive number");
+        }
+        if self.frames.is_empty() {
+            bail!("no frames");
+        }
+        if self.frames.len() > MAX_INDEX {
+            bail!("{} frames (at most {MAX_INDEX})", self.frames.len());
+        }
+        let mut seen = std::collections::HashSet::new();
+        for f in &self.frames {
+            let n = f.index;
+            if n as usize > MAX_INDEX {
+                bail!("frame {n}: index above {MAX_INDEX}");
+            }
+            if !seen.insert(n) {
+                bail!("frame {n} appears twice");
+            }
+            if f.xres == 0 || f.yres == 0 || f.xres > MAX_RES || f.yres > MAX_RES {
+                bail!("frame {n}: resolution {}x{} out of range", f.xres, f.yres);
+            }
+            if !(f.pixaspect.is_finite() && f.pixaspect > 0.0) {
+                bail!("frame {n}: bad pixaspect");
+            }
+            f.view
+                .frame()
+                .map_err(|e| anyhow!("frame {n}: bad view: {e}"))?;
+            if f.tiles.is_empty() || f.tiles.len() > MAX_INDEX {
+                bail!("frame {n}: {} tiles", f.tiles.len());
+            }
+            check_cover(f.xres, f.yres, &f.tiles).map_err(|e| anyhow!("frame {n}: {e}"))?;
+        }
+        Ok(())
+    }
+
+    /// The fingerprint as bytes.
+    pub fn fingerprint_bytes(&self) -> [u8; 32] {
+        parse_hex32(&self.fingerprint).unwrap_or([0; 32])
+    }
+
+    /// The frame with number `index`.
+    pub fn frame(&self, index: u32) -> Option<&FramePlan> {
+        self.frames.iter().find(|f| f.index == index)
+    }
+
+    /// Every task of the job in the order workers take them: frame by frame, each frame's
+    /// tiles largest first.
+    pub fn tasks(&self) -> Vec<(String, u32, usize)> {
+        let mut out = Vec::new();
+        for f in &self.frames {
+            for i in 0..f.tiles.len() {
+                out.push((task_name(f.index, i), f.index, i));
+            }
+        }
+        out
+    }
+
+    /// The tile of a task.
+    pub fn tile(&self, frame: u32, tile: usize) -> Option<&TileRect> {
+        self.frame(frame)?.tiles.get(tile)
+    }
+}
+
+/// A file name with no directory part, not `.`/`..`, not hidden.
+pub fn check_plain_name(name: &str) -> Result<()> {
+    if name.is_empty()
+        || name.contains('/')
+        || name.contains('\\')
+        || name.starts_with('.')
+        || name.contains('\0')
+    {
+        bail!("'{name}' must be a plain file name inside the job directory");
+    }
+    Ok(())
+}
+
+/// What `tplan` was asked for.
+#[derive(Clone, Debug, Default)]
+pub struct PlanRequest {
+    /// `--tiles N` (per frame).
+    pub tiles: Option<usize>,
+    /// `--tile-size W H`.
+    pub tile_size: Option<(usize, usize)>,
+    /// `--workers N` (default 4): sets the default tile count.
+    pub workers: Option<usize>,
+    /// `--frames VIEWFILE`: one view per line, each on top of the previous.
+    pub frames: Option<String>,
+    /// `--lease SECONDS`.
+    pub lease: Option<f64>,
+    /// `--ambient FILE`: seed the job's ambient store.
+    pub ambient: Option<String>,
+    /// Accept an ambient store with another fingerprint.
+    pub amb_force: bool,
+    /// The rpict options and scene files.
+    pub args: Vec<String>,
+    /// The full command line (for headers).
+    pub command: String,
+}
+
+/// Write primitives back in Radiance's scene syntax (numbers in shortest round-trip form,
+/// so reading the text gives identical primitives).
+pub fn scene_text(prims: &[Primitive], sources: &[String]) -> String {
+    use std::fmt::Write;
+    let mut s = String::new();
+    let _ = writeln!(
+        s,
+        "# Flattened by {} from: {}",
+        crate::tpict::SOFTWARE,
+        sources.join(" ")
+    );
+    for p in prims {
+        if p.ptype == "alias" {
+            let target = p.sargs.first().map(String::as_str).unwrap_or("void");
+            let _ = writeln!(s, "\n{} alias {} {}", p.modifier, p.name, target);
+            continue;
+        }
+        let _ = writeln!(s, "\n{} {} {}", p.modifier, p.ptype, p.name);
+        let _ = write!(s, "{}", p.sargs.len());
+        for a in &p.sargs {
+            let _ = write!(s, " {a}");
+        }
+        let _ = write!(s, "\n{}", p.iargs.len());
+        for a in &p.iargs {
+            let _ = write!(s, " {a}");
+        }
+        let _ = write!(s, "\n{}", p.rargs.len());
+        for a in &p.rargs {
+            let _ = write!(s, " {a}");
+        }
+        s.push('\n');
+    }
+    s
+}
+
+/// Create a job directory (`tplan`). The directory is assembled under a temporary name
+/// beside `dir` and renamed into place, so a job directory is either complete or absent.
+pub fn create_job(dir: &Path, req: &PlanRequest) -> Result<Manifest> {
+    let opts = match parse_rpict_args(&req.args).map_err(|e| anyhow!(e))? {
+        Command::Render(o) => *o,
+        _ => bail!("tplan needs render options and scene files after '--'"),
+    };
+    let mut opts: RpictOptions = opts;
+    if opts.sequence_start.is_some() {
+        bail!("-S has no meaning in a job: give the frames' views with --frames VIEWFILE");
+    }
+    if opts.output.is_some() {
+        bail!("-o has no meaning in a job: pictures come from tassemble");
+    }
+    if opts.params.af.is_some() {
+        bail!("-af has no meaning in a job: seed the job's ambient store with --ambient FILE");
+    }
+    if opts.amb_log.is_some() || opts.stats_file.is_some() {
+        bail!("--amb-log and --stats have no meaning in a job: workers keep their own logs and statistics");
+    }
+    if opts.pm != 0.0 || opts.pd != 0.0 {
+        bail!("-pm (motion blur) and -pd (depth of field) are not supported yet; use -pm 0 -pd 0");
+    }
+    if opts.scene_files.is_empty() {
+        bail!("no scene files given (a job cannot read its scene from standard input)");
+    }
+    if dir.exists() {
+        let empty = std::fs::read_dir(dir)
+            .map(|mut d| d.next().is_none())
+            .unwrap_or(false);
+        if !empty {
+            bail!(
+                "job directory {} exists and is not empty; choose a new one",
+                dir.display()
+            );
+        }
+    }
+    // Scene: read, check that it builds, flatten.
+    let mut ro = ReadOptions::from_env();
+    ro.allow_commands |= opts.allow_commands;
+    let prims = read_scene_files(&opts.scene_files, &ro)?;
+    let scene = Scene::build(&prims)?;
+    for w in &scene.warnings {
+        eprintln!("tplan: warning - {w}");
+    }
+    let fingerprint = crate::ambient::fingerprint::fingerprint(&prims, &opts.params);
+    let text = scene_text(&prims, &opts.scene_files);
+    // Frames.
+    let mut views: Vec<View> = Vec::new();
+    match &req.frames {
+        None => views.push(opts.view.clone()),
+        Some(vf) => {
+            let content = std::fs::read_to_string(vf)
+                .with_context(|| format!("cannot read frames file {vf}"))?;
+            let mut base = opts.view.clone();
+            for (i, line) in content.lines().enumerate() {
+                let v = parse_view_line(line, &base).map_err(|e| anyhow!("{vf}:{}: {e}", i + 1))?;
+                if let Some(v) = v {
+                    v.frame()
+                        .map_err(|e| anyhow!("{vf}:{}: bad view: {e}", i + 1))?;
+                    base = v.clone();
+                    views.push(v);
+                }
+            }
+            if views.is_empty() {
+                bail!("frames file {vf} has no view lines");
+            }
+        }
+    }
+    let workers = req.workers.unwrap_or(4).max(1);
+    let mut frames = Vec::new();
+    for (i, v) in views.into_iter().enumerate() {
+        let vfr = v.frame().map_err(|e| anyhow!("bad view: {e}"))?;
+        let mut pa = opts.pa;
+        let (mut x, mut y) = (opts.x, opts.y);
+        normaspect(vfr.aspect(), &mut pa, &mut x, &mut y);
+        if x == 0 || y == 0 || x > MAX_RES || y > MAX_RES {
+            bail!("resolution {x}x{y} is out of range");
+        }
+        let tiles = match (req.tile_size, req.tiles) {
+            (Some((tw, th)), _) => plan_fixed(x, y, tw, th),
+            (None, Some(n)) => plan_tiles(x, y, n),
+            (None, None) => plan_tiles(x, y, TILES_PER_WORKER * workers),
+        };
+        if tiles.len() > MAX_INDEX {
+            bail!("{} tiles per frame (at most {MAX_INDEX})", tiles.len());
+        }
+        frames.push(FramePlan {
+            index: i as u32,
+            view: v,
+            xres: x,
+            yres: y,
+            pixaspect: if (0.995..=1.005).contains(&pa) {
+                1.0
+            } else {
+                pa
+            },
+            tiles,
+        });
+    }
+    let sources = opts.scene_files.clone();
+    opts.scene_files = vec!["scene.rad".into()];
+    opts.view = frames[0].view.clone();
+    opts.error_file = None;
+    opts.threads = None;
+    let lease = req.lease.unwrap_or(DEFAULT_LEASE);
+    if !(lease.is_finite() && lease > 0.0) {
+        bail!("--lease must be a positive number of seconds");
+    }
+    let m = Manifest {
+        format: FORMAT.into(),
+        version: VERSION,
+        software: crate::tpict::SOFTWARE.into(),
+        command: req.command.clone(),
+        options: opts,
+        scene_file: "scene.rad".into(),
+        scene_sources: sources,
+        primitives: prims.len(),
+        fingerprint: hex32(&fingerprint),
+        lease_seconds: lease,
+        workers_expected: workers,
+        frames,
+    };
+    m.validate()?;
+    // Build the directory under a temporary name, then rename it into place.
+    let parent = match dir.parent() {
+        Some(p) if !p.as_os_str().is_empty() => p.to_path_buf(),
+        _ => std::path::PathBuf::from("."),
+    };
+    std::fs::create_dir_all(&parent)
+        .with_context(|| format!("cannot create {}", parent.display()))?;
+    let tmp = tempfile::Builder::new()
+        .prefix(".tplan-")
+        .tempdir_in(&parent)
+        .with_context(|| format!("cannot create a directory in {}", parent.display()))?;
+    let job = JobDir::new(tmp.path());
+    for d in job.subdirs() {
+        std::fs::create_dir(&d).with_context(|| format!("cannot create {}", d.display()))?;
+    }
+    super::write_file_atomic(&job.file("scene.rad"), text.as_bytes())
+        .context("cannot write scene.rad")?;
+    for (name, _, _) in m.tasks() {
+        std::fs::File::create(job.tasks().join(format!("{name}.todo")))
+            .with_context(|| format!("cannot create task {name}"))?;
+    }
+    if let Some(a) = &req.ambient {
+        super::merge::seed_store(&job, Path::new(a), &fingerprint, req.amb_force)?;
+    }
+    let json = serde_json::to_string_pretty(&m)?;
+    super::write_file_atomic(&job.manifest(), json.as_bytes())
+        .context("cannot write manifest.json")?;
+    let tmp_path = tmp.keep();
+    if dir.exists() {
+        // An empty directory given by the user: replace it.
+        std::fs::remove_dir(dir)
+            .with_context(|| format!("cannot replace empty directory {}", dir.display()))?;
+    }
+    if let Err(e) = std::fs::rename(&tmp_path, dir) {
+        let _ = std::fs::remove_dir_all(&tmp_path);
+        return Err(anyhow!(
+            "cannot create job directory {}: {e}",
+            dir.display()
+        ));
+    }
+    super::sync_dir(&parent);
+    Ok(m)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn flattened_scene_reads_back_identically() {
+        let src = "void plastic red\n0\n0\n5 .5 .1 .1 0 0\n\nred sphere ball\n0\n0\n4 1e-7 2.5 -3 0.1\nred alias other red\nvoid light l 0 0 3 100 100 100\n";
+        let prims = crate::scene::parse_scene_text(src, "t.rad", &ReadOptions::default()).unwrap();
+        let text = scene_text(&prims, &["t.rad".into()]);
+        let back = crate::scene::parse_scene_text(&text, "f.rad", &ReadOptions::default()).unwrap();
+        assert_eq!(prims.len(), back.len());
+        for (a, b) in prims.iter().zip(&back) {
+            assert_eq!(
+                (&a.modifier, &a.ptype, &a.name),
+                (&b.modifier, &b.ptype, &b.name)
+            );
+            assert_eq!(a.sargs, b.sargs);
+            assert_eq!(a.rargs, b.rargs);
+        }
+    }
+
+    #[test]
+    fn plain_names() {
+        check_plain_name("scene.rad").unwrap();
+        for bad in ["", "../x", "a/b", ".hidden", "..", "/etc/passwd"] {
+            assert!(check_plain_name(bad).is_err(), "{bad}");
+        }
+    }
+}

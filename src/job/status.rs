@@ -1,0 +1,301 @@
+//! `tstat`: progress and the seed paper's metrics.
+//!
+//! Per worker and aggregated: T_spec (rendering not spent making ambient values), T_amb
+//! (making new ambient values), T_idle (waiting with nothing to claim), T_sync (ambient log
+//! writes and reads), extensive ambient computations, values shared in and out, tiles.
+//! Worker liveness shown here is judged from the heartbeat's wall-clock time and is only
+//! informational: workers themselves never judge staleness by clocks (see heartbeat.rs).
+
+use super::heartbeat::{read_record, WorkerRecord};
+use super::manifest::Manifest;
+use super::task::{self, TaskState};
+use super::{task_name, tile, JobDir};
+use anyhow::{Context, Result};
+use serde::Serialize;
+
+/// Progress of one frame.
+#[derive(Debug, Default, Serialize)]
+pub struct FrameProgress {
+    /// Frame number.
+    pub frame: u32,
+    /// Tiles in the plan.
+    pub tiles: usize,
+    /// Not claimed.
+    pub todo: usize,
+    /// Claimed.
+    pub claimed: usize,
+    /// Done.
+    pub done: usize,
+}
+
+/// Aggregated metrics (sums over workers).
+#[derive(Debug, Default, Serialize)]
+pub struct Aggregate {
+    /// Worker incarnations seen.
+    pub workers: usize,
+    /// Workers whose heartbeat is recent and who have not ended.
+    pub live: usize,
+    /// Tiles rendered.
+    pub tiles_done: u64,
+    /// ΣT_spec.
+    pub t_spec: f64,
+    /// ΣT_amb.
+    pub t_amb: f64,
+    /// ΣT_idle.
+    pub t_idle: f64,
+    /// ΣT_sync.
+    pub t_sync: f64,
+    /// Σ CPU seconds.
+    pub cpu_seconds: f64,
+    /// Extensive ambient computations.
+    pub new_values: u64,
+    /// Values read from others.
+    pub shared_in: u64,
+    /// Values written for others.
+    pub shared_out: u64,
+    /// Rays.
+    pub rays: u64,
+    /// From the first worker's start to the last heartbeat (seconds).
+    pub wall_seconds: f64,
+}
+
+/// Everything tstat reports.
+#[derive(Debug, Default, Serialize)]
+pub struct JobStatus {
+    /// Job directory.
+    pub job: String,
+    /// Per frame.
+    pub frames: Vec<FrameProgress>,
+    /// Tiles in all.
+    pub tiles: usize,
+    /// Done in all.
+    pub done: usize,
+    /// Estimated seconds left (None before the first tile).
+    pub eta_seconds: Option<f64>,
+    /// Per worker.
+    pub workers: Vec<WorkerRecord>,
+    /// Sums.
+    pub aggregate: Aggregate,
+    /// With a baseline job: its wall time, and this job's speed-up and efficiency.
+    pub baseline: Option<Baseline>,
+}
+
+/// Comparison with a one-worker job.
+#[derive(Debug, Default, Serialize)]
+pub struct Baseline {
+    /// Baseline job directory.
+    pub job: String,
+    /// Its wall time.
+    pub wall_seconds: f64,
+    /// Its extensive ambient computations.
+    pub new_values: u64,
+    /// Baseline wall / this wall.
+    pub speedup: f64,
+    /// Speed-up / workers.
+    pub efficiency: f64,
+    /// This job's new values / the baseline's.
+    pub new_values_ratio: f64,
+}
+
+/// Read the job's state.
+pub fn status(job: &JobDir) -> Result<JobStatus> {
+    let m = Manifest::load(job)?;
+    let states = task::scan(&job.tasks())
+        .with_context(|| format!("cannot list {}", job.tasks().display()))?;
+    let mut st = JobStatus {
+        job: job.root().display().to_string(),
+        ..JobStatus::default()
+    };
+    let mut remaining_px = 0usize;
+    let mut done_px = 0usize;
+    for f in &m.frames {
+        let mut p = FrameProgress {
+            frame: f.index,
+            tiles: f.tiles.len(),
+            ..FrameProgress::default()
+        };
+        for (i, r) in f.tiles.iter().enumerate() {
+            match states.get(&task_name(f.index, i)) {
+                Some(TaskState::Done) => {
+                    p.done += 1;
+                    done_px += r.area();
+                }
+                Some(TaskState::Claimed(_)) => {
+                    p.claimed += 1;
+                    remaining_px += r.area();
+                }
+                _ => {
+                    p.todo += 1;
+                    remaining_px += r.area();
+                }
+            }
+        }
+        st.tiles += p.tiles;
+        st.done += p.done;
+        st.frames.push(p);
+    }
+    let mut names: Vec<_> = std::fs::read_dir(job.workers())
+        .with_context(|| format!("cannot list {}", job.workers().display()))?
+        .flatten()
+        .filter_map(|e| e.file_name().to_str().map(String::from))
+        .filter(|n| n.ends_with(".json") && !n.starts_with('.'))
+        .collect();
+    names.sort();
+    let now = super::unix_now();
+    let a = &mut st.aggregate;
+    let mut first = f64::INFINITY;
+    let mut last: f64 = 0.0;
+    for n in names {
+        let Some(r) = read_record(&job.workers().join(&n)) else {
+            continue;
+        };
+        a.workers += 1;
+        if (r.state == "running" || r.state == "idle") && now - r.updated_unix < m.lease_seconds {
+            a.live += 1;
+        }
+        a.tiles_done += r.tiles_done;
+        a.t_spec += r.t_spec;
+        a.t_amb += r.t_amb;
+        a.t_idle += r.t_idle;
+        a.t_sync += r.t_sync;
+        a.cpu_seconds += r.cpu_seconds;
+        a.new_values += r.new_values;
+        a.shared_in += r.shared_in;
+        a.shared_out += r.shared_out;
+        a.rays += r.rays;
+        first = first.min(r.started_unix);
+        last = last.max(r.updated_unix);
+        st.workers.push(r);
+    }
+    if first.is_finite() {
+        a.wall_seconds = (last - first).max(0.0);
+    }
+    let busy = a.t_spec + a.t_amb;
+    if done_px > 0 && busy > 0.0 {
+        let per_px = busy / done_px as f64;
+        st.eta_seconds = Some(remaining_px as f64 * per_px / a.live.max(1) as f64);
+    }
+    Ok(st)
+}
+
+/// Add a baseline comparison.
+pub fn with_baseline(mut st: JobStatus, base: &JobDir) -> Result<JobStatus> {
+    let b = status(base)?;
+    let n = st.aggregate.workers.max(1) as f64;
+    let w = st.aggregate.wall_seconds;
+    let speedup = if w > 0.0 {
+        b.aggregate.wall_seconds / w
+    } else {
+        0.0
+    };
+    st.baseline = Some(Baseline {
+        job: base.root().display().to_string(),
+        wall_seconds: b.aggregate.wall_seconds,
+        new_values: b.aggregate.new_values,
+        speedup,
+        efficiency: speedup / n,
+        new_values_ratio: if b.aggregate.new_values > 0 {
+            st.aggregate.new_values as f64 / b.aggregate.new_values as f64
+        } else {
+            0.0
+        },
+    });
+    Ok(st)
+}
+
+/// Measured per-tile costs of a frame (for `bench/tilesim`): the picture size and every
+/// tile with a valid result, with its CPU seconds (wall seconds when CPU time is unknown).
+pub fn costs(job: &JobDir, frame: u32) -> Result<serde_json::Value> {
+    let m = Manifest::load(job)?;
+    let fp = m
+        .frame(frame)
+        .ok_or_else(|| anyhow::anyhow!("the job has no frame {frame}"))?;
+    let mut tiles = Vec::new();
+    for i in 0..fp.tiles.len() {
+        if let Ok((meta, _)) = tile::read(&job.tile_file(&task_name(frame, i))) {
+            let secs = if meta.cpu_seconds > 0.0 {
+                meta.cpu_seconds
+            } else {
+                meta.wall_seconds
+            };
+            tiles.push(serde_json::json!({
+                "x0": meta.x0, "y0": meta.y0, "w": meta.w, "h": meta.h, "seconds": secs,
+                "new_values": meta.new_values
+            }));
+        }
+    }
+    Ok(serde_json::json!({"width": fp.xres, "height": fp.yres, "tiles": tiles}))
+}
+
+/// The human-readable report.
+pub fn render_text(st: &JobStatus) -> String {
+    use std::fmt::Write;
+    let mut s = String::new();
+    let _ = writeln!(s, "job {}: {} of {} tiles done", st.job, st.done, st.tiles);
+    for f in &st.frames {
+        let _ = writeln!(
+            s,
+            "  frame {:>5}: {:>5} todo {:>5} claimed {:>5} done (of {})",
+            f.frame, f.todo, f.claimed, f.done, f.tiles
+        );
+    }
+    if let Some(e) = st.eta_seconds {
+        if st.done < st.tiles {
+            let _ = writeln!(s, "  ETA about {e:.0} s");
+        }
+    }
+    let a = &st.aggregate;
+    let _ = writeln!(
+        s,
+        "workers: {} seen, {} live; wall {:.2} s",
+        a.workers, a.live, a.wall_seconds
+    );
+    let _ = writeln!(
+        s,
+        "  {:<28} {:>8} {:>5} {:>8} {:>8} {:>8} {:>8} {:>7} {:>7} {:>7}",
+        "owner", "state", "tiles", "T_spec", "T_amb", "T_idle", "T_sync", "new", "in", "out"
+    );
+    for w in &st.workers {
+        let _ = writeln!(
+            s,
+            "  {:<28} {:>8} {:>5} {:>8.2} {:>8.2} {:>8.2} {:>8.3} {:>7} {:>7} {:>7}",
+            w.owner,
+            w.state,
+            w.tiles_done,
+            w.t_spec,
+            w.t_amb,
+            w.t_idle,
+            w.t_sync,
+            w.new_values,
+            w.shared_in,
+            w.shared_out
+        );
+    }
+    let _ = writeln!(
+        s,
+        "  {:<28} {:>8} {:>5} {:>8.2} {:>8.2} {:>8.2} {:>8.3} {:>7} {:>7} {:>7}",
+        "aggregate",
+        "",
+        a.tiles_done,
+        a.t_spec,
+        a.t_amb,
+        a.t_idle,
+        a.t_sync,
+        a.new_values,
+        a.shared_in,
+        a.shared_out
+    );
+    let _ = writeln!(s, "  CPU {:.2} s, {} rays", a.cpu_seconds, a.rays);
+    if let Some(b) = &st.baseline {
+        let _ = writeln!(
+            s,
+            "baseline {}: wall {:.2} s; speed-up {:.2}, efficiency {:.0}%, extensive ambient computations ×{:.3}",
+            b.job,
+            b.wall_seconds,
+            b.speedup,
+            100.0 * b.efficiency,
+            b.new_values_ratio
+        );
+    }
+    s
+}
