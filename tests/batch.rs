@@ -1,0 +1,532 @@
+//! End-to-end tests of the batch toolkit: tplan → tpiece ×N → tmerge → tassemble → tstat,
+//! run as real processes on real job directories, with crashes injected.
+
+mod common;
+
+use common::{compare, reduce, run_ok, PixelsF64};
+use std::path::{Path, PathBuf};
+use std::process::{Child, Command, Stdio};
+use std::time::{Duration, Instant};
+use tessera::image::{read_picture, Image};
+
+fn bin(name: &str) -> PathBuf {
+    match name {
+        "tplan" => PathBuf::from(env!("CARGO_BIN_EXE_tplan")),
+        "tpiece" => PathBuf::from(env!("CARGO_BIN_EXE_tpiece")),
+        "tmerge" => PathBuf::from(env!("CARGO_BIN_EXE_tmerge")),
+        "tassemble" => PathBuf::from(env!("CARGO_BIN_EXE_tassemble")),
+        "tstat" => PathBuf::from(env!("CARGO_BIN_EXE_tstat")),
+        "tpict" => PathBuf::from(env!("CARGO_BIN_EXE_tpict")),
+        _ => unreachable!(),
+    }
+}
+
+fn demo() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("demo")
+}
+
+fn cmd(name: &str) -> Command {
+    let mut c = Command::new(bin(name));
+    c.env("RAYPATH", demo());
+    c.env_remove("SLURM_ARRAY_JOB_ID");
+    c.env_remove("SLURM_JOB_ID");
+    c.env_remove("SLURM_CPUS_PER_TASK");
+    c
+}
+
+/// Render options shared by the jobs and the single-process references.
+fn view_args(x: u32, y: u32, amb: &[&str]) -> Vec<String> {
+    let mut v: Vec<String> = vec![
+        "-vf".into(),
+        demo().join("demo.vf").display().to_string(),
+        "-x".into(),
+        x.to_string(),
+        "-y".into(),
+        y.to_string(),
+    ];
+    v.extend(amb.iter().map(|s| s.to_string()));
+    v.push(demo().join("demo.rad").display().to_string());
+    v
+}
+
+fn plan(job: &Path, plan_args: &[&str], args: &[String]) {
+    let mut c = cmd("tplan");
+    c.args(plan_args).arg("-o").arg(job).arg("--").args(args);
+    run_ok(&mut c);
+}
+
+fn worker(job: &Path, id: &str, extra: &[&str]) -> Command {
+    let mut c = cmd("tpiece");
+    c.arg(job)
+        .args(["--worker-id", id, "--threads", "1", "-q"])
+        .args(extra);
+    c
+}
+
+fn run_workers(job: &Path, n: usize, extra: &[&str]) {
+    let mut kids: Vec<Child> = (0..n)
+        .map(|i| {
+            worker(job, &format!("w{i}"), extra)
+                .stderr(Stdio::piped())
+                .spawn()
+                .expect("start tpiece")
+        })
+        .collect();
+    for k in kids.drain(..) {
+        let out = k.wait_with_output().unwrap();
+        assert!(
+            out.status.success(),
+            "tpiece failed: {}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+    }
+}
+
+fn assemble(job: &Path) -> Image {
+    let out = job.join("out.hdr");
+    let _ = std::fs::remove_file(&out);
+    run_ok(cmd("tassemble").arg(job).arg("-o").arg(&out));
+    read_picture(&out).unwrap()
+}
+
+fn tpict(args: &[String]) -> Image {
+    let d = tempfile::tempdir().unwrap();
+    let out = d.path().join("ref.hdr");
+    run_ok(cmd("tpict").arg("-o").arg(&out).args(args));
+    read_picture(&out).unwrap()
+}
+
+fn stat(job: &Path) -> serde_json::Value {
+    let out = run_ok(cmd("tstat").arg(job).arg("--json"));
+    serde_json::from_slice(&out).unwrap()
+}
+
+fn within_tolerance(a: &Image, b: &Image, what: &str) {
+    let (w, h) = ((a.width / 2).max(1), (a.height / 2).max(1));
+    let c = compare(&reduce(a, w, h), &reduce(b, w, h), 0.05);
+    eprintln!("{what}: {c:?}");
+    assert!(
+        c.rms <= 0.10 && c.max <= 1.5 && c.mean_lum <= 0.02,
+        "{what}: {c:?}"
+    );
+}
+
+#[test]
+fn ab0_jobs_are_pixel_identical_to_tpict_at_any_worker_count() {
+    let args = view_args(96, 72, &["-ab", "0"]);
+    let reference = tpict(&args);
+    for n in [1usize, 2, 4] {
+        let d = tempfile::tempdir().unwrap();
+        let job = d.path().join("job");
+        plan(&job, &["--workers", &n.to_string()], &args);
+        run_workers(&job, n, &[]);
+        let img = assemble(&job);
+        assert_eq!((img.width, img.height), (reference.width, reference.height));
+        assert!(
+            img.pixels == reference.pixels,
+            "{n} workers: picture differs from tpict's"
+        );
+        let st = stat(&job);
+        assert_eq!(st["done"], st["tiles"]);
+    }
+}
+
+#[test]
+fn ambient_values_are_shared_and_not_recomputed() {
+    let amb = ["-ab", "1", "-ad", "256", "-as", "0", "-aa", ".15"];
+    let args = view_args(120, 90, &amb);
+    let reference = tpict(&args);
+    let mut counts = Vec::new();
+    let mut pictures = Vec::new();
+    for n in [1usize, 2, 4] {
+        let d = tempfile::tempdir().unwrap();
+        let job = d.path().join("job");
+        plan(&job, &["--workers", &n.to_string()], &args);
+        run_workers(&job, n, &["--amb-flush", "auto"]);
+        let img = assemble(&job);
+        let st = stat(&job);
+        let made = st["aggregate"]["new_values"].as_u64().unwrap();
+        let shared_in = st["aggregate"]["shared_in"].as_u64().unwrap();
+        eprintln!("{n} workers: {made} new values, {shared_in} shared in");
+        if n > 1 {
+            assert!(shared_in > 0, "{n} workers shared nothing");
+            // Every worker used values another one computed.
+            for w in st["workers"].as_array().unwrap() {
+                assert!(w["shared_in"].as_u64().unwrap() > 0, "{w}");
+            }
+        }
+        // The merged store holds every value once.
+        run_ok(cmd("tmerge").arg(&job));
+        let idx: serde_json::Value = serde_json::from_str(
+            &std::fs::read_to_string(job.join("merged/store.json")).unwrap(),
+        )
+        .unwrap();
+        assert_eq!(idx["records"].as_u64().unwrap(), made);
+        within_tolerance(&img, &reference, &format!("{n} workers vs tpict"));
+        counts.push(made);
+        pictures.push(img);
+    }
+    within_tolerance(&pictures[2], &pictures[0], "4 workers vs 1");
+    let ratio = counts[2] as f64 / counts[0] as f64;
+    eprintln!("new values 4 workers / 1 worker = {ratio:.3}");
+    assert!(
+        ratio <= 1.10,
+        "4 workers made {} values, 1 worker {}",
+        counts[2],
+        counts[0]
+    );
+}
+
+/// A tiny deterministic generator for the fault campaign.
+struct Rng(u64);
+impl Rng {
+    fn next(&mut self) -> u64 {
+        self.0 ^= self.0 << 13;
+        self.0 ^= self.0 >> 7;
+        self.0 ^= self.0 << 17;
+        self.0
+    }
+    fn below(&mut self, n: u64) -> u64 {
+        self.next() % n
+    }
+}
+
+fn kill9(c: &mut Child) {
+    let _ = c.kill(); // SIGKILL on Unix
+    let _ = c.wait();
+}
+
+/// Every whole record of every worker log must be in the merged store.
+fn assert_logs_in_store(job: &Path) {
+    use std::collections::HashSet;
+    use tessera::ambient::log::LogReader;
+    let idx: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(job.join("merged/store.json")).unwrap())
+            .unwrap();
+    let store = job.join("merged").join(idx["store"].as_str().unwrap());
+    let mut r = LogReader::open(&store, None, false).unwrap();
+    let ids: HashSet<_> = r.read_available().unwrap().iter().map(|x| x.id).collect();
+    let mut total = 0;
+    for e in std::fs::read_dir(job.join("amb")).unwrap() {
+        let p = e.unwrap().path();
+        let Ok(mut r) = LogReader::open(&p, None, false) else {
+            continue; // a log whose header was never completed holds no record
+        };
+        for rec in r.read_available().unwrap() {
+            total += 1;
+            assert!(ids.contains(&rec.id), "{}: record {:?} not merged", p.display(), rec.id);
+        }
+    }
+    assert!(total > 0);
+}
+
+#[test]
+fn killed_workers_lose_nothing() {
+    let rounds: u64 = std::env::var("TESSERA_FAULT_ROUNDS")
+        .ok()
+        .and_then(|v| v.parse().ok())
+        .unwrap_or(20);
+    let amb = ["-ab", "1", "-ad", "128", "-as", "0", "-aa", ".2"];
+    let args = view_args(64, 48, &amb);
+    let d = tempfile::tempdir().unwrap();
+    // The fault-free picture.
+    let clean = d.path().join("clean");
+    plan(&clean, &["--workers", "4", "--lease", "0.3"], &args);
+    run_workers(&clean, 2, &[]);
+    let clean_img = assemble(&clean);
+    let mut rng = Rng(0x9E37_79B9_7F4A_7C15);
+    let mut kills = 0;
+    for round in 0..rounds {
+        let job = d.path().join(format!("job{round}"));
+        plan(&job, &["--workers", "4", "--lease", "0.3"], &args);
+        let mut kids: Vec<Option<Child>> = (0..4)
+            .map(|i| {
+                Some(
+                    worker(&job, &format!("r{round}w{i}"), &["--amb-flush", "5"])
+                        .stderr(Stdio::null())
+                        .spawn()
+                        .unwrap(),
+                )
+            })
+            .collect();
+        // Kill 1–3 random workers at random times; restart about half of them (sometimes
+        // under the same id, as a requeued SLURM task would be).
+        let victims = 1 + rng.below(3);
+        for _ in 0..victims {
+            std::thread::sleep(Duration::from_millis(20 + rng.below(250)));
+            let i = rng.below(4) as usize;
+            if let Some(mut c) = kids[i].take() {
+                kill9(&mut c);
+                kills += 1;
+            }
+            if rng.below(2) == 0 {
+                let id = if rng.below(2) == 0 {
+                    format!("r{round}w{i}")
+                } else {
+                    format!("r{round}x{i}")
+                };
+                kids[i] = Some(
+                    worker(&job, &id, &["--amb-flush", "5"])
+                        .stderr(Stdio::null())
+                        .spawn()
+                        .unwrap(),
+                );
+            }
+        }
+        // Survivors finish the job, re-claiming what the dead held.
+        let deadline = Instant::now() + Duration::from_secs(120);
+        let mut all_dead = true;
+        for c in kids.iter_mut().flatten() {
+            all_dead = false;
+            loop {
+                if let Some(st) = c.try_wait().unwrap() {
+                    assert!(st.success(), "round {round}: a worker failed");
+                    break;
+                }
+                assert!(Instant::now() < deadline, "round {round}: workers hang");
+                std::thread::sleep(Duration::from_millis(20));
+            }
+        }
+        if all_dead {
+            run_workers(&job, 1, &[]);
+        } else {
+            // Nothing may be left: a worker only exits when every tile is done.
+            let st = stat(&job);
+            assert_eq!(st["done"], st["tiles"], "round {round}");
+        }
+        let img = assemble(&job);
+        within_tolerance(&img, &clean_img, &format!("round {round}"));
+        // Every tile result exists exactly once and covers its own rectangle.
+        let tiles = std::fs::read_dir(job.join("tiles"))
+            .unwrap()
+            .filter(|e| {
+                e.as_ref()
+                    .unwrap()
+                    .file_name()
+                    .to_string_lossy()
+                    .ends_with(".tile")
+            })
+            .count();
+        assert_eq!(tiles as u64, stat(&job)["tiles"].as_u64().unwrap());
+        run_ok(cmd("tmerge").arg(&job));
+        assert_logs_in_store(&job);
+        let _ = std::fs::remove_dir_all(&job);
+    }
+    assert!(kills >= rounds, "{kills} kills in {rounds} rounds");
+}
+
+#[test]
+fn stale_claims_are_reclaimed_after_the_lease() {
+    let d = tempfile::tempdir().unwrap();
+    let job = d.path().join("job");
+    plan(
+        &job,
+        &["--tiles", "3", "--lease", "0.5"],
+        &view_args(48, 36, &["-ab", "0"]),
+    );
+    // A ghost worker holds a tile and its heartbeat never changes.
+    let tasks = job.join("tasks");
+    std::fs::rename(
+        tasks.join("f00000-t00000.todo"),
+        tasks.join("f00000-t00000.claim.ghost.0000dead"),
+    )
+    .unwrap();
+    std::fs::write(
+        job.join("workers/ghost.0000dead.json"),
+        r#"{"worker_id":"ghost","owner":"ghost.0000dead","host":"x","pid":1,"state":"running","beat":7,"started_unix":0,"updated_unix":4102444800,"threads":1,"tiles_done":0,"t_render":0,"t_spec":0,"t_amb":0,"t_idle":0,"t_sync":0,"new_values":0,"shared_in":0,"shared_out":0,"amb_flush":0,"rays":0,"cpu_seconds":0,"error":null}"#,
+    )
+    .unwrap();
+    let t = Instant::now();
+    let out = worker(&job, "live", &[]).output().unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    // Its clock in the future does not matter: staleness is judged by the lease only.
+    assert!(t.elapsed() >= Duration::from_millis(500));
+    assert!(tasks.join("f00000-t00000.done").exists());
+    assemble(&job);
+}
+
+#[test]
+fn late_workers_duplicate_ids_and_merges_are_harmless() {
+    let d = tempfile::tempdir().unwrap();
+    let job = d.path().join("job");
+    let args = view_args(48, 36, &["-ab", "1", "-ad", "64", "-as", "0"]);
+    plan(&job, &["--tiles", "8"], &args);
+    // Two workers with the same id: distinct owners, distinct logs, one picture.
+    let a = worker(&job, "same", &[]).spawn().unwrap();
+    let b = worker(&job, "same", &[]).spawn().unwrap();
+    assert!(a.wait_with_output().unwrap().status.success());
+    assert!(b.wait_with_output().unwrap().status.success());
+    let logs = std::fs::read_dir(job.join("amb")).unwrap().count();
+    assert_eq!(logs, 2);
+    let pic = assemble(&job);
+    // A worker started after everything is done exits at once, successfully.
+    let t = Instant::now();
+    let out = worker(&job, "late", &[]).output().unwrap();
+    assert!(out.status.success());
+    assert!(t.elapsed() < Duration::from_secs(5));
+    // Merging twice changes nothing the second time; two merges at once both succeed.
+    run_ok(cmd("tmerge").arg(&job));
+    let first = std::fs::read(job.join("merged/store.json")).unwrap();
+    let out = run_ok(cmd("tmerge").arg(&job).arg("--json"));
+    let rep: serde_json::Value = serde_json::from_slice(&out).unwrap();
+    assert_eq!(rep["added"], 0);
+    assert!(rep["written"].is_null());
+    assert_eq!(std::fs::read(job.join("merged/store.json")).unwrap(), first);
+    let m1 = cmd("tmerge").arg(&job).spawn().unwrap();
+    let m2 = cmd("tmerge").arg(&job).spawn().unwrap();
+    assert!(m1.wait_with_output().unwrap().status.success());
+    assert!(m2.wait_with_output().unwrap().status.success());
+    // A new job seeded with the store makes far fewer values.
+    let exported = d.path().join("amb.rad");
+    run_ok(cmd("tmerge").arg(&job).arg("--export-radiance").arg(&exported));
+    let job2 = d.path().join("job2");
+    let store: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(job.join("merged/store.json")).unwrap()).unwrap();
+    let store_file = job.join("merged").join(store["store"].as_str().unwrap());
+    plan(
+        &job2,
+        &["--tiles", "8", "--ambient", store_file.to_str().unwrap()],
+        &args,
+    );
+    run_workers(&job2, 1, &[]);
+    let st = stat(&job2);
+    let before = stat(&job)["aggregate"]["new_values"].as_u64().unwrap();
+    let after = st["aggregate"]["new_values"].as_u64().unwrap();
+    eprintln!("seeded job: {after} new values (first job {before})");
+    assert!(after * 4 < before, "{after} vs {before}");
+    within_tolerance(&assemble(&job2), &pic, "seeded job");
+    // The Radiance export is a valid ambient file with every value.
+    let (_, recs, _) = tessera::ambient::radfile::read_file(&exported).unwrap();
+    assert_eq!(recs.len() as u64, store["records"].as_u64().unwrap());
+}
+
+#[test]
+fn bad_input_and_full_disks_fail_cleanly() {
+    let d = tempfile::tempdir().unwrap();
+    let job = d.path().join("job");
+    let args = view_args(32, 24, &["-ab", "0"]);
+    plan(&job, &["--tiles", "4"], &args);
+    // Planning into an existing job directory is refused.
+    let out = cmd("tplan")
+        .arg("-o")
+        .arg(&job)
+        .arg("--")
+        .args(&args)
+        .output()
+        .unwrap();
+    assert!(!out.status.success());
+    assert!(String::from_utf8_lossy(&out.stderr).contains("not empty"));
+    // Bad worker ids are refused before anything is touched.
+    for bad in ["../x", "a/b", "a.b", ""] {
+        let out = cmd("tpiece")
+            .arg(&job)
+            .args(["--worker-id", bad])
+            .output()
+            .unwrap();
+        assert!(!out.status.success(), "{bad}");
+    }
+    // A disk-full error on a tile result: clear error, the tile goes back to todo.
+    let out = worker(&job, "full", &[])
+        .env("TESSERA_FAULT_TILE_ENOSPC", "1")
+        .output()
+        .unwrap();
+    assert!(!out.status.success());
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(err.contains("No space left") && err.contains("released"), "{err}");
+    let names: Vec<String> = std::fs::read_dir(job.join("tasks"))
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .collect();
+    assert!(names.iter().all(|n| n.ends_with(".todo")), "{names:?}");
+    // The job still completes.
+    run_workers(&job, 1, &[]);
+    assemble(&job);
+    // Missing tiles: tassemble names them and fails; --partial fills black.
+    std::fs::remove_file(job.join("tiles/f00000-t00001.tile")).unwrap();
+    let out = cmd("tassemble")
+        .arg(&job)
+        .arg("-o")
+        .arg(d.path().join("x.hdr"))
+        .output()
+        .unwrap();
+    assert!(!out.status.success());
+    assert!(String::from_utf8_lossy(&out.stderr).contains("f00000-t00001"));
+    assert!(!d.path().join("x.hdr").exists());
+    run_ok(
+        cmd("tassemble")
+            .arg(&job)
+            .arg("--partial")
+            .arg("-o")
+            .arg(d.path().join("x.hdr")),
+    );
+    // Hostile manifests are refused with the file named.
+    let m = std::fs::read_to_string(job.join("manifest.json")).unwrap();
+    for (from, to) in [
+        ("\"scene_file\": \"scene.rad\"", "\"scene_file\": \"../../etc/passwd\""),
+        ("\"lease_seconds\": 180.0", "\"lease_seconds\": -1.0"),
+        ("\"x0\": 0", "\"x0\": 1"),
+        ("\"format\": \"tessera-job\"", "\"format\": \"other\""),
+    ] {
+        assert!(m.contains(from), "{from}");
+        std::fs::write(job.join("manifest.json"), m.replacen(from, to, 1)).unwrap();
+        for prog in ["tpiece", "tassemble", "tstat", "tmerge"] {
+            let out = cmd(prog).arg(&job).output().unwrap();
+            assert!(!out.status.success(), "{prog} accepted {to}");
+            assert!(
+                String::from_utf8_lossy(&out.stderr).contains("manifest.json"),
+                "{prog}: {}",
+                String::from_utf8_lossy(&out.stderr)
+            );
+        }
+    }
+    std::fs::write(job.join("manifest.json"), "{ not json").unwrap();
+    let out = cmd("tstat").arg(&job).output().unwrap();
+    assert!(String::from_utf8_lossy(&out.stderr).contains("manifest.json:1:"));
+    // A changed scene is refused by workers.
+    std::fs::write(job.join("manifest.json"), &m).unwrap();
+    let mut scene = std::fs::read_to_string(job.join("scene.rad")).unwrap();
+    scene.push_str("\nvoid plastic extra\n0\n0\n5 .5 .5 .5 0 0\n");
+    std::fs::write(job.join("scene.rad"), scene).unwrap();
+    let out = cmd("tpiece").arg(&job).output().unwrap();
+    assert!(!out.status.success());
+    assert!(String::from_utf8_lossy(&out.stderr).contains("changed since the job was planned"));
+}
+
+#[test]
+fn animation_frames_are_planned_and_assembled() {
+    let d = tempfile::tempdir().unwrap();
+    let frames = d.path().join("walk.vf");
+    std::fs::write(
+        &frames,
+        "VIEW= -vp 7.6 0.35 2.1\nVIEW= -vp 7.4 0.55 2.1\nVIEW= -vp 7.2 0.75 2.1\n",
+    )
+    .unwrap();
+    let job = d.path().join("job");
+    let args = view_args(40, 30, &["-ab", "0"]);
+    let mut c = cmd("tplan");
+    c.args(["--tiles", "3", "--frames"])
+        .arg(&frames)
+        .arg("-o")
+        .arg(&job)
+        .arg("--")
+        .args(&args);
+    run_ok(&mut c);
+    run_workers(&job, 2, &[]);
+    let pat = d.path().join("f%02d.hdr");
+    run_ok(
+        cmd("tassemble")
+            .arg(&job)
+            .arg("--all-frames")
+            .arg("-o")
+            .arg(&pat),
+    );
+    for f in 0..3 {
+        let img = read_picture(&d.path().join(format!("f{f:02}.hdr"))).unwrap();
+        assert_eq!(img.header.frame, Some(f));
+        assert!(img.pixels_f64().iter().any(|p| p[0] > 0.0));
+    }
+}
