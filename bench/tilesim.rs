@@ -176,8 +176,9 @@ fn plan_grid(width: usize, height: usize, tiles: usize) -> Vec<TileRect> {
 /// The band plan of `plan_tiles` with other parameters, to try changes to it: the picture is
 /// cut top to bottom into bands holding `share` of the rows each (shares are normalised),
 /// and band k's tiles have about `size_k · b` pixels, b chosen so that the plan has about
-/// `tiles` tiles. `plan_tiles` is `[(0.5, 2), (0.25, 1), (0.125, 0.5), (0.125, 0.25)]`
-/// (the self-test checks that the two agree).
+/// `tiles` tiles. `plan_tiles` uses the shares and sizes
+/// `[(0.5, 2), (0.25, 1), (0.125, 0.5), (0.0625, 0.25), (0.03125, 0.125), (0.03125, 0.0625)]`
+/// with b = 1.25·area/tiles (so about 1.4× the tiles), farthest-point order in each band.
 fn plan_bands(width: usize, height: usize, tiles: usize, bands: &[(f64, f64)]) -> Vec<TileRect> {
     if width == 0 || height == 0 {
         return Vec::new();
@@ -611,8 +612,10 @@ fn self_test() -> Result<(), String> {
         format!(" ({mismatches} mismatches)"),
     );
 
-    // 5. `plan_bands` with plan_tiles's parameters is plan_tiles; other parameters cover.
-    let default = parse_bands("0.5:2,0.25:1,0.125:0.5,0.125:0.25")?;
+    // 5. plan_tiles and `plan_bands` with other parameters cover the picture. (plan_tiles
+    // orders each band farthest-point first and floors tile areas at 64 pixels, so the two
+    // are not compared tile by tile.)
+    let default = parse_bands("0.5:2,0.25:1,0.125:0.5,0.0625:0.25,0.03125:0.125,0.03125:0.0625")?;
     let other = parse_bands("0.4:2,0.3:1,0.2:0.5,0.1:0.125")?;
     let mut bad = Vec::new();
     for &(w, h, n) in &[
@@ -625,14 +628,15 @@ fn self_test() -> Result<(), String> {
         (7, 1000, 20),
         (1920, 1080, 1280),
     ] {
-        if plan_bands(w, h, n, &default) != plan_tiles(w, h, n)
+        if check_cover(w, h, &plan_tiles(w, h, n)).is_err()
+            || check_cover(w, h, &plan_bands(w, h, n, &default)).is_err()
             || check_cover(w, h, &plan_bands(w, h, n, &other)).is_err()
         {
             bad.push(format!("{w}x{h}/{n}"));
         }
     }
     check(
-        "plan_bands(plan_tiles's bands) = plan_tiles; other bands cover",
+        "plan_tiles and band plans cover the picture",
         bad.is_empty(),
         if bad.is_empty() {
             String::new()

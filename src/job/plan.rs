@@ -114,7 +114,12 @@ fn spread(tiles: &mut [TileRect]) {
     }
     let c: Vec<(f64, f64)> = tiles
         .iter()
-        .map(|t| (t.x0 as f64 + 0.5 * t.w as f64, t.y0 as f64 + 0.5 * t.h as f64))
+        .map(|t| {
+            (
+                t.x0 as f64 + 0.5 * t.w as f64,
+                t.y0 as f64 + 0.5 * t.h as f64,
+            )
+        })
         .collect();
     let d2 = |a: (f64, f64), b: (f64, f64)| (a.0 - b.0).powi(2) + (a.1 - b.1).powi(2);
     let mut order = Vec::with_capacity(n);
