@@ -34,6 +34,8 @@ MUNGE_KEY=/etc/munge/munge.key
 PROG="$(basename "$0")"
 
 export SLURM_CONF="$CONF"
+# The daemons and runuser live in sbin, which a plain user's PATH (or env -i) may lack.
+export PATH="$PATH:/usr/sbin:/sbin"
 
 say() { printf '%s: %s\n' "$PROG" "$*" >&2; }
 die() {
@@ -307,6 +309,10 @@ cmd_start() {
     # Half a cluster (one daemon died): restart both from a consistent state.
     signal_and_wait slurmd "$RUN/slurmd.pid"
     signal_and_wait slurmctld "$RUN/slurmctld.pid"
+    # A fresh cluster each time: no jobs or node states left over from an earlier run
+    # (after a crash they would be recovered as running).
+    rm -rf "$DIR/state" "$DIR/spool"
+    mkdir -p "$DIR/state" "$DIR/spool"
     write_config "$host"
     # -i: start even when the state files are missing or unreadable.
     detached slurmctld -i || { tail_logs; die "slurmctld failed to start"; }
@@ -366,11 +372,76 @@ cmd_stop_quiet() {
   fi
   signal_and_wait slurmd "$RUN/slurmd.pid"
   signal_and_wait slurmctld "$RUN/slurmctld.pid"
+  reap_stepds
   signal_and_wait munged "$RUN/munged.pid"
   rm -f "$RUN/munged.pid"
 }
 
 both_gone() { not_alive slurmctld "$RUN/slurmctld.pid" && not_alive slurmd "$RUN/slurmd.pid"; }
+
+# slurmstepd processes of THIS cluster: they hold our slurmd.log open. Normally none are left
+# (jobs are cancelled first), but when slurmctld died they keep waiting for it.
+our_stepds() {
+  local p fd comm
+  for p in /proc/[0-9]*; do
+    comm=""
+    { read -r comm <"$p/comm"; } 2>/dev/null || continue
+    [ "$comm" = slurmstepd ] || continue
+    for fd in "$p"/fd/*; do
+      if [ "$(readlink "$fd" 2>/dev/null)" = "$LOG/slurmd.log" ]; then
+        printf '%s\n' "${p#/proc/}"
+        break
+      fi
+    done
+  done
+}
+
+# All descendants of the given pids (their job scripts and what those started).
+descendants() {
+  local -A kids=()
+  local p stat rest ppid
+  for p in /proc/[0-9]*; do
+    stat=""
+    { read -r stat <"$p/stat"; } 2>/dev/null || continue
+    rest="${stat##*) }"
+    rest="${rest#* }"
+    ppid="${rest%% *}"
+    kids[$ppid]+="${p#/proc/} "
+  done
+  local queue=("$@") next
+  while [ "${#queue[@]}" -gt 0 ]; do
+    next="${queue[0]}"
+    queue=("${queue[@]:1}")
+    for p in ${kids[$next]:-}; do
+      printf '%s\n' "$p"
+      queue+=("$p")
+    done
+  done
+}
+
+no_stepds() { [ -z "$(our_stepds)" ]; }
+
+# A finished step's slurmstepd lingers ~1 s; one whose slurmctld died waits for it forever
+# and ignores SIGTERM. Their jobs' processes get SIGTERM, the slurmstepds SIGKILL.
+reap_stepds() {
+  wait_until "slurmstepd processes to exit" 3 no_stepds 2>/dev/null && return 0
+  local stepds pids
+  mapfile -t stepds < <(our_stepds)
+  [ "${#stepds[@]}" -gt 0 ] || return 0
+  mapfile -t pids < <(descendants "${stepds[@]}")
+  say "stopping leftover slurmstepd ${stepds[*]} and their jobs' processes: ${pids[*]:-none}"
+  if [ "${#pids[@]}" -gt 0 ]; then
+    kill -TERM "${pids[@]}" 2>/dev/null || true
+    sleep 1
+    # Whatever is still below them (looked up again: pids that exited are not reused here).
+    mapfile -t pids < <(descendants "${stepds[@]}")
+    if [ "${#pids[@]}" -gt 0 ]; then
+      kill -KILL "${pids[@]}" 2>/dev/null || true
+    fi
+  fi
+  kill -KILL "${stepds[@]}" 2>/dev/null || true
+  wait_until "slurmstepd processes to exit" 5 no_stepds || true
+}
 
 cmd_stop() {
   need_root stop
