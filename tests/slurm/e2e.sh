@@ -1,0 +1,188 @@
+#!/usr/bin/env bash
+# CI check: the demo scene rendered as a SLURM array job on a real single-node cluster
+# (tests/slurm/cluster.sh) matches a single-process tpict render of the same view and options.
+#
+#   tests/slurm/cluster.sh install          # once (root; apt-get)
+#   TESSERA_BIN=$PWD/target/release tests/slurm/e2e.sh
+#
+# Steps: start the cluster (stopped again on exit), tplan a 160x120 job, slurm/submit.sh it
+# with 4 workers, wait (wall-clock deadline), check the assembled picture and compare it with
+# `tpict` under the tests' tolerance (tests/slurm/picdiff.py: relative RMS <= 10% after
+# halving both pictures, max <= 1.5, mean luminance within 2%).
+#
+# Environment:
+#   TESSERA_BIN           folder with tplan, tpiece, tmerge, tassemble, tstat, tpict
+#                         (default: target/release of this checkout)
+#   TESSERA_RADIANCE_BIN  folder with Radiance's getinfo, pfilt, pvalue when not on PATH
+#   TESSERA_E2E_TIMEOUT   seconds allowed from submission to both jobs done (default 180)
+#   SLURM_CI_*            see tests/slurm/cluster.sh
+set -euo pipefail
+
+REPO="$(cd "$(dirname "${BASH_SOURCE[0]}")/../.." && pwd -P)"
+cd "$REPO"
+PROG="e2e.sh"
+WORKERS=4
+DEADLINE_S="${TESSERA_E2E_TIMEOUT:-180}"
+OPTS=(-vf demo/demo.vf -x 160 -y 120 -ab 1 -av .02 .02 .02)
+SCENE=demo/demo.rad
+
+now_ms() { date +%s%3N; }
+secs() { # secs START_MS [END_MS] -> "1.23"
+  local ms=$((${2:-$(now_ms)} - $1))
+  printf '%d.%02d' $((ms / 1000)) $((ms % 1000 / 10))
+}
+T_ALL="$(now_ms)"
+TIMINGS=()
+timing() { TIMINGS+=("$(printf '%-28s %7ss' "$1" "$2")"); }
+
+die() {
+  echo "$PROG: FAIL: $*" >&2
+  exit 1
+}
+
+# --- tools --------------------------------------------------------------------------------
+BIN="${TESSERA_BIN:-$REPO/target/release}"
+[ -d "$BIN" ] || die "TESSERA_BIN=$BIN is not a folder (build with: cargo build --release)"
+BIN="$(cd "$BIN" && pwd -P)"
+for t in tplan tpiece tmerge tassemble tstat tpict; do
+  [ -x "$BIN/$t" ] || die "$BIN/$t missing (build with: cargo build --release)"
+done
+export TESSERA_BIN="$BIN"
+
+if ! command -v pvalue >/dev/null; then
+  for d in "${TESSERA_RADIANCE_BIN:-}" /opt/radvenv/lib/python3.11/site-packages/pyradiance/bin; do
+    if [ -n "$d" ] && [ -x "$d/pvalue" ]; then
+      PATH="$d:$PATH"
+      break
+    fi
+  done
+fi
+for t in getinfo pfilt pvalue python3 timeout; do
+  command -v "$t" >/dev/null || die "$t not found on PATH (Radiance: set TESSERA_RADIANCE_BIN)"
+done
+# The demo scene's !xform commands find their files through RAYPATH.
+export RAYPATH="$REPO/demo:${RAYPATH:-.}"
+
+WORK="$(mktemp -d "${TMPDIR:-/tmp}/tessera-slurm-e2e.XXXXXX")"
+JOB="$WORK/job"
+PICTURE="$WORK/out/demo.hdr"
+REFERENCE="$WORK/reference.hdr"
+CLUSTER="$REPO/tests/slurm/cluster.sh"
+
+diagnostics() {
+  echo "== diagnostics (work folder kept: $WORK)" >&2
+  if [ -n "${RENDER_JOB:-}" ]; then
+    timeout 20 squeue --states=all -j "$RENDER_JOB,$ASSEMBLE_JOB" -o '%i %j %T %r %e' >&2 || true
+  fi
+  local f
+  for f in "$JOB"/logs/*.log; do
+    [ -e "$f" ] || continue
+    echo "--- $f" >&2
+    tail -n 40 "$f" >&2 || true
+  done
+  bash "$CLUSTER" status >&2 || true
+  if [ -n "${SLURM_CONF:-}" ]; then
+    f="$(dirname "$SLURM_CONF")/log/slurmctld.log"
+    if [ -s "$f" ]; then
+      echo "--- $f" >&2
+      tail -n 20 "$f" >&2 || true
+    fi
+  fi
+}
+
+on_exit() {
+  local rc=$?
+  trap - EXIT
+  [ "$rc" = 0 ] || diagnostics
+  local t
+  t="$(now_ms)"
+  bash "$CLUSTER" stop || echo "$PROG: warning: cluster.sh stop failed" >&2
+  timing "cluster stop" "$(secs "$t")"
+  timing "total" "$(secs "$T_ALL")"
+  echo "== timings"
+  printf '%s\n' "${TIMINGS[@]}"
+  if [ "$rc" = 0 ]; then
+    rm -rf "$WORK"
+    echo "$PROG: passed"
+  else
+    echo "$PROG: FAILED (exit $rc)" >&2
+  fi
+  exit "$rc"
+}
+trap on_exit EXIT
+
+# --- cluster ------------------------------------------------------------------------------
+echo "== start the SLURM cluster"
+t="$(now_ms)"
+eval "$(bash "$CLUSTER" env)"
+bash "$CLUSTER" start
+timing "cluster start" "$(secs "$t")"
+
+# --- plan and submit ------------------------------------------------------------------------
+echo "== tplan ($WORKERS workers)"
+t="$(now_ms)"
+"$BIN/tplan" --workers "$WORKERS" -o "$JOB" -- "${OPTS[@]}" "$SCENE"
+[ -d "$JOB" ] || die "tplan did not create $JOB"
+timing "tplan" "$(secs "$t")"
+
+echo "== submit"
+t_submit="$(now_ms)"
+ids="$(TESSERA_OUTPUT="$PICTURE" bash slurm/submit.sh "$JOB" "$WORKERS")" || die "slurm/submit.sh failed"
+echo "$ids"
+re='render_job=([0-9]+) assemble_job=([0-9]+)'
+[[ "$ids" =~ $re ]] || die "cannot parse submit.sh output: $ids"
+RENDER_JOB="${BASH_REMATCH[1]}"
+ASSEMBLE_JOB="${BASH_REMATCH[2]}"
+
+# --- wait ---------------------------------------------------------------------------------
+# squeue prints nothing both when the jobs are gone and when it fails (slurmctld down), so
+# its exit status decides; only "Invalid job id" (record purged) means gone.
+echo "== wait for jobs $RENDER_JOB (render array) and $ASSEMBLE_JOB (assembly), at most ${DEADLINE_S}s"
+deadline=$((SECONDS + DEADLINE_S))
+last=""
+while :; do
+  if q="$(timeout 20 squeue -h -j "$RENDER_JOB,$ASSEMBLE_JOB" -o '%i %T' 2>&1)"; then
+    [ -n "$q" ] || break
+  else
+    rc=$?
+    case "$q" in
+      *"Invalid job id"*) break ;;
+      *) die "squeue failed (exit $rc): $q" ;;
+    esac
+  fi
+  now="$(echo "$q" | tr '\n' ' ')"
+  if [ "$now" != "$last" ]; then
+    echo "  $((SECONDS - deadline + DEADLINE_S))s: $now"
+    last="$now"
+  fi
+  [ "$SECONDS" -lt "$deadline" ] || die "jobs not done after ${DEADLINE_S}s: $now"
+  sleep 1
+done
+timing "submit -> jobs done" "$(secs "$t_submit")"
+
+states="$(timeout 20 squeue --states=all -h -j "$RENDER_JOB,$ASSEMBLE_JOB" -o '%i %T %e')" ||
+  die "squeue --states=all failed"
+echo "$states"
+assemble_state="$(timeout 20 squeue --states=all -h -j "$ASSEMBLE_JOB" -o %T)" ||
+  die "squeue --states=all -j $ASSEMBLE_JOB failed"
+[ "$assemble_state" = COMPLETED ] || die "assembly job $ASSEMBLE_JOB is $assemble_state, not COMPLETED"
+while read -r id state _; do
+  [ "$state" = COMPLETED ] || die "render task $id is $state"
+done < <(timeout 20 squeue --states=all -h -j "$RENDER_JOB" -o '%i %T')
+
+echo "== assembly log"
+cat "$JOB"/logs/assemble-"$ASSEMBLE_JOB".log
+[ -s "$PICTURE" ] || die "assembled picture $PICTURE missing or empty"
+getinfo -d "$PICTURE"
+
+# --- compare with a single-process render ---------------------------------------------------
+echo "== reference: tpict ${OPTS[*]} $SCENE"
+t="$(now_ms)"
+"$BIN/tpict" "${OPTS[@]}" "$SCENE" >"$REFERENCE" || die "tpict failed"
+timing "tpict reference" "$(secs "$t")"
+
+echo "== compare"
+t="$(now_ms)"
+python3 tests/slurm/picdiff.py "$PICTURE" "$REFERENCE" ||
+  die "the SLURM picture differs from tpict's beyond the tests' tolerance"
+timing "compare" "$(secs "$t")"
