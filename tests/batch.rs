@@ -157,10 +157,9 @@ fn ambient_values_are_shared_and_not_recomputed() {
         }
         // The merged store holds every value once.
         run_ok(cmd("tmerge").arg(&job));
-        let idx: serde_json::Value = serde_json::from_str(
-            &std::fs::read_to_string(job.join("merged/store.json")).unwrap(),
-        )
-        .unwrap();
+        let idx: serde_json::Value =
+            serde_json::from_str(&std::fs::read_to_string(job.join("merged/store.json")).unwrap())
+                .unwrap();
         assert_eq!(idx["records"].as_u64().unwrap(), made);
         within_tolerance(&img, &reference, &format!("{n} workers vs tpict"));
         counts.push(made);
@@ -214,7 +213,12 @@ fn assert_logs_in_store(job: &Path) {
         };
         for rec in r.read_available().unwrap() {
             total += 1;
-            assert!(ids.contains(&rec.id), "{}: record {:?} not merged", p.display(), rec.id);
+            assert!(
+                ids.contains(&rec.id),
+                "{}: record {:?} not merged",
+                p.display(),
+                rec.id
+            );
         }
     }
     assert!(total > 0);
@@ -382,7 +386,12 @@ fn late_workers_duplicate_ids_and_merges_are_harmless() {
     assert!(m2.wait_with_output().unwrap().status.success());
     // A new job seeded with the store makes far fewer values.
     let exported = d.path().join("amb.rad");
-    run_ok(cmd("tmerge").arg(&job).arg("--export-radiance").arg(&exported));
+    run_ok(
+        cmd("tmerge")
+            .arg(&job)
+            .arg("--export-radiance")
+            .arg(&exported),
+    );
     let job2 = d.path().join("job2");
     let store: serde_json::Value =
         serde_json::from_slice(&std::fs::read(job.join("merged/store.json")).unwrap()).unwrap();
@@ -436,7 +445,10 @@ fn bad_input_and_full_disks_fail_cleanly() {
         .unwrap();
     assert!(!out.status.success());
     let err = String::from_utf8_lossy(&out.stderr);
-    assert!(err.contains("No space left") && err.contains("released"), "{err}");
+    assert!(
+        err.contains("No space left") && err.contains("released"),
+        "{err}"
+    );
     let names: Vec<String> = std::fs::read_dir(job.join("tasks"))
         .unwrap()
         .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
@@ -466,7 +478,10 @@ fn bad_input_and_full_disks_fail_cleanly() {
     // Hostile manifests are refused with the file named.
     let m = std::fs::read_to_string(job.join("manifest.json")).unwrap();
     for (from, to) in [
-        ("\"scene_file\": \"scene.rad\"", "\"scene_file\": \"../../etc/passwd\""),
+        (
+            "\"scene_file\": \"scene.rad\"",
+            "\"scene_file\": \"../../etc/passwd\"",
+        ),
         ("\"lease_seconds\": 180.0", "\"lease_seconds\": -1.0"),
         ("\"x0\": 0", "\"x0\": 1"),
         ("\"format\": \"tessera-job\"", "\"format\": \"other\""),
