@@ -64,6 +64,8 @@ pub struct Aggregate {
 pub struct JobStatus {
     /// Job directory.
     pub job: String,
+    /// Number of frames.
+    pub frame_count: usize,
     /// Per frame.
     pub frames: Vec<FrameProgress>,
     /// Tiles in all.
@@ -106,6 +108,7 @@ pub fn status(job: &JobDir) -> Result<JobStatus> {
         job: job.root().display().to_string(),
         ..JobStatus::default()
     };
+    st.frame_count = m.frames.len();
     let mut remaining_px = 0usize;
     let mut done_px = 0usize;
     for f in &m.frames {
