@@ -35,7 +35,8 @@ pub struct AmbientStats {
     pub hits: AtomicU64,
     /// New values computed, by ambient level (index clamped to 7).
     pub new_values: [AtomicU64; 8],
-    /// Nanoseconds spent computing new values (including their child rays).
+    /// Nanoseconds spent computing new level-0 values (including their child rays and the
+    /// deeper values made inside them, so nothing is counted twice).
     pub amb_nanos: AtomicU64,
     /// Hemisphere sample rays traced.
     pub sample_rays: AtomicU64,
@@ -382,9 +383,13 @@ impl Ambient {
         let _ = v;
         let lvl_idx = (lvl as usize).min(7);
         self.stats.new_values[lvl_idx].fetch_add(1, Ordering::Relaxed);
-        self.stats
-            .amb_nanos
-            .fetch_add(start.elapsed().as_nanos() as u64, Ordering::Relaxed);
+        // Deeper values are made inside a level-0 value's sampling: counting level 0 only
+        // counts each nanosecond once.
+        if lvl == 0 {
+            self.stats
+                .amb_nanos
+                .fetch_add(start.elapsed().as_nanos() as u64, Ordering::Relaxed);
+        }
         Some(CachedValue {
             id: self.cache.next_id(),
             pos: hit.point,

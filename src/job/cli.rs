@@ -143,7 +143,7 @@ struct TpieceArgs {
     #[arg(long)]
     worker_id: Option<String>,
     /// Ambient values per log write (N_A), or `auto` to adapt it at run time.
-    #[arg(long, default_value = "20", value_name = "N|auto")]
+    #[arg(long, default_value = "auto", value_name = "N|auto")]
     amb_flush: String,
     /// Render threads (default: $SLURM_CPUS_PER_TASK, else every core).
     #[arg(long)]

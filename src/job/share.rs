@@ -10,7 +10,7 @@
 //!
 //! `--amb-flush auto` adapts N_A: it keeps running means of the cost of one new value (c_v,
 //! thread-seconds) and of one sync (c_s, a log write plus reading every other log) and sets
-//! N_A = c_s / (0.02·c_v), clamped to 1..=256, so that syncing costs about 2% of the time
+//! N_A = c_s / (0.1·c_v), clamped to 1..=256, so that syncing costs at most about 10% of the time
 //! spent making values and values are shared as early as that allows.
 
 use super::heartbeat::Counters;
@@ -35,7 +35,7 @@ pub enum FlushPolicy {
 }
 
 /// Overhead share `--amb-flush auto` aims for.
-const AUTO_SHARE: f64 = 0.02;
+const AUTO_SHARE: f64 = 0.1;
 const AUTO_MAX: usize = 256;
 
 struct Readers {
@@ -81,7 +81,7 @@ impl Share {
         let writer = LogWriter::open(&job.amb_log(owner), &header, false)?;
         let first = match policy {
             FlushPolicy::Fixed(n) => n.max(1),
-            FlushPolicy::Auto => 8,
+            FlushPolicy::Auto => 1,
         };
         counters.amb_flush.store(first as u64, Ordering::Relaxed);
         let share = Arc::new(Share {

@@ -50,7 +50,7 @@ impl Default for WorkerOptions {
     fn default() -> Self {
         WorkerOptions {
             worker_id: None,
-            amb_flush: FlushPolicy::Fixed(20),
+            amb_flush: FlushPolicy::Auto,
             threads: None,
             wait: true,
             verbose: true,
