@@ -277,6 +277,8 @@ fn killed_workers_lose_nothing() {
                 );
             }
         }
+        // A merge while workers run is safe (its result is checked below, after the final one).
+        run_ok(cmd("tmerge").arg(&job));
         // Survivors finish the job, re-claiming what the dead held.
         let deadline = Instant::now() + Duration::from_secs(120);
         let mut all_dead = true;
@@ -543,5 +545,41 @@ fn animation_frames_are_planned_and_assembled() {
         let img = read_picture(&d.path().join(format!("f{f:02}.hdr"))).unwrap();
         assert_eq!(img.header.frame, Some(f));
         assert!(img.pixels_f64().iter().any(|p| p[0] > 0.0));
+    }
+}
+
+mod manifest_fuzz {
+    use proptest::prelude::*;
+    use tessera::job::manifest::Manifest;
+
+    fn good() -> String {
+        let d = tempfile::tempdir().unwrap();
+        let job = d.path().join("job");
+        super::plan(
+            &job,
+            &["--tiles", "5"],
+            &super::view_args(16, 12, &["-ab", "0"]),
+        );
+        std::fs::read_to_string(job.join("manifest.json")).unwrap()
+    }
+
+    proptest! {
+        #![proptest_config(ProptestConfig::with_cases(300))]
+        /// Hostile manifests (random byte edits of a valid one) never panic the loader: they
+        /// either fail to parse, fail validation, or are valid.
+        #[test]
+        fn mutated_manifests_never_panic(edits in proptest::collection::vec((any::<usize>(), any::<u8>()), 1..8)) {
+            thread_local!(static GOOD: String = good());
+            let mut b = GOOD.with(|g| g.clone().into_bytes());
+            for (pos, byte) in edits {
+                let i = pos % b.len();
+                b[i] = byte;
+            }
+            if let Ok(text) = String::from_utf8(b) {
+                if let Ok(m) = serde_json::from_str::<Manifest>(&text) {
+                    let _ = m.validate();
+                }
+            }
+        }
     }
 }

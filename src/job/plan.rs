@@ -36,7 +36,7 @@ pub struct TileRect {
 impl TileRect {
     /// Number of pixels.
     pub fn area(&self) -> usize {
-        self.w * self.h
+        self.w.saturating_mul(self.h)
     }
 }
 
@@ -169,32 +169,43 @@ pub fn plan_fixed(width: usize, height: usize, tw: usize, th: usize) -> Vec<Tile
     out
 }
 
+/// Most pixels in a planned frame (16384 × 16384).
+pub const MAX_PIXELS: usize = 1 << 28;
+
 /// Check that `tiles` cover the `width × height` picture exactly once; the error names the
 /// first problem.
 pub fn check_cover(width: usize, height: usize, tiles: &[TileRect]) -> Result<(), String> {
-    let total: usize = tiles.iter().map(|t| t.area()).sum();
+    if width.checked_mul(height).is_none_or(|a| a > MAX_PIXELS) {
+        return Err(format!("{width}x{height} pixels is more than {MAX_PIXELS}"));
+    }
+    let total = tiles.iter().fold(0usize, |a, t| a.saturating_add(t.area()));
     if total != width * height {
         return Err(format!(
             "tiles cover {total} pixels, the picture has {}",
             width * height
         ));
     }
-    // Equal areas with no overlap imply an exact cover; overlap is checked row span by row
-    // span on a coverage bitmap.
-    let mut seen = vec![false; width * height];
+    // Equal areas with no overlap imply an exact cover; overlap is checked on a coverage
+    // bitmap (one bit per pixel).
+    let mut seen = vec![0u64; (width * height).div_ceil(64)];
     for (i, t) in tiles.iter().enumerate() {
-        if t.w == 0 || t.h == 0 || t.x0 + t.w > width || t.y0 + t.h > height {
+        if t.w == 0
+            || t.h == 0
+            || t.x0.saturating_add(t.w) > width
+            || t.y0.saturating_add(t.h) > height
+        {
             return Err(format!(
                 "tile {i} ({}x{} at {},{}) is empty or outside the {width}x{height} picture",
                 t.w, t.h, t.x0, t.y0
             ));
         }
         for y in t.y0..t.y0 + t.h {
-            for s in &mut seen[y * width + t.x0..y * width + t.x0 + t.w] {
-                if *s {
+            for p in y * width + t.x0..y * width + t.x0 + t.w {
+                let (word, bit) = (p / 64, 1u64 << (p % 64));
+                if seen[word] & bit != 0 {
                     return Err(format!("tile {i} overlaps another tile at row {y}"));
                 }
-                *s = true;
+                seen[word] |= bit;
             }
         }
     }

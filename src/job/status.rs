@@ -35,6 +35,9 @@ pub struct Aggregate {
     pub workers: usize,
     /// Workers whose heartbeat is recent and who have not ended.
     pub live: usize,
+    /// Workers that have not ended but whose heartbeat is older than the lease (dead, or
+    /// on a host whose clock disagrees: informational).
+    pub stale: usize,
     /// Tiles rendered.
     pub tiles_done: u64,
     /// ΣT_spec.
@@ -250,8 +253,8 @@ pub fn render_text(st: &JobStatus) -> String {
     let a = &st.aggregate;
     let _ = writeln!(
         s,
-        "workers: {} seen, {} live; wall {:.2} s",
-        a.workers, a.live, a.wall_seconds
+        "workers: {} seen, {} live, {} stale; wall {:.2} s",
+        a.workers, a.live, a.stale, a.wall_seconds
     );
     let _ = writeln!(
         s,
