@@ -44,6 +44,9 @@ pub struct CachedValue {
     pub gpos: [f64; 2],
     /// Rotational gradient about u and v (relative to `val`).
     pub gdir: [f64; 2],
+    /// Light-leak flags: bit s set when a wall stands inside the value's reach in azimuth
+    /// sector s (32 sectors of the (u, n × u) frame; see `compute::corral_sector`).
+    pub corral: u32,
     /// Value (mean incoming radiance over the cosine-weighted hemisphere).
     pub val: Color,
 }
@@ -210,7 +213,7 @@ impl CachedValue {
             rad: [f(self.rad[0]), f(self.rad[1])],
             gpos: [f(self.gpos[0]), f(self.gpos[1])],
             gdir: [f(self.gdir[0]), f(self.gdir[1])],
-            corral: 0,
+            corral: self.corral,
             val: [f(self.val.x), f(self.val.y), f(self.val.z)],
         }
     }
@@ -229,6 +232,7 @@ impl CachedValue {
             rad: [r.rad[0] as f64, r.rad[1] as f64],
             gpos: [r.gpos[0] as f64, r.gpos[1] as f64],
             gdir: [r.gdir[0] as f64, r.gdir[1] as f64],
+            corral: r.corral,
             val: Color::new(r.val[0] as f64, r.val[1] as f64, r.val[2] as f64),
         }
     }

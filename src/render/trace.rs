@@ -454,6 +454,21 @@ impl<'a> Tracer<'a> {
         }
     }
 
+    /// True when an opaque surface blocks the segment from `org` along the unit `dir` within
+    /// `dist` (transparent surfaces are crossed as by shadow rays): the ambient cache's
+    /// light-leak test.
+    pub fn occluded(
+        &self,
+        org: DVec3,
+        dir: DVec3,
+        dist: f64,
+        am: [Option<MatId>; MAX_ANTIMATTER],
+        rng: &mut Sampler,
+    ) -> bool {
+        let (t, _) = self.shadow_walk(org, dir, dist, am, rng, |_| false);
+        t.max_element() <= 0.0
+    }
+
     /// Walk a shadow ray through transparent surfaces (multiplying their transmission) until
     /// `is_target` accepts a hit. Returns the transmission so far and that hit; or the
     /// transmission and None when the ray leaves the scene (zero when blocked first).
