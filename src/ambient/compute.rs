@@ -169,10 +169,12 @@ pub fn corral_target(p: DVec3, n: DVec3, pv: DVec3, nv: DVec3, offset: f64) -> D
             let sq = disc.sqrt();
             // Numerically stable pair of roots.
             let q = -0.5 * (qb + qb.signum() * sq);
-            roots = [q / qa, if q != 0.0 { qc / q } else { f64::NAN }];
-            if q == 0.0 {
-                roots[1] = -qb / (2.0 * qa);
-            }
+            // q vanishes only with qb = disc = 0 (then qc = 0 too): a double root at 0.
+            roots = if q != 0.0 {
+                [q / qa, qc / q]
+            } else {
+                [0.0, 0.0]
+            };
         }
     } else if qb.abs() > 1e-300 {
         roots[0] = -qc / qb;
