@@ -412,6 +412,12 @@ pub struct AmbientReport {
     pub sample_rays: u64,
     /// Seconds spent computing new values (the seed paper's T_amb, summed over threads).
     pub ambient_seconds: f64,
+    /// New values with light-leak (corral) flags.
+    pub corral_values: u64,
+    /// Light-leak test rays traced at lookups.
+    pub leak_tests: u64,
+    /// Cached values rejected because a wall blocked the leak test.
+    pub leak_rejects: u64,
 }
 
 impl AmbientReport {
@@ -431,6 +437,9 @@ impl AmbientReport {
             cached_values: cached,
             sample_rays: s.sample_rays.load(Ordering::Relaxed),
             ambient_seconds: s.amb_nanos.load(Ordering::Relaxed) as f64 * 1e-9,
+            corral_values: s.corral_values.load(Ordering::Relaxed),
+            leak_tests: s.leak_tests.load(Ordering::Relaxed),
+            leak_rejects: s.leak_rejects.load(Ordering::Relaxed),
         }
     }
 }
