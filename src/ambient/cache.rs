@@ -18,6 +18,12 @@ use std::sync::{OnceLock, RwLock};
 pub trait ValueSink: Send + Sync {
     /// Called once per new value, from the thread that computed it.
     fn accept(&self, v: &CachedValue);
+    /// Called when a lookup found no value, before a new one is computed: a sink that
+    /// shares values with other processes may insert theirs now; returns how many it added
+    /// (the lookup is then retried).
+    fn refresh(&self) -> u64 {
+        0
+    }
 }
 
 const SHARDS: usize = 64;
@@ -96,6 +102,11 @@ impl AmbientCache {
     /// Send every value this process computes from now on to `sink` (set once).
     pub fn set_sink(&self, sink: Box<dyn ValueSink>) -> bool {
         self.sink.set(sink).is_ok()
+    }
+
+    /// Ask the sink for values other processes made (see [`ValueSink::refresh`]).
+    pub fn refresh(&self) -> u64 {
+        self.sink.get().map(|s| s.refresh()).unwrap_or(0)
     }
 
     /// The id origin of values computed by this process.

@@ -322,9 +322,16 @@ impl Ambient {
         }
         self.stats.lookups.fetch_add(1, Ordering::Relaxed);
         let am = hit.antimatter;
-        let found = self.interpolate(hit.point, n, ray.amb_level, ray.weight, &mut |o, d, t| {
-            tr.occluded(o, d, t, am, rng)
-        });
+        let mut found =
+            self.interpolate(hit.point, n, ray.amb_level, ray.weight, &mut |o, d, t| {
+                tr.occluded(o, d, t, am, rng)
+            });
+        // Before computing a value, take what other processes have shared meanwhile.
+        if found.is_none() && self.cache.refresh() > 0 {
+            found = self.interpolate(hit.point, n, ray.amb_level, ray.weight, &mut |o, d, t| {
+                tr.occluded(o, d, t, am, rng)
+            });
+        }
         if let Some(v) = found {
             self.stats.hits.fetch_add(1, Ordering::Relaxed);
             return Outcome::Value(v);

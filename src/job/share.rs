@@ -5,8 +5,10 @@
 //! values. At every write, and at least twice per heartbeat interval, it reads the records
 //! other workers have appended since it last looked (each log from the offset it reached:
 //! whole CRC-valid records only, a torn tail is read later) and inserts those it has not seen
-//! (deduplicated by value id). A worker starting late first loads the merged store and then
-//! only the log tails after the offsets the store includes.
+//! (deduplicated by value id). Before it computes a new value (a cache lookup found none), it
+//! also reads the logs it knows once more and retries the lookup, so a value another worker
+//! wrote a moment ago is used instead of computed again. A worker starting late first loads
+//! the merged store and then only the log tails after the offsets the store includes.
 //!
 //! `--amb-flush auto` adapts N_A: it keeps running means of the cost of one new value (c_v,
 //! thread-seconds) and of one sync (c_s, a log write plus reading every other log) and sets
@@ -143,6 +145,12 @@ impl Share {
     /// lock (otherwise a sync already running elsewhere makes this a no-op). Returns the
     /// number of new values inserted.
     pub fn sync_in(&self, wait: bool) -> u64 {
+        self.read_logs(wait, true)
+    }
+
+    /// Like [`sync_in`](Self::sync_in); `list` also looks for new logs (a directory listing),
+    /// otherwise only the logs already open are read (one read per log).
+    fn read_logs(&self, wait: bool, list: bool) -> u64 {
         let mut rd = if wait {
             self.readers.lock().unwrap_or_else(|e| e.into_inner())
         } else {
@@ -152,7 +160,12 @@ impl Share {
             }
         };
         let rd = &mut *rd;
-        if let Ok(dir) = std::fs::read_dir(self.job.amb()) {
+        let dir = if list {
+            std::fs::read_dir(self.job.amb()).ok()
+        } else {
+            None
+        };
+        if let Some(dir) = dir {
             for e in dir.flatten() {
                 let Some(name) = e.file_name().to_str().map(String::from) else {
                     continue;
@@ -278,6 +291,13 @@ impl Share {
 struct SinkRef(Arc<Share>);
 
 impl ValueSink for SinkRef {
+    fn refresh(&self) -> u64 {
+        let t = Instant::now();
+        let n = self.0.read_logs(false, false);
+        super::heartbeat::add_time(&self.0.counters.sync_ns, t.elapsed());
+        n
+    }
+
     fn accept(&self, v: &CachedValue) {
         let s = &self.0;
         let due = {
