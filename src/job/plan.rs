@@ -40,9 +40,12 @@ impl TileRect {
     }
 }
 
-/// Default number of tiles per expected worker (Radiance's own notes measured 16% idle time
-/// with 5 tiles per CPU).
-pub const TILES_PER_WORKER: usize = 20;
+/// Default `tiles` per expected worker (the plan then has about 1.4 × 80 tiles per worker,
+/// fewer where the 64-pixel floor applies). Radiance's own notes measured 16% idle time with
+/// 5 tiles per CPU; replaying the tile costs of a 16-worker `-ab 2` job of the demo scene
+/// (whose mirror and glass make a few tiles cost 20× the mean), `bench/tilesim` gives 83%
+/// efficiency at 16 workers with 40 and 99% with 80 (docs/benchmarks.md).
+pub const TILES_PER_WORKER: usize = 80;
 
 /// Smallest planned tile area in pixels (tiny tiles cost more to claim and write than to
 /// render).

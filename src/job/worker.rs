@@ -275,21 +275,41 @@ fn work(
             }
         }
         if mine.is_none() {
-            let states = task::scan(tasks_dir)
+            // A directory listing made while other workers rename entries may miss an entry
+            // (POSIX leaves renamed entries unspecified during readdir): list again before
+            // concluding that entries are really missing.
+            let mut states = task::scan(tasks_dir)
                 .with_context(|| format!("cannot list {}", tasks_dir.display()))?;
-            if states.len() < all.len() {
+            let missing = |st: &std::collections::HashMap<String, TaskState>| {
+                all.iter().filter(|(n, _, _)| !st.contains_key(n)).count()
+            };
+            for _ in 0..5 {
+                if missing(&states) == 0 {
+                    break;
+                }
+                std::thread::sleep(Duration::from_millis(20));
+                states = task::scan(tasks_dir)
+                    .with_context(|| format!("cannot list {}", tasks_dir.display()))?;
+            }
+            let lost = missing(&states);
+            if lost > 0 {
                 bail!(
-                    "{}: {} of {} task entries are missing (was the job directory edited?)",
+                    "{}: {lost} of {} task entries are missing (was the job directory edited?)",
                     tasks_dir.display(),
-                    all.len() - states.len(),
                     all.len()
                 );
             }
-            if states.values().all(|s| *s == TaskState::Done) {
+            if all
+                .iter()
+                .all(|(n, _, _)| states.get(n) == Some(&TaskState::Done))
+            {
                 break;
             }
             // A todo entry can reappear only when a worker released its tile.
-            if states.values().any(|s| *s == TaskState::Todo) {
+            if all
+                .iter()
+                .any(|(n, _, _)| states.get(n) == Some(&TaskState::Todo))
+            {
                 cursor = 0;
                 continue;
             }
