@@ -13,31 +13,12 @@ Installs matplotlib and numpy into a venv ($TESSERA_VENV, default
 ~/.cache/tessera-bench-venv) when the running Python lacks them.
 """
 import os
-import subprocess
 import sys
 
-VENV = os.environ.get("TESSERA_VENV", os.path.expanduser("~/.cache/tessera-bench-venv"))
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+from plotenv import ensure_deps  # noqa: E402
 
-
-def ensure_deps():
-    try:
-        import matplotlib  # noqa: F401
-        import numpy  # noqa: F401
-        return
-    except ImportError:
-        pass
-    py = os.path.join(VENV, "bin", "python")
-    if os.path.realpath(sys.executable) == os.path.realpath(py) and os.environ.get("_TESSERA_REEXEC"):
-        sys.exit("plot_ambient: matplotlib/numpy still missing in " + VENV)
-    if not os.path.exists(py):
-        print(f"plot_ambient: creating venv {VENV}", file=sys.stderr)
-        subprocess.check_call([sys.executable, "-m", "venv", VENV])
-    subprocess.check_call([py, "-m", "pip", "install", "-q", "matplotlib", "numpy"])
-    os.environ["_TESSERA_REEXEC"] = "1"
-    os.execv(py, [py] + sys.argv)
-
-
-ensure_deps()
+ensure_deps("plot_ambient", ["matplotlib", "numpy"])
 
 import csv  # noqa: E402
 import glob  # noqa: E402

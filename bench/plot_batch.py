@@ -12,30 +12,13 @@ the running Python lacks it.
 """
 import csv
 import os
-import subprocess
 import sys
 from collections import defaultdict
 
-VENV = os.environ.get("TESSERA_VENV", os.path.expanduser("~/.cache/tessera-bench-venv"))
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+from plotenv import ensure_deps  # noqa: E402
 
-
-def ensure_deps():
-    try:
-        import matplotlib  # noqa: F401
-        return
-    except ImportError:
-        pass
-    py = os.path.join(VENV, "bin", "python")
-    if os.path.realpath(sys.executable) == os.path.realpath(py) and os.environ.get("_TESSERA_REEXEC"):
-        sys.exit("plot_batch: matplotlib still missing in " + VENV)
-    if not os.path.exists(py):
-        subprocess.check_call([sys.executable, "-m", "venv", VENV])
-    subprocess.check_call([py, "-m", "pip", "install", "-q", "matplotlib"])
-    os.environ["_TESSERA_REEXEC"] = "1"
-    os.execv(py, [py] + sys.argv)
-
-
-ensure_deps()
+ensure_deps("plot_batch", ["matplotlib"])
 import matplotlib  # noqa: E402
 
 matplotlib.use("Agg")
