@@ -762,7 +762,7 @@ fn report_line(p: &RenderProgress, pct: f64, start: Instant, amb: Option<&Ambien
     );
     if let Some(a) = amb {
         let s = &a.stats;
-        let made: u64 = s.new_values.iter().map(|v| v.load(Ordering::Relaxed)).sum();
+        let made = s.made();
         line.push_str(&format!(
             "; ambient: {} lookups, {} interpolated, {} new values, {:.1}s making them",
             s.lookups.load(Ordering::Relaxed),

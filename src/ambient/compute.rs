@@ -48,6 +48,16 @@ pub struct AmbientStats {
     pub leak_rejects: AtomicU64,
 }
 
+impl AmbientStats {
+    /// New values computed so far, all levels.
+    pub fn made(&self) -> u64 {
+        self.new_values
+            .iter()
+            .map(|v| v.load(Ordering::Relaxed))
+            .sum()
+    }
+}
+
 /// Number of azimuth sectors of the light-leak ("corral") flags: one bit each in a `u32`.
 pub const CORRAL_SECTORS: u32 = 32;
 

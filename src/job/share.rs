@@ -244,7 +244,7 @@ impl Share {
         };
         *sc = Some(c_s);
         let s = &self.ambient.stats;
-        let made: u64 = s.new_values.iter().map(|v| v.load(Ordering::Relaxed)).sum();
+        let made = s.made();
         if made < 4 {
             return;
         }

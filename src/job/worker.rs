@@ -101,12 +101,7 @@ impl Beat {
         r.amb_flush = c.amb_flush.load(Ordering::Relaxed);
         r.rays = c.rays.load(Ordering::Relaxed);
         if let Some(a) = &self.ambient {
-            r.new_values = a
-                .stats
-                .new_values
-                .iter()
-                .map(|v| v.load(Ordering::Relaxed))
-                .sum();
+            r.new_values = a.stats.made();
             r.t_amb = secs(&a.stats.amb_nanos) / self.threads as f64;
         }
         r.t_spec = (r.t_render - r.t_amb).max(0.0);
@@ -383,16 +378,9 @@ fn work(
             frame: fp.index,
             irradiance: m.options.params.i,
         };
-        let amb_before = ambient.as_ref().map(|a| {
-            (
-                a.stats
-                    .new_values
-                    .iter()
-                    .map(|v| v.load(Ordering::Relaxed))
-                    .sum::<u64>(),
-                a.stats.amb_nanos.load(Ordering::Relaxed),
-            )
-        });
+        let amb_before = ambient
+            .as_ref()
+            .map(|a| (a.stats.made(), a.stats.amb_nanos.load(Ordering::Relaxed)));
         let cpu0 = crate::tpict::process_cpu_seconds().unwrap_or(0.0);
         let t0 = Instant::now();
         let progress = RenderProgress::default();
@@ -413,12 +401,7 @@ fn work(
         counters.rays.fetch_add(rays, Ordering::Relaxed);
         let (new_values, amb_secs) = match (ambient, amb_before) {
             (Some(a), Some((n0, t0))) => (
-                a.stats
-                    .new_values
-                    .iter()
-                    .map(|v| v.load(Ordering::Relaxed))
-                    .sum::<u64>()
-                    - n0,
+                a.stats.made() - n0,
                 (a.stats.amb_nanos.load(Ordering::Relaxed) - t0) as f64 * 1e-9,
             ),
             _ => (0, 0.0),
