@@ -70,6 +70,33 @@ fn furnace_matches_the_analytic_series() {
     }
 }
 
+/// Without a cache (`-aa 0`) a deeper bounce takes one sample per hit (path tracing, as
+/// rpict does): `-ab 2` stays unbiased and costs about twice the rays of `-ab 1`, not
+/// `-ad` times more.
+#[test]
+fn uncached_deeper_bounces_are_path_traced() {
+    let t = furnace_dir();
+    let mut runs = Vec::new();
+    for ab in ["1", "2", "3"] {
+        let mut args: Vec<&str> = VIEW.to_vec();
+        args.extend(["-ab", ab, "-aa", "0", "-ad", "1024", "-as", "0", "-ps", "1"]);
+        let (m, st) = mean_red(t.path(), &args);
+        let rays = st["ambient"]["sample_rays"].as_u64().unwrap();
+        let k: i32 = ab.parse().unwrap();
+        let want = furnace_expected(k);
+        eprintln!("-ab {ab} -aa 0: {m:.5} vs {want:.5}, {rays} ambient rays");
+        assert!(
+            (m - want).abs() / want < 0.02,
+            "-ab {ab} -aa 0: {m} vs {want}"
+        );
+        runs.push(rays as f64);
+    }
+    // Three quarters of the first bounce's rays hit the diffuse shell and go on once each.
+    let (r1, r2, r3) = (runs[0], runs[1], runs[2]);
+    assert!(r2 > 1.5 * r1 && r2 < 2.0 * r1, "{runs:?}");
+    assert!(r3 > r2 + 0.4 * r1 && r3 < r2 + 0.8 * r1, "{runs:?}");
+}
+
 #[test]
 fn cache_is_used_and_counted() {
     let t = furnace_dir();

@@ -468,6 +468,48 @@ impl Ambient {
         blocked
     }
 
+    /// The weight of a new value at ambient level `lvl` for a ray of weight `rweight`, and
+    /// its hemisphere divisions `(wt, M, N)`: M rings in sin²θ, N columns in φ, M·N ≈ -ad·wt.
+    ///
+    /// Cached: `wt = 0.5^lvl` (or `1.25·rweight` when the ray weighs less than a tenth of
+    /// that), at least 4 rings (52 cells, about Radiance's 7×7). Uncached (`-aa 0`): `wt` is
+    /// the ray's weight, so a deeper bounce, whose rays weigh about 0.5/cells, takes a single
+    /// sample; the cell count is also capped so that each sample ray keeps a weight of at
+    /// least `-lw` (`cells ≤ 0.5·rweight/lw`): beyond that Radiance traces no more rays
+    /// either (its ray count stops growing near `-ad 5000` at `-lw 1e-4`).
+    pub fn divisions(&self, lvl: u32, rweight: f64, cached: bool, lw: f64) -> (f64, usize, usize) {
+        if cached {
+            let mut wt = AVGREFL.powi(lvl as i32);
+            if rweight < 0.1 * wt {
+                wt = 1.25 * rweight;
+            }
+            let total = (self.ad * wt).max(1.0);
+            let m = ((total / PI).sqrt().round() as usize).max(4);
+            return (wt, m, (PI * m as f64).round() as usize);
+        }
+        let total = (self.ad * rweight).max(1.0);
+        // The most cells whose rays still weigh at least -lw (at least one: a lighter ray is
+        // cut by spawn's own -lw test, or rouletted with -lr < 0).
+        let cap = if lw > 0.0 {
+            (AVGREFL * rweight / lw).floor().max(1.0)
+        } else {
+            f64::INFINITY
+        };
+        let cols = |m: usize| {
+            if m == 1 {
+                // One ring: up to three columns, a single sample when that is all it may take.
+                (total.min(cap).round() as usize).clamp(1, 3)
+            } else {
+                (PI * m as f64).round() as usize
+            }
+        };
+        let mut m = ((total / PI).sqrt().round() as usize).max(1);
+        while m > 1 && (m * cols(m)) as f64 > cap {
+            m -= 1;
+        }
+        (rweight, m, cols(m))
+    }
+
     /// Compute a new value at a hit by sampling the hemisphere around `n`.
     fn sample(
         &self,
@@ -479,13 +521,16 @@ impl Ambient {
     ) -> Option<CachedValue> {
         let start = Instant::now();
         let lvl = ray.amb_level;
-        let mut wt = AVGREFL.powi(lvl as i32);
-        if ray.weight < 0.1 * wt {
-            wt = 1.25 * ray.weight;
-        }
-        let total = (self.ad * wt).max(1.0);
-        let m = ((total / PI).sqrt().round() as usize).max(if self.aa > FTINY { 4 } else { 1 });
-        let nphi = ((PI * m as f64).round() as usize).max(1);
+        let cached = self.aa > FTINY;
+        let (wt, m, nphi) = self.divisions(lvl, ray.weight, cached, tr.params.lw);
+        // Without a cache each sample ray stands for its share of this one estimate, so it
+        // carries the ray's weight over the cell count (deeper bounces then take one sample:
+        // path tracing); a cached value is shared by many rays and its samples carry AVGREFL.
+        let coef = if cached {
+            AVGREFL
+        } else {
+            AVGREFL / (m * nphi) as f64
+        };
         let u0 = any_perpendicular(n);
         let v0 = n.cross(u0);
         let ncells = m * nphi;
@@ -499,7 +544,7 @@ impl Ambient {
             let ct = (1.0 - s2).max(0.0).sqrt();
             let phi = 2.0 * PI * (k as f64 + r2) / nphi as f64;
             let dir = n * ct + (u0 * phi.cos() + v0 * phi.sin()) * st;
-            let mut r = tr.spawn(ray, hit, dir, RayKind::Ambient, Color::splat(AVGREFL))?;
+            let mut r = tr.spawn(ray, hit, dir, RayKind::Ambient, Color::splat(coef))?;
             r.amb_level = lvl + 1;
             traced += 1;
             let (c, t) = tr.trace_dist(&r, rng);
@@ -1116,5 +1161,41 @@ mod tests {
         amb.use_corral = false;
         let mut never = |_: DVec3, _: DVec3, _: f64| -> bool { panic!("asked") };
         assert!(amb.interpolate(east, Z, 0, 1.0, &mut never).is_some());
+    }
+
+    #[test]
+    fn divisions_follow_weight_and_lw() {
+        let params = RenderParams {
+            ab: 2,
+            ad: 1024,
+            ..RenderParams::default()
+        };
+        let amb = Ambient::new(&params, 10.0, 1).unwrap();
+        let cells = |(_, m, n): (f64, usize, usize)| m * n;
+        // Cached: 0.5^level, at least 4 rings, whatever the ray's weight above a tenth of it.
+        let (wt, m, _) = amb.divisions(0, 1.0, true, 1e-4);
+        assert_eq!((wt, m), (1.0, 18));
+        assert!((cells(amb.divisions(1, 0.4, true, 1e-4)) as f64 - 512.0).abs() < 40.0);
+        assert_eq!(amb.divisions(3, 1e-6, true, 1e-4).1, 4);
+        // Uncached: the ray's weight; a first-bounce ray (0.5/cells) takes one sample.
+        let c0 = cells(amb.divisions(0, 1.0, false, 1e-4));
+        assert!((c0 as f64 - 1024.0).abs() < 60.0, "{c0}");
+        assert_eq!(cells(amb.divisions(1, 0.5 / c0 as f64, false, 1e-4)), 1);
+        // Every sample ray keeps a weight of at least -lw: 0.5·w/cells >= lw.
+        for w in [1.0, 0.3, 0.05, 0.01] {
+            for lw in [1e-4, 1e-3, 2e-3] {
+                let c = cells(amb.divisions(0, w, false, lw)) as f64;
+                assert!(c == 1.0 || 0.5 * w / c >= lw, "w {w} lw {lw}: {c} cells");
+            }
+        }
+        // -lw 0: no cap.
+        let big = RenderParams {
+            ab: 1,
+            ad: 20000,
+            ..RenderParams::default()
+        };
+        let amb = Ambient::new(&big, 10.0, 1).unwrap();
+        assert!(cells(amb.divisions(0, 1.0, false, 0.0)) > 19000);
+        assert!(cells(amb.divisions(0, 1.0, false, 1e-4)) <= 5000);
     }
 }
