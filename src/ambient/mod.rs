@@ -1,6 +1,7 @@
 //! Indirect irradiance ("ambient") values and their stores.
 //!
 //! - [`compute`]: new values (hemisphere sampling, gradients, radii) and interpolation.
+//! - [`hessian`]: the irradiance Hessian that gives a new value its anisotropic radii.
 //! - [`cache`]: the in-memory cache shared by render threads.
 //! - [`AmbRecord`]: one cached irradiance value, as Radiance's AMBVAL plus a stable id.
 //! - [`radfile`]: Radiance's own ambient file format (`-af`, read by `lookamb`).
@@ -9,6 +10,7 @@
 pub mod cache;
 pub mod compute;
 pub mod fingerprint;
+pub mod hessian;
 pub mod log;
 pub mod radfile;
 
