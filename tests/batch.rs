@@ -314,6 +314,21 @@ fn killed_workers_lose_nothing() {
             })
             .count();
         assert_eq!(tiles as u64, stat(&job)["tiles"].as_u64().unwrap());
+        // Every task has exactly one state entry, and it is `done`: no tile was finished
+        // twice into two states, none was left claimed or to do.
+        let mut entries = std::collections::HashMap::<String, Vec<String>>::new();
+        for e in std::fs::read_dir(job.join("tasks")).unwrap() {
+            let name = e.unwrap().file_name().to_string_lossy().into_owned();
+            if let Some((task, state)) = name.split_once('.') {
+                if task.starts_with('f') {
+                    entries.entry(task.into()).or_default().push(state.into());
+                }
+            }
+        }
+        assert_eq!(entries.len() as u64, tiles as u64, "round {round}");
+        for (task, states) in &entries {
+            assert_eq!(states, &["done"], "round {round}: task {task}");
+        }
         run_ok(cmd("tmerge").arg(&job));
         assert_logs_in_store(&job);
         let _ = std::fs::remove_dir_all(&job);
@@ -342,13 +357,37 @@ fn stale_claims_are_reclaimed_after_the_lease() {
         r#"{"worker_id":"ghost","owner":"ghost.0000dead","host":"x","pid":1,"state":"running","beat":7,"started_unix":0,"updated_unix":4102444800,"threads":1,"tiles_done":0,"t_render":0,"t_spec":0,"t_amb":0,"t_idle":0,"t_sync":0,"new_values":0,"shared_in":0,"shared_out":0,"amb_flush":0,"rays":0,"cpu_seconds":0,"error":null}"#,
     )
     .unwrap();
+    // A worker that died in 1970 is stale; the ghost, whose record is dated 2100 (a host
+    // whose clock disagrees), counts as live for tstat, which is informational only.
+    let ghost = std::fs::read_to_string(job.join("workers/ghost.0000dead.json")).unwrap();
+    std::fs::write(
+        job.join("workers/old.00000001.json"),
+        ghost
+            .replace("ghost.0000dead", "old.00000001")
+            .replace("4102444800", "1"),
+    )
+    .unwrap();
+    let st = stat(&job);
+    assert_eq!(st["aggregate"]["stale"], 1, "{st}");
+    assert_eq!(st["aggregate"]["live"], 1, "{st}");
+    assert_eq!(st["frames"][0]["claimed"], 1, "{st}");
     let t = Instant::now();
-    let out = worker(&job, "live", &[]).output().unwrap();
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
+    let mut live = worker(&job, "live", &[])
+        .stderr(Stdio::null())
+        .spawn()
+        .unwrap();
+    // A staleness test that trusted the ghost's clock (year 2100) would wait forever.
+    loop {
+        if let Some(st) = live.try_wait().unwrap() {
+            assert!(st.success());
+            break;
+        }
+        if t.elapsed() > Duration::from_secs(60) {
+            kill9(&mut live);
+            panic!("the worker did not re-claim the ghost's tile within 60 s");
+        }
+        std::thread::sleep(Duration::from_millis(20));
+    }
     // Its clock in the future does not matter: staleness is judged by the lease only.
     assert!(t.elapsed() >= Duration::from_millis(500));
     assert!(tasks.join("f00000-t00000.done").exists());
@@ -458,7 +497,7 @@ fn bad_input_and_full_disks_fail_cleanly() {
     assert!(names.iter().all(|n| n.ends_with(".todo")), "{names:?}");
     // The job still completes.
     run_workers(&job, 1, &[]);
-    assemble(&job);
+    let full = assemble(&job);
     // Missing tiles: tassemble names them and fails; --partial fills black.
     std::fs::remove_file(job.join("tiles/f00000-t00001.tile")).unwrap();
     let out = cmd("tassemble")
@@ -470,13 +509,42 @@ fn bad_input_and_full_disks_fail_cleanly() {
     assert!(!out.status.success());
     assert!(String::from_utf8_lossy(&out.stderr).contains("f00000-t00001"));
     assert!(!d.path().join("x.hdr").exists());
-    run_ok(
-        cmd("tassemble")
-            .arg(&job)
-            .arg("--partial")
-            .arg("-o")
-            .arg(d.path().join("x.hdr")),
+    let out = cmd("tassemble")
+        .arg(&job)
+        .arg("--partial")
+        .arg("-o")
+        .arg(d.path().join("x.hdr"))
+        .output()
+        .unwrap();
+    assert!(out.status.success());
+    assert!(String::from_utf8_lossy(&out.stderr).contains("f00000-t00001"));
+    // The missing tile is black and named in the header; the rest is the full picture.
+    let part = read_picture(&d.path().join("x.hdr")).unwrap();
+    let head = std::fs::read(d.path().join("x.hdr")).unwrap();
+    assert!(String::from_utf8_lossy(&head[..head.len().min(4096)])
+        .contains("TESSERA_MISSING_TILES=f00000-t00001"));
+    let manifest: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(job.join("manifest.json")).unwrap()).unwrap();
+    let rect = manifest
+        .pointer("/frames/0/tiles/1")
+        .or_else(|| manifest.pointer("/tiles/1"))
+        .cloned()
+        .expect("tile 1 in the manifest");
+    let (x0, y0, w, h) = (
+        rect["x0"].as_u64().unwrap() as usize,
+        rect["y0"].as_u64().unwrap() as usize,
+        rect["w"].as_u64().unwrap() as usize,
+        rect["h"].as_u64().unwrap() as usize,
     );
+    assert!(w > 0 && h > 0);
+    for (i, p) in part.pixels.iter().enumerate() {
+        let (x, y) = (i % part.width, i / part.width);
+        if x >= x0 && x < x0 + w && y >= y0 && y < y0 + h {
+            assert_eq!(p, &[0.0; 3], "pixel ({x}, {y}) of the missing tile");
+        } else {
+            assert_eq!(p, &full.pixels[i], "pixel ({x}, {y})");
+        }
+    }
     // Hostile manifests are refused with the file named.
     let m = std::fs::read_to_string(job.join("manifest.json")).unwrap();
     for (from, to) in [

@@ -156,8 +156,12 @@ pub fn status(job: &JobDir) -> Result<JobStatus> {
             continue;
         };
         a.workers += 1;
-        if (r.state == "running" || r.state == "idle") && now - r.updated_unix < m.lease_seconds {
-            a.live += 1;
+        if r.state == "running" || r.state == "idle" {
+            if now - r.updated_unix < m.lease_seconds {
+                a.live += 1;
+            } else {
+                a.stale += 1;
+            }
         }
         a.tiles_done += r.tiles_done;
         a.t_spec += r.t_spec;
