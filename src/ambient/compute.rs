@@ -602,7 +602,9 @@ impl Ambient {
         }
         let lb: Vec<f64> = lval.iter().map(|c| bright(*c)).collect();
         // Gradients (Ward & Heckbert 1992) of the brightness, relative to the value.
-        let (gpos, gdir) = if b > FTINY && m > 1 && nphi > 1 {
+        // Gradients, radii and light-leak flags serve interpolation only: an uncached
+        // estimate (-aa 0) is used once and needs none of them.
+        let (gpos, gdir) = if cached && b > FTINY && m > 1 && nphi > 1 {
             gradients(&lb, &dist, m, nphi, u0, v0)
         } else {
             (DVec3::ZERO, DVec3::ZERO)
@@ -610,7 +612,7 @@ impl Ambient {
         let scale = if b > FTINY { 1.0 / b } else { 0.0 };
         // Radii: from the Hessian when the mesh of hit points is complete, else the harmonic
         // mean distance (isotropic).
-        let hess = if complete && self.use_hessian && m > 1 && nphi > 2 {
+        let hess = if cached && complete && self.use_hessian && m > 1 && nphi > 2 {
             let pts: Vec<DVec3> = cells.iter().map(|c| c.hit).collect();
             hessian(&pts, &lb, m, nphi, n, u0, v0).and_then(|h| hessian_radii(&h))
         } else {
@@ -655,7 +657,7 @@ impl Ambient {
             gp = [gp[0] / glen, gp[1] / glen];
         }
         let _ = v;
-        let corral = if self.use_corral && self.aa > FTINY && m >= CORRAL_MIN_DIVISIONS {
+        let corral = if self.use_corral && cached && m >= CORRAL_MIN_DIVISIONS {
             let hits: Vec<Option<DVec3>> = cells
                 .iter()
                 .map(|c| (c.count > 0).then_some(c.hit))
