@@ -651,3 +651,149 @@ mod manifest_fuzz {
         }
     }
 }
+
+/// A worker stopped (SIGSTOP) while it renders a tile outlives its lease; another worker
+/// re-claims and finishes the tile and the job; when the first resumes it completes its
+/// tile too, harmlessly: it exits 0 and the picture is the same.
+#[test]
+fn a_resumed_slow_worker_finishing_a_reclaimed_tile_is_harmless() {
+    let d = tempfile::tempdir().unwrap();
+    let job = d.path().join("job");
+    let args = view_args(64, 48, &["-ab", "1", "-ad", "256", "-as", "0", "-aa", ".1"]);
+    plan(&job, &["--tiles", "2", "--lease", "0.5"], &args);
+    // Not quiet: it reports a tile finished after someone else re-claimed it.
+    let mut slow = cmd("tpiece")
+        .arg(&job)
+        .args(["--worker-id", "slow", "--threads", "1"])
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    // Wait until it holds a tile, then freeze it mid-render.
+    let tasks = job.join("tasks");
+    let t = Instant::now();
+    let held = loop {
+        let claimed = std::fs::read_dir(&tasks).unwrap().find_map(|e| {
+            let n = e.unwrap().file_name().to_string_lossy().into_owned();
+            n.contains(".claim.slow.").then_some(n)
+        });
+        if let Some(n) = claimed {
+            break n;
+        }
+        assert!(t.elapsed() < Duration::from_secs(30), "no claim");
+        std::thread::sleep(Duration::from_millis(2));
+    };
+    let signal = |sig: &str| {
+        let ok = Command::new("kill")
+            .args([sig, &slow.id().to_string()])
+            .status()
+            .unwrap()
+            .success();
+        assert!(ok, "kill {sig}");
+    };
+    signal("-STOP");
+    let task = held.split('.').next().unwrap().to_string();
+    // Another worker re-claims it after the lease and finishes everything.
+    run_ok(&mut worker(&job, "fast", &[]));
+    assert!(tasks.join(format!("{task}.done")).exists());
+    let tile_file = job.join("tiles").join(format!("{task}.tile"));
+    let owner_of = |p: &Path| tessera::job::tile::read(p).unwrap().0.owner;
+    assert!(owner_of(&tile_file).starts_with("fast."));
+    let before = assemble(&job);
+    signal("-CONT");
+    let t = Instant::now();
+    let status = loop {
+        if let Some(st) = slow.try_wait().unwrap() {
+            break st;
+        }
+        if t.elapsed() > Duration::from_secs(60) {
+            kill9(&mut slow);
+            panic!("the resumed worker did not end");
+        }
+        std::thread::sleep(Duration::from_millis(20));
+    };
+    let mut err = String::new();
+    std::io::Read::read_to_string(&mut slow.stderr.take().unwrap(), &mut err).unwrap();
+    assert!(status.success(), "{err}");
+    // Its late result replaced the other one (the later rename wins; both are complete).
+    // (Its own task entry was already `done`: on NFS a rename that reports ENOENT is taken
+    // as done when the target exists, so it cannot tell and need not.)
+    assert!(
+        owner_of(&tile_file).starts_with("slow."),
+        "the slow worker should have written its tile late: {err}"
+    );
+    // Still exactly one entry per task, all done; the picture is as good as before.
+    let names: Vec<String> = std::fs::read_dir(&tasks)
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .collect();
+    assert!(names.iter().all(|n| n.ends_with(".done")), "{names:?}");
+    let after = assemble(&job);
+    within_tolerance(&after, &before, "after the slow worker's late result");
+}
+
+/// A full disk while a worker appends its ambient log: a clear error naming the log, the
+/// tile goes back to todo, and the job completes with another worker.
+#[test]
+fn a_full_disk_under_the_ambient_log_releases_the_tile() {
+    let d = tempfile::tempdir().unwrap();
+    let job = d.path().join("job");
+    let args = view_args(48, 36, &["-ab", "1", "-ad", "64", "-as", "0"]);
+    plan(&job, &["--tiles", "2"], &args);
+    let out = worker(&job, "full", &[])
+        .env("TESSERA_FAULT_LOG_ENOSPC", "1")
+        .output()
+        .unwrap();
+    assert!(!out.status.success());
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        err.contains("ambient log")
+            && err.contains("No space left")
+            && err.contains("released")
+            && err.contains(".log"),
+        "{err}"
+    );
+    let names: Vec<String> = std::fs::read_dir(job.join("tasks"))
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .collect();
+    assert!(names.iter().all(|n| n.ends_with(".todo")), "{names:?}");
+    run_workers(&job, 1, &[]);
+    assemble(&job);
+}
+
+/// tassemble writes Radiance to stdout, OpenEXR and PNG, all of the same picture.
+#[test]
+fn tassemble_writes_every_format() {
+    let d = tempfile::tempdir().unwrap();
+    let job = d.path().join("job");
+    plan(&job, &["--tiles", "3"], &view_args(40, 30, &["-ab", "0"]));
+    run_workers(&job, 1, &[]);
+    let hdr = assemble(&job);
+    let out = cmd("tassemble").arg(&job).output().unwrap();
+    assert!(out.status.success());
+    let stdout_pic = d.path().join("stdout.hdr");
+    std::fs::write(&stdout_pic, &out.stdout).unwrap();
+    assert!(out.stdout.starts_with(b"#?RADIANCE"));
+    assert_eq!(read_picture(&stdout_pic).unwrap().pixels, hdr.pixels);
+    let exr = d.path().join("p.exr");
+    run_ok(cmd("tassemble").arg(&job).arg("-o").arg(&exr));
+    let e = read_picture(&exr).unwrap();
+    assert_eq!((e.width, e.height), (hdr.width, hdr.height));
+    // EXR keeps half floats; RGBE shares one exponent, so its channels are exact to about
+    // 1/256 of the pixel's largest channel.
+    for (a, b) in e.pixels.iter().zip(&hdr.pixels) {
+        let big = b.iter().fold(0f32, |m, v| m.max(v.abs()));
+        for c in 0..3 {
+            assert!((a[c] - b[c]).abs() <= 0.01 * big + 1e-4, "{a:?} {b:?}");
+        }
+    }
+    let png = d.path().join("p.png");
+    run_ok(cmd("tassemble").arg(&job).arg("-o").arg(&png));
+    let bytes = std::fs::read(&png).unwrap();
+    assert!(bytes.starts_with(b"\x89PNG\r\n\x1a\n"));
+    let img = image::load_from_memory(&bytes).unwrap();
+    assert_eq!(
+        (img.width() as usize, img.height() as usize),
+        (hdr.width, hdr.height)
+    );
+}

@@ -425,6 +425,9 @@ pub struct LogWriter {
     /// File length after the last successful flush.
     end: u64,
     fsync: bool,
+    /// Test hook (`TESSERA_FAULT_LOG_ENOSPC` set when the log is opened): every flush fails
+    /// as on a full disk.
+    fault_enospc: bool,
 }
 
 impl LogWriter {
@@ -500,6 +503,7 @@ impl LogWriter {
             pending: 0,
             end,
             fsync: false,
+            fault_enospc: std::env::var_os("TESSERA_FAULT_LOG_ENOSPC").is_some(),
         }
     }
 
@@ -533,13 +537,20 @@ impl LogWriter {
         if self.pending == 0 {
             return Ok(0);
         }
-        let res = self.file.write_all(&self.buf).and_then(|_| {
-            if self.fsync {
-                self.file.sync_data()
-            } else {
-                Ok(())
-            }
-        });
+        let res = if self.fault_enospc {
+            Err(io::Error::from_raw_os_error(28))
+        } else {
+            Ok(())
+        };
+        let res = res
+            .and_then(|_| self.file.write_all(&self.buf))
+            .and_then(|_| {
+                if self.fsync {
+                    self.file.sync_data()
+                } else {
+                    Ok(())
+                }
+            });
         if let Err(source) = res {
             let _ = self.file.set_len(self.end);
             return Err(AmbLogError::Io {

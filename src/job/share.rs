@@ -252,9 +252,7 @@ impl Share {
         if c_v <= 0.0 {
             return;
         }
-        let n = (c_s / (AUTO_SHARE * c_v))
-            .ceil()
-            .clamp(1.0, AUTO_MAX as f64) as usize;
+        let n = auto_flush(c_s, c_v);
         self.flush_every.store(n, Ordering::Relaxed);
         self.counters.amb_flush.store(n as u64, Ordering::Relaxed);
     }
@@ -288,6 +286,18 @@ impl Share {
     }
 }
 
+/// N_A for `--amb-flush auto` from the mean cost of one sync `c_s` and of one new value
+/// `c_v` (seconds): syncing every N_A values costs at most `AUTO_SHARE` of the time spent
+/// making them, clamped to 1..=`AUTO_MAX`.
+pub fn auto_flush(c_s: f64, c_v: f64) -> usize {
+    if c_v.is_nan() || c_v <= 0.0 || !c_s.is_finite() {
+        return AUTO_MAX;
+    }
+    (c_s.max(0.0) / (AUTO_SHARE * c_v))
+        .ceil()
+        .clamp(1.0, AUTO_MAX as f64) as usize
+}
+
 struct SinkRef(Arc<Share>);
 
 impl ValueSink for SinkRef {
@@ -308,5 +318,26 @@ impl ValueSink for SinkRef {
         if due {
             s.sync();
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::auto_flush;
+
+    #[test]
+    fn auto_flush_keeps_syncing_near_a_tenth_of_the_value_time() {
+        // A sync as cheap as a tenth of a value: share every value.
+        assert_eq!(auto_flush(0.001, 0.01), 1);
+        assert_eq!(auto_flush(0.0, 0.01), 1);
+        // A sync costing five values: every 50 values (5 / 50 = 10%).
+        assert_eq!(auto_flush(0.05, 0.01), 50);
+        // Slower syncs give larger batches, up to the cap.
+        assert!(auto_flush(0.2, 0.01) > auto_flush(0.05, 0.01));
+        assert_eq!(auto_flush(100.0, 0.01), 256);
+        // Nonsense costs never give 0 or panic.
+        assert_eq!(auto_flush(f64::NAN, 0.01), 256);
+        assert_eq!(auto_flush(0.01, 0.0), 256);
+        assert_eq!(auto_flush(0.01, f64::NAN), 256);
     }
 }
