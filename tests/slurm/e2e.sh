@@ -23,7 +23,7 @@ cd "$REPO"
 PROG="e2e.sh"
 WORKERS=4
 DEADLINE_S="${TESSERA_E2E_TIMEOUT:-180}"
-OPTS=(-vf demo/demo.vf -x 160 -y 120 -ab 1 -av .02 .02 .02)
+OPTS=(-vf demo/demo.vf -x 320 -y 240 -ab 1 -av .02 .02 .02)
 SCENE=demo/demo.rad
 
 now_ms() { date +%s%3N; }
@@ -121,7 +121,7 @@ timing "cluster start" "$(secs "$t")"
 # --- plan and submit ------------------------------------------------------------------------
 echo "== tplan ($WORKERS workers)"
 t="$(now_ms)"
-"$BIN/tplan" --workers "$WORKERS" -o "$JOB" -- "${OPTS[@]}" "$SCENE"
+"$BIN/tplan" --workers "$WORKERS" --lease 10 -o "$JOB" -- "${OPTS[@]}" "$SCENE"
 [ -d "$JOB" ] || die "tplan did not create $JOB"
 timing "tplan" "$(secs "$t")"
 
@@ -133,6 +133,40 @@ re='render_job=([0-9]+) assemble_job=([0-9]+)'
 [[ "$ids" =~ $re ]] || die "cannot parse submit.sh output: $ids"
 RENDER_JOB="${BASH_REMATCH[1]}"
 ASSEMBLE_JOB="${BASH_REMATCH[2]}"
+
+# --- requeue one task while it renders ---------------------------------------------------
+# As SLURM does on node failure or preemption (the tasks are submitted with --requeue): task
+# 0 is killed mid-render and queued again under the same array index; its new run takes
+# over its predecessor's tile at once (same worker id), or, while it waits for a CPU, the
+# other tasks re-claim that tile after the lease (10 s here: the node has 2 CPUs, so the
+# requeued task may only start when the others end); the picture must come out whole.
+echo "== requeue task ${RENDER_JOB}_0 while it renders"
+t="$(now_ms)"
+deadline=$((SECONDS + DEADLINE_S))
+while :; do
+  st="$(timeout 20 squeue -h -j "${RENDER_JOB}_0" -o %T 2>/dev/null || true)"
+  if [ "$st" = RUNNING ] && compgen -G "$JOB/tasks/*.claim.${RENDER_JOB}-0.*" >/dev/null; then
+    break
+  fi
+  case "$st" in
+    COMPLETED | FAILED | CANCELLED) die "task ${RENDER_JOB}_0 ended ($st) before it could be requeued" ;;
+  esac
+  [ "$SECONDS" -lt "$deadline" ] || die "task ${RENDER_JOB}_0 never held a tile"
+  sleep 0.1
+done
+timeout 20 scontrol requeue "${RENDER_JOB}_0" || die "scontrol requeue ${RENDER_JOB}_0 failed"
+# SLURM holds a requeued job back (reason BeginTime) for a while: release it.
+for _ in $(seq 1 100); do
+  st="$(timeout 20 squeue -h -j "${RENDER_JOB}_0" -o '%T %r' 2>/dev/null || true)"
+  case "$st" in
+    "PENDING BeginTime"*)
+      timeout 20 scontrol update JobId="${RENDER_JOB}_0" StartTime=now && break
+      ;;
+    RUNNING* | COMPLETED*) break ;;
+  esac
+  sleep 0.1
+done
+timing "requeue" "$(secs "$t")"
 
 # --- wait ---------------------------------------------------------------------------------
 # squeue prints nothing both when the jobs are gone and when it fails (slurmctld down), so
@@ -169,6 +203,12 @@ assemble_state="$(timeout 20 squeue --states=all -h -j "$ASSEMBLE_JOB" -o %T)" |
 while read -r id state _; do
   [ "$state" = COMPLETED ] || die "render task $id is $state"
 done < <(timeout 20 squeue --states=all -h -j "$RENDER_JOB" -o '%i %T')
+
+# The requeued task ran twice (its log is appended to) and its second run finished.
+LOG0="$JOB/logs/render-${RENDER_JOB}_0.log"
+grep -q 'restart 1' "$LOG0" || die "task ${RENDER_JOB}_0 was not restarted (see $LOG0)"
+echo "task ${RENDER_JOB}_0 was requeued and ran again:"
+grep 'render.sbatch:' "$LOG0"
 
 echo "== assembly log"
 cat "$JOB"/logs/assemble-"$ASSEMBLE_JOB".log
