@@ -797,3 +797,50 @@ fn tassemble_writes_every_format() {
         (hdr.width, hdr.height)
     );
 }
+
+/// `tstat --baseline`: speed-up and efficiency against a one-worker job, counting a
+/// restarted worker (same id, two incarnations) once.
+#[test]
+fn tstat_baseline_reports_speedup_per_worker() {
+    let d = tempfile::tempdir().unwrap();
+    let args = view_args(48, 36, &["-ab", "1", "-ad", "64", "-as", "0"]);
+    let one = d.path().join("one");
+    plan(&one, &["--tiles", "6"], &args);
+    run_workers(&one, 1, &[]);
+    let two = d.path().join("two");
+    plan(&two, &["--tiles", "6"], &args);
+    run_workers(&two, 2, &[]);
+    // A second incarnation of one of them (it finds nothing to do).
+    let w0 = std::fs::read_dir(two.join("workers"))
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .find(|n| n.ends_with(".json"))
+        .unwrap();
+    let id = w0.split('.').next().unwrap().to_string();
+    run_ok(&mut worker(&two, &id, &[]));
+    let out = run_ok(
+        cmd("tstat")
+            .arg(&two)
+            .arg("--json")
+            .arg("--baseline")
+            .arg(&one),
+    );
+    let st: serde_json::Value = serde_json::from_slice(&out).unwrap();
+    assert_eq!(st["aggregate"]["workers"], 3, "{st}");
+    let b = &st["baseline"];
+    let speedup = b["speedup"].as_f64().unwrap();
+    let eff = b["efficiency"].as_f64().unwrap();
+    assert!(speedup > 0.0, "{b}");
+    assert!(
+        (eff - speedup / 2.0).abs() < 1e-9,
+        "two workers, not three: {b}"
+    );
+    assert!(b["new_values_ratio"].as_f64().unwrap() > 0.5, "{b}");
+    assert!(b["new_values"].as_u64().unwrap() > 0, "{b}");
+    let text = run_ok(cmd("tstat").arg(&two).arg("--baseline").arg(&one));
+    let text = String::from_utf8_lossy(&text);
+    assert!(
+        text.contains("speed-up") || text.contains("speedup"),
+        "{text}"
+    );
+}

@@ -191,7 +191,10 @@ pub fn status(job: &JobDir) -> Result<JobStatus> {
 /// Add a baseline comparison.
 pub fn with_baseline(mut st: JobStatus, base: &JobDir) -> Result<JobStatus> {
     let b = status(base)?;
-    let n = st.aggregate.workers.max(1) as f64;
+    // Workers, not incarnations: a restarted worker (same id) counts once.
+    let ids: std::collections::HashSet<&str> =
+        st.workers.iter().map(|w| w.worker_id.as_str()).collect();
+    let n = ids.len().max(1) as f64;
     let w = st.aggregate.wall_seconds;
     let speedup = if w > 0.0 {
         b.aggregate.wall_seconds / w

@@ -278,11 +278,13 @@ fn work(
             let missing = |st: &std::collections::HashMap<String, TaskState>| {
                 all.iter().filter(|(n, _, _)| !st.contains_key(n)).count()
             };
-            for _ in 0..5 {
+            // Back off from 20 ms up to about 5 s in all: on NFS a client's cached listing
+            // may lag the server for a while.
+            for attempt in 0..8 {
                 if missing(&states) == 0 {
                     break;
                 }
-                std::thread::sleep(Duration::from_millis(20));
+                std::thread::sleep(Duration::from_millis(20 << attempt));
                 states = task::scan(tasks_dir)
                     .with_context(|| format!("cannot list {}", tasks_dir.display()))?;
             }
