@@ -452,6 +452,18 @@ fn late_workers_duplicate_ids_and_merges_are_harmless() {
     // The Radiance export is a valid ambient file with every value.
     let (_, recs, _) = tessera::ambient::radfile::read_file(&exported).unwrap();
     assert_eq!(recs.len() as u64, store["records"].as_u64().unwrap());
+    // ... and seeds a job as well (Radiance's format carries no fingerprint).
+    let job3 = d.path().join("job3");
+    plan(
+        &job3,
+        &["--tiles", "8", "--ambient", exported.to_str().unwrap()],
+        &args,
+    );
+    run_workers(&job3, 1, &[]);
+    let from_rad = stat(&job3)["aggregate"]["new_values"].as_u64().unwrap();
+    eprintln!("job seeded from the Radiance export: {from_rad} new values");
+    assert!(from_rad * 4 < before, "{from_rad} vs {before}");
+    within_tolerance(&assemble(&job3), &pic, "job seeded from a Radiance file");
 }
 
 #[test]

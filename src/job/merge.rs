@@ -292,8 +292,20 @@ pub fn read_any_store(path: &Path, fingerprint: &[u8; 32], force: bool) -> Resul
         let mut r = LogReader::open(path, Some(fingerprint), force)?;
         Ok(r.read_available()?)
     } else {
-        let (_, recs, _) = crate::ambient::radfile::read_file(path)
+        let (_, mut recs, _) = crate::ambient::radfile::read_file(path)
             .with_context(|| format!("cannot read ambient file {}", path.display()))?;
+        // Radiance's records carry no id: give them stable ones, an origin named by the
+        // file's content and their order in it, so that they stay distinct from each other
+        // (deduplication is by id) and seeding from the same file twice yields the same ids.
+        let bytes = std::fs::read(path)
+            .with_context(|| format!("cannot read ambient file {}", path.display()))?;
+        let origin = (1u64 << 63) | (u64::from(crc32fast::hash(&bytes)) << 16) | 0x5261;
+        for (seq, r) in recs.iter_mut().enumerate() {
+            r.id = crate::ambient::ValueId {
+                origin,
+                seq: seq as u64,
+            };
+        }
         Ok(recs)
     }
 }
