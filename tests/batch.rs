@@ -96,6 +96,14 @@ fn tpict(args: &[String]) -> Image {
     read_picture(&out).unwrap()
 }
 
+/// The entry names in a job's `tasks/`.
+fn task_entries(job: &Path) -> Vec<String> {
+    std::fs::read_dir(job.join("tasks"))
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .collect()
+}
+
 fn stat(job: &Path) -> serde_json::Value {
     let out = run_ok(cmd("tstat").arg(job).arg("--json"));
     serde_json::from_slice(&out).unwrap()
@@ -502,10 +510,7 @@ fn bad_input_and_full_disks_fail_cleanly() {
         err.contains("No space left") && err.contains("released"),
         "{err}"
     );
-    let names: Vec<String> = std::fs::read_dir(job.join("tasks"))
-        .unwrap()
-        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
-        .collect();
+    let names = task_entries(&job);
     assert!(names.iter().all(|n| n.ends_with(".todo")), "{names:?}");
     // The job still completes.
     run_workers(&job, 1, &[]);
@@ -734,10 +739,7 @@ fn a_resumed_slow_worker_finishing_a_reclaimed_tile_is_harmless() {
         "the slow worker should have written its tile late: {err}"
     );
     // Still exactly one entry per task, all done; the picture is as good as before.
-    let names: Vec<String> = std::fs::read_dir(&tasks)
-        .unwrap()
-        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
-        .collect();
+    let names = task_entries(&job);
     assert!(names.iter().all(|n| n.ends_with(".done")), "{names:?}");
     let after = assemble(&job);
     within_tolerance(&after, &before, "after the slow worker's late result");
@@ -764,10 +766,7 @@ fn a_full_disk_under_the_ambient_log_releases_the_tile() {
             && err.contains(".log"),
         "{err}"
     );
-    let names: Vec<String> = std::fs::read_dir(job.join("tasks"))
-        .unwrap()
-        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
-        .collect();
+    let names = task_entries(&job);
     assert!(names.iter().all(|n| n.ends_with(".todo")), "{names:?}");
     run_workers(&job, 1, &[]);
     assemble(&job);
