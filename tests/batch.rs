@@ -248,6 +248,7 @@ fn killed_workers_lose_nothing() {
     let clean_img = assemble(&clean);
     let mut rng = Rng(0x9E37_79B9_7F4A_7C15);
     let mut kills = 0;
+    let mut reclaimed = 0;
     for round in 0..rounds {
         let job = d.path().join(format!("job{round}"));
         plan(&job, &["--workers", "4", "--lease", "0.3"], &args);
@@ -310,6 +311,7 @@ fn killed_workers_lose_nothing() {
         }
         let img = assemble(&job);
         within_tolerance(&img, &clean_img, &format!("round {round}"));
+        reclaimed += stat(&job)["aggregate"]["reclaimed"].as_u64().unwrap();
         // Every tile result exists exactly once and covers its own rectangle.
         let tiles = std::fs::read_dir(job.join("tiles"))
             .unwrap()
@@ -342,6 +344,12 @@ fn killed_workers_lose_nothing() {
         let _ = std::fs::remove_dir_all(&job);
     }
     assert!(kills >= rounds, "{kills} kills in {rounds} rounds");
+    // The kills hit workers holding tiles: others took those over.
+    eprintln!("{kills} kills, {reclaimed} tiles re-claimed in {rounds} rounds");
+    assert!(
+        reclaimed >= rounds / 5,
+        "{reclaimed} re-claims in {rounds} rounds"
+    );
 }
 
 #[test]

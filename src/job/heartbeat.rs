@@ -54,6 +54,9 @@ pub struct WorkerRecord {
     pub shared_out: u64,
     /// Current N_A (values per log write).
     pub amb_flush: u64,
+    /// Tiles this worker took over from a stale (or earlier) owner.
+    #[serde(default)]
+    pub reclaimed: u64,
     /// Rays traced.
     pub rays: u64,
     /// CPU seconds of the process.
@@ -79,6 +82,8 @@ pub struct Counters {
     pub shared_out: AtomicU64,
     /// Current N_A.
     pub amb_flush: AtomicU64,
+    /// Tiles re-claimed from other owners.
+    pub reclaimed: AtomicU64,
     /// Rays traced.
     pub rays: AtomicU64,
 }

@@ -40,6 +40,8 @@ pub struct Aggregate {
     pub stale: usize,
     /// Tiles rendered.
     pub tiles_done: u64,
+    /// Tiles re-claimed from stale (or earlier) owners.
+    pub reclaimed: u64,
     /// ΣT_spec.
     pub t_spec: f64,
     /// ΣT_amb.
@@ -164,6 +166,7 @@ pub fn status(job: &JobDir) -> Result<JobStatus> {
             }
         }
         a.tiles_done += r.tiles_done;
+        a.reclaimed += r.reclaimed;
         a.t_spec += r.t_spec;
         a.t_amb += r.t_amb;
         a.t_idle += r.t_idle;
@@ -260,8 +263,8 @@ pub fn render_text(st: &JobStatus) -> String {
     let a = &st.aggregate;
     let _ = writeln!(
         s,
-        "workers: {} seen, {} live, {} stale; wall {:.2} s",
-        a.workers, a.live, a.stale, a.wall_seconds
+        "workers: {} seen, {} live, {} stale; {} tiles re-claimed; wall {:.2} s",
+        a.workers, a.live, a.stale, a.reclaimed, a.wall_seconds
     );
     let _ = writeln!(
         s,

@@ -99,6 +99,7 @@ impl Beat {
         r.shared_in = c.shared_in.load(Ordering::Relaxed);
         r.shared_out = c.shared_out.load(Ordering::Relaxed);
         r.amb_flush = c.amb_flush.load(Ordering::Relaxed);
+        r.reclaimed = c.reclaimed.load(Ordering::Relaxed);
         r.rays = c.rays.load(Ordering::Relaxed);
         if let Some(a) = &self.ambient {
             r.new_values = a.stats.made();
@@ -323,6 +324,7 @@ fn work(
                 if stale && task::reclaim(tasks_dir, name, o, owner)? {
                     mine = Some((name.clone(), *f, *t, true));
                     summary.reclaimed += 1;
+                    counters.reclaimed.fetch_add(1, Ordering::Relaxed);
                     if wo.verbose {
                         eprintln!("tpiece {owner}: re-claimed {name} from {o}");
                     }
