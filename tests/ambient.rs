@@ -95,6 +95,19 @@ fn uncached_deeper_bounces_are_path_traced() {
     let (r1, r2, r3) = (runs[0], runs[1], runs[2]);
     assert!(r2 > 1.5 * r1 && r2 < 2.0 * r1, "{runs:?}");
     assert!(r3 > r2 + 0.4 * r1 && r3 < r2 + 0.8 * r1, "{runs:?}");
+    // Six bounces: with Russian roulette (-lr < 0) paths lighter than -lw go on with a gain
+    // instead of ending, so the deep bounces are not lost.
+    let mut args: Vec<&str> = VIEW.to_vec();
+    args.extend([
+        "-ab", "6", "-aa", "0", "-ad", "1024", "-as", "0", "-lr", "-8",
+    ]);
+    let (m, _) = mean_red(t.path(), &args);
+    let want = furnace_expected(6);
+    eprintln!("-ab 6 -aa 0 -lr -8: {m:.5} vs {want:.5}");
+    assert!(
+        (m - want).abs() / want < 0.02,
+        "-ab 6 -aa 0 -lr -8: {m} vs {want}"
+    );
 }
 
 #[test]
