@@ -540,17 +540,14 @@ impl LogWriter {
         let res = if self.fault_enospc {
             Err(io::Error::from_raw_os_error(28))
         } else {
-            Ok(())
-        };
-        let res = res
-            .and_then(|_| self.file.write_all(&self.buf))
-            .and_then(|_| {
+            self.file.write_all(&self.buf).and_then(|_| {
                 if self.fsync {
                     self.file.sync_data()
                 } else {
                     Ok(())
                 }
-            });
+            })
+        };
         if let Err(source) = res {
             let _ = self.file.set_len(self.end);
             return Err(AmbLogError::Io {

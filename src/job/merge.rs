@@ -295,11 +295,18 @@ pub fn read_any_store(path: &Path, fingerprint: &[u8; 32], force: bool) -> Resul
         let (_, mut recs, _) = crate::ambient::radfile::read_file(path)
             .with_context(|| format!("cannot read ambient file {}", path.display()))?;
         // Radiance's records carry no id: give them stable ones, an origin named by the
-        // file's content and their order in it, so that they stay distinct from each other
+        // records' content and their order, so that they stay distinct from each other
         // (deduplication is by id) and seeding from the same file twice yields the same ids.
-        let bytes = std::fs::read(path)
-            .with_context(|| format!("cannot read ambient file {}", path.display()))?;
-        let origin = (1u64 << 63) | (u64::from(crc32fast::hash(&bytes)) << 16) | 0x5261;
+        let mut h = crc32fast::Hasher::new();
+        for r in &recs {
+            for x in r.pos.to_array().iter().chain(&r.ndir.to_array()) {
+                h.update(&x.to_le_bytes());
+            }
+            for x in r.val.iter().chain(&r.rad) {
+                h.update(&x.to_le_bytes());
+            }
+        }
+        let origin = (1u64 << 63) | (u64::from(h.finalize()) << 16) | 0x5261;
         for (seq, r) in recs.iter_mut().enumerate() {
             r.id = crate::ambient::ValueId {
                 origin,
