@@ -17,7 +17,21 @@
 # Environment:
 #   SCENES="spheres curved glassy mirrors"   AB_LIST="1"   RES=128   RED=64
 #   AA_LIST="0.3 0.2 0.15 0.1"  AD_LIST="128 512 1024"  AS_LIST="0 128"
+#                          (AA_LIST="" renders only the references, e.g. to fill REF_DIR)
 #   REF_AD=2048            divisions of the references
+#   EXTRA=""               more options for every picture (references and runs), e.g.
+#                          "-st 1": rough specular reflections go into the ambient term
+#                          instead of being sampled, which takes their per-pixel noise (which
+#                          no -a option reduces) out of the error (docs/benchmarks.md)
+#   REF_EXTRA=""           more options for both references, e.g. "-lw 1e-5": the ray weight
+#                          limit caps the divisions of an ambient value at 0.5/lw (rpict, tpict)
+#   REF_RES=$RES           resolution of the references. Keep it equal to RES: with -pj 0
+#                          each run samples the pixel centres, and a reference sampling other
+#                          points adds the runs' sub-pixel aliasing (highlights, silhouettes),
+#                          not ambient error, to every error
+#   REF_DIR=dir            keep the reference pictures there and reuse them when present
+#                          (named by scene, -ab, REF_RES, REF_AD, EXTRA and REF_EXTRA; delete
+#                          to re-render)
 #   FLOOR=0.01             relative floor of the error denominator (x mean reference)
 #   OUT=docs/benchmarks-ambient   where runs.tsv and references.tsv go (TAG=x -> runs-x.tsv)
 #   TESSERA_RADIANCE_BIN   folder holding rpict, oconv, pfilt, pvalue, pcomb
@@ -32,10 +46,14 @@ SCENES=${SCENES:-"spheres curved glassy mirrors"}
 AB_LIST=${AB_LIST:-"1"}
 RES=${RES:-128}
 RED=${RED:-64}
-AA_LIST=${AA_LIST:-"0.3 0.2 0.15 0.1"}
+AA_LIST=${AA_LIST-"0.3 0.2 0.15 0.1"}
 AD_LIST=${AD_LIST:-"128 512 1024"}
 AS_LIST=${AS_LIST:-"0 128"}
 REF_AD=${REF_AD:-2048}
+REF_RES=${REF_RES:-$RES}
+REF_DIR=${REF_DIR:-}
+REF_EXTRA=${REF_EXTRA:-}
+EXTRA=${EXTRA:-}
 FLOOR=${FLOOR:-0.01}
 OUT=${OUT:-"$ROOT/docs/benchmarks-ambient"}
 TAG=${TAG:-}
@@ -95,11 +113,29 @@ for s in $SCENES; do
     oct="$TMP/$s.oct"
     (cd "$sdir" && oconv "$s.rad" >"$oct")
     for ab in $AB_LIST; do
-        common=(-vf "$s.vf" -x "$RES" -y "$RES" -ps 1 -pj 0 -ab "$ab")
+        # shellcheck disable=SC2206
+        common=(-vf "$s.vf" -x "$RES" -y "$RES" -ps 1 -pj 0 -ab "$ab" $EXTRA)
         cd "$sdir"
         # --- references ---
-        rc=$(cpu_run "$TMP/rref.hdr" rpict "${common[@]}" -aa 0 -ad "$REF_AD" -as 0 "$oct")
-        tc=$(cpu_run "$TMP/tref.hdr" "$TPICT" -n 1 "${common[@]}" -aa 0 -ad "$REF_AD" -as 0 "$s.rad")
+        refc=(-vf "$s.vf" -x "$REF_RES" -y "$REF_RES" -ps 1 -pj 0 -ab "$ab" -aa 0 -ad "$REF_AD" -as 0)
+        # shellcheck disable=SC2206
+        refc+=($EXTRA $REF_EXTRA)
+        key="$s-ab$ab-$REF_RES-ad$REF_AD$(echo "$EXTRA $REF_EXTRA" | tr -d ' ')"
+        if [[ -n $REF_DIR && -s "$REF_DIR/$key-rref.hdr" && -s "$REF_DIR/$key-tref.hdr" ]]; then
+            cp "$REF_DIR/$key-rref.hdr" "$TMP/rref.hdr"
+            cp "$REF_DIR/$key-tref.hdr" "$TMP/tref.hdr"
+            read -r rc tc <"$REF_DIR/$key-cpu"
+            echo "ambient: reusing references $REF_DIR/$key-*" >&2
+        else
+            rc=$(cpu_run "$TMP/rref.hdr" rpict "${refc[@]}" "$oct")
+            tc=$(cpu_run "$TMP/tref.hdr" "$TPICT" -n 1 "${refc[@]}" "$s.rad")
+            if [[ -n $REF_DIR ]]; then
+                mkdir -p "$REF_DIR"
+                cp "$TMP/rref.hdr" "$REF_DIR/$key-rref.hdr"
+                cp "$TMP/tref.hdr" "$REF_DIR/$key-tref.hdr"
+                echo "$rc $tc" >"$REF_DIR/$key-cpu"
+            fi
+        fi
         pcomb -e 'ro=(ri(1)+ri(2))/2;go=(gi(1)+gi(2))/2;bo=(bi(1)+bi(2))/2' \
             -o "$TMP/rref.hdr" -o "$TMP/tref.hdr" >"$TMP/aref.hdr"
         bright "$TMP/rref.hdr" "$TMP/rref.b"

@@ -10,7 +10,7 @@
 //! gradient as Radiance does. Lookups apply Radiance's acceptance tests and weights.
 
 use super::cache::{AmbientCache, CachedValue};
-pub use super::hessian::{hessian, hessian_radii};
+pub use super::hessian::{hessian, hessian_radii, hessian_subsampled};
 use crate::color::{bright, Color};
 use crate::material::normal::any_perpendicular;
 use crate::radopt::RenderParams;
@@ -223,6 +223,10 @@ pub struct Ambient {
     as_: f64,
     /// Anisotropic radii from the Hessian (default true; else the harmonic mean distance).
     pub use_hessian: bool,
+    /// Cells of the mesh the Hessian is taken from at most (thinned evenly beyond).
+    pub hessian_cells: usize,
+    /// Outlier limit of a cached value's cells (0: none): see [`clamp_outliers`].
+    pub clamp: f64,
     av: Color,
     /// `-aw`: weight of `-av` in the moving log-average (0: `-av` stays fixed).
     aw: f64,
@@ -261,6 +265,14 @@ impl Ambient {
             ad: params.ad as f64,
             as_: params.as_.max(0) as f64,
             use_hessian: true,
+            hessian_cells: std::env::var("TESSERA_HESS_MAX")
+                .ok()
+                .and_then(|s| s.parse().ok())
+                .unwrap_or(usize::MAX),
+            clamp: std::env::var("TESSERA_AMB_CLAMP")
+                .ok()
+                .and_then(|s| s.parse().ok())
+                .unwrap_or(0.0),
             use_gradients: true,
             use_corral: std::env::var("TESSERA_NO_CORRAL").as_deref() != Ok("1"),
             minarad,
@@ -588,7 +600,10 @@ impl Ambient {
         if traced == 0 {
             return None;
         }
-        let lval: Vec<Color> = cells.iter().map(|c| c.mean()).collect();
+        let mut lval: Vec<Color> = cells.iter().map(|c| c.mean()).collect();
+        if cached && self.clamp > 0.0 {
+            clamp_outliers(&mut lval, self.clamp);
+        }
         let dist: Vec<f64> = cells.iter().map(|c| c.dist(self.max_dist)).collect();
         let count = ncells as f64;
         let val = lval.iter().fold(Color::ZERO, |a, c| a + *c) / count;
@@ -614,7 +629,8 @@ impl Ambient {
         // mean distance (isotropic).
         let hess = if cached && complete && self.use_hessian && m > 1 && nphi > 2 {
             let pts: Vec<DVec3> = cells.iter().map(|c| c.hit).collect();
-            hessian(&pts, &lb, m, nphi, n, u0, v0).and_then(|h| hessian_radii(&h))
+            hessian_subsampled(&pts, &lb, m, nphi, n, u0, v0, self.hessian_cells)
+                .and_then(|h| hessian_radii(&h))
         } else {
             None
         };
@@ -695,6 +711,24 @@ impl Ambient {
 }
 
 /// One hemisphere cell: the running sum of its samples.
+/// Limits every cell's brightness to `f` × the sum of all the other cells' brightness
+/// (scaling its colour), so that one sample that caught a rare bright path (a highlight seen
+/// from below a glossy object, a caustic) cannot make the whole value: with few cells such a
+/// spike would otherwise be spread over the value's radii.
+pub fn clamp_outliers(cells: &mut [Color], f: f64) {
+    let b: Vec<f64> = cells.iter().map(|c| bright(*c)).collect();
+    let total: f64 = b.iter().sum();
+    if !(total > 0.0 && total.is_finite()) {
+        return;
+    }
+    for (c, &bi) in cells.iter_mut().zip(&b) {
+        let cap = f * (total - bi);
+        if bi > cap && bi > 0.0 {
+            *c *= cap.max(0.0) / bi;
+        }
+    }
+}
+
 #[derive(Clone, Copy, Default)]
 struct Cell {
     sum: Color,

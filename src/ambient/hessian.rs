@@ -64,6 +64,20 @@ impl Jet {
         }
     }
 
+    /// self × L for a function L linear in δ with value `l`, gradient (`lu`, `lv`) and no
+    /// second derivatives (a cheaper [`Mul`]).
+    #[inline]
+    fn scale_linear(self, l: f64, lu: f64, lv: f64) -> Jet {
+        Jet {
+            v: self.v * l,
+            du: self.du * l + self.v * lu,
+            dv: self.dv * l + self.v * lv,
+            uu: self.uu * l + 2.0 * self.du * lu,
+            uv: self.uv * l + self.du * lv + self.dv * lu,
+            vv: self.vv * l + 2.0 * self.dv * lv,
+        }
+    }
+
     /// √self (self.v > 0).
     pub fn sqrt(self) -> Jet {
         let r = self.v.sqrt();
@@ -174,39 +188,48 @@ impl EdgeTerm for Jet {
 }
 
 /// The edge term `Θ·(N·X)/|X|` of the edge from `a` to `c` (hit points relative to the
-/// shading point) as a jet in the point's tangent-plane offset along `u` and `v`.
+/// shading point) as a jet in the point's tangent-plane offset along `u` and `v`
+/// (an orthonormal frame with `n`).
 pub fn edge_jet(a: DVec3, c: DVec3, n: DVec3, u: DVec3, v: DVec3) -> Jet {
+    let local = |p: DVec3| DVec3::new(p.dot(u), p.dot(v), p.dot(n));
+    edge_jet_local(local(a), local(c))
+}
+
+/// [`edge_jet`] with `a` and `c` given in the tangent frame itself (x along u, y along v,
+/// z along the normal), where the frame's cross and dot products reduce to picking
+/// components: with e = C − A, `X = A×C + e×δ`, `e×u = (0, e_z, −e_y)`,
+/// `e×v = (−e_z, 0, e_x)`, `N·X = X_z`.
+#[inline]
+pub fn edge_jet_local(a: DVec3, c: DVec3) -> Jet {
     let x0 = a.cross(c);
     let e = c - a;
-    let (xu, xv) = (e.cross(u), e.cross(v));
     let s2 = Jet {
-        v: x0.dot(x0),
-        du: 2.0 * x0.dot(xu),
-        dv: 2.0 * x0.dot(xv),
-        uu: 2.0 * xu.dot(xu),
-        uv: 2.0 * xu.dot(xv),
-        vv: 2.0 * xv.dot(xv),
+        v: x0.length_squared(),
+        du: 2.0 * (x0.y * e.z - x0.z * e.y),
+        dv: 2.0 * (x0.z * e.x - x0.x * e.z),
+        uu: 2.0 * (e.y * e.y + e.z * e.z),
+        uv: -2.0 * e.x * e.y,
+        vv: 2.0 * (e.x * e.x + e.z * e.z),
     };
     if s2.v < 1e-300 {
         return Jet::default();
     }
-    let s = s2.sqrt();
-    let sum = a + c;
+    // |X| and 1/|X| straight from |X|².
+    let r = s2.v.sqrt();
+    let ir = 1.0 / r;
+    let s = s2.chain(r, 0.5 * ir, -0.25 * ir * ir * ir);
+    let inv_s = s2.chain(ir, -0.5 * ir * ir * ir, 0.75 * ir * ir * ir * ir * ir);
     let d = Jet {
         v: a.dot(c),
-        du: -u.dot(sum),
-        dv: -v.dot(sum),
-        uu: 2.0 * u.length_squared(),
-        uv: 2.0 * u.dot(v),
-        vv: 2.0 * v.length_squared(),
+        du: -(a.x + c.x),
+        dv: -(a.y + c.y),
+        uu: 2.0,
+        uv: 0.0,
+        vv: 2.0,
     };
-    let nx = Jet {
-        v: n.dot(x0),
-        du: n.dot(xu),
-        dv: n.dot(xv),
-        ..Jet::default()
-    };
-    s.atan2(d) * nx * s.recip()
+    // N·X is linear in δ: (X0_z, −e_y, e_x) with no second derivatives.
+    let g = inv_s.scale_linear(x0.z, -e.y, e.x);
+    s.atan2(d) * g
 }
 
 /// The same edge term as a number, seen from the shading point itself.
@@ -283,35 +306,36 @@ impl<'a> Mesh<'a> {
     /// per edge: along φ (j,k)→(j,k+1), along θ (j,k)→(j+1,k), diagonal (j,k)→(j+1,k+1).
     pub fn contour<T: EdgeTerm>(&self, edge: impl Fn(DVec3, DVec3) -> T) -> T {
         let (m, nphi) = (self.m, self.nphi);
-        let at = |j: usize, k: usize| j * nphi + (k % nphi);
-        let nc = m * nphi;
-        let mut eh = vec![T::default(); nc];
-        let mut ev = vec![T::default(); nc];
-        let mut ed = vec![T::default(); nc];
-        for j in 0..m {
-            for k in 0..nphi {
-                let i = at(j, k);
-                let p = self.pts[i];
-                eh[i] = edge(p, self.pts[at(j, k + 1)]);
-                if j + 1 < m {
-                    ev[i] = edge(p, self.pts[at(j + 1, k)]);
-                    ed[i] = edge(p, self.pts[at(j + 1, k + 1)]);
-                }
-            }
-        }
+        let pts = self.pts;
+        let ring = |j: usize, out: &mut Vec<T>| {
+            out.clear();
+            out.extend((0..nphi).map(|k| edge(pts[j * nphi + k], pts[j * nphi + (k + 1) % nphi])));
+        };
         let abs = |t: T| if t.value() < 0.0 { t * -1.0 } else { t };
-        let mut f = T::default();
+        // Edges along φ of the current and the next ring; along θ and diagonal of the current.
+        let (mut eh, mut eh_next) = (Vec::with_capacity(nphi), Vec::with_capacity(nphi));
+        let (mut ev, mut ed) = (Vec::with_capacity(nphi), Vec::with_capacity(nphi));
+        ring(0, &mut eh);
+        let cap = eh.iter().fold(T::default(), |s, &e| s + e);
+        let mut f = abs(cap) * self.cap_w;
         for j in 0..m - 1 {
+            ring(j + 1, &mut eh_next);
+            ev.clear();
+            ed.clear();
             for k in 0..nphi {
-                let i = at(j, k);
-                let ta = eh[i] + ev[at(j, k + 1)] - ed[i];
-                let tb = ed[i] - eh[at(j + 1, k)] - ev[i];
+                let p = pts[j * nphi + k];
+                ev.push(edge(p, pts[(j + 1) * nphi + k]));
+                ed.push(edge(p, pts[(j + 1) * nphi + (k + 1) % nphi]));
+            }
+            for k in 0..nphi {
+                let ta = eh[k] + ev[(k + 1) % nphi] - ed[k];
+                let tb = ed[k] - eh_next[k] - ev[k];
                 let [wa, wb] = self.tw[j * nphi + k];
                 f = f + abs(ta) * wa + abs(tb) * wb;
             }
+            std::mem::swap(&mut eh, &mut eh_next);
         }
-        let cap = (0..nphi).fold(T::default(), |s, k| s + eh[k]);
-        f + abs(cap) * self.cap_w
+        f
     }
 }
 
@@ -329,10 +353,56 @@ pub fn hessian(
     u: DVec3,
     v: DVec3,
 ) -> Option<[f64; 3]> {
-    let mesh = Mesh::new(pts, b, m, nphi)?;
-    let f = mesh.contour(|a, c| edge_jet(a, c, n, u, v)) * (1.0 / (2.0 * PI));
+    hessian_subsampled(pts, b, m, nphi, n, u, v, usize::MAX)
+}
+
+/// [`hessian`] of a mesh thinned to at most about `max_cells` cells by [`subsample_grid`].
+#[allow(clippy::too_many_arguments)]
+pub fn hessian_subsampled(
+    pts: &[DVec3],
+    b: &[f64],
+    m: usize,
+    nphi: usize,
+    n: DVec3,
+    u: DVec3,
+    v: DVec3,
+    max_cells: usize,
+) -> Option<[f64; 3]> {
+    if pts.len() != m * nphi || b.len() != m * nphi {
+        return None;
+    }
+    let (rows, cols) = subsample_grid(m, nphi, max_cells);
+    let mut local = Vec::with_capacity(rows.len() * cols.len());
+    let mut lb = Vec::with_capacity(rows.len() * cols.len());
+    for &j in &rows {
+        for &k in &cols {
+            let p = pts[j * nphi + k];
+            local.push(DVec3::new(p.dot(u), p.dot(v), p.dot(n)));
+            lb.push(b[j * nphi + k]);
+        }
+    }
+    let mesh = Mesh::new(&local, &lb, rows.len(), cols.len())?;
+    let f = mesh.contour(edge_jet_local) * (1.0 / (2.0 * PI));
     let h = [f.uu, f.uv, f.vv];
     h.iter().all(|x| x.is_finite()).then_some(h)
+}
+
+/// The rings and columns of an m × nphi grid kept for a mesh of at most about `max_cells`
+/// cells: evenly spaced, always including the first and the last ring.
+pub fn subsample_grid(m: usize, nphi: usize, max_cells: usize) -> (Vec<usize>, Vec<usize>) {
+    if m * nphi <= max_cells || m < 3 {
+        return ((0..m).collect(), (0..nphi).collect());
+    }
+    let f = ((m * nphi) as f64 / max_cells as f64).sqrt();
+    let m2 = ((m as f64 / f).round() as usize).clamp(2, m);
+    let n2 = ((nphi as f64 / f).round() as usize).clamp(3, nphi);
+    let rows = (0..m2)
+        .map(|i| ((i * (m - 1)) as f64 / (m2 - 1) as f64).round() as usize)
+        .collect();
+    let cols = (0..n2)
+        .map(|i| ((i * nphi) as f64 / n2 as f64).round() as usize % nphi)
+        .collect();
+    (rows, cols)
 }
 
 /// Radii from a tangent-plane Hessian `[h_uu, h_uv, h_vv]`: eigenvalues λ give
