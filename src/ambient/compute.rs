@@ -265,14 +265,8 @@ impl Ambient {
             ad: params.ad as f64,
             as_: params.as_.max(0) as f64,
             use_hessian: true,
-            hessian_cells: std::env::var("TESSERA_HESS_MAX")
-                .ok()
-                .and_then(|s| s.parse().ok())
-                .unwrap_or(usize::MAX),
-            clamp: std::env::var("TESSERA_AMB_CLAMP")
-                .ok()
-                .and_then(|s| s.parse().ok())
-                .unwrap_or(0.0),
+            hessian_cells: env_or("TESSERA_HESSIAN_CELLS", HESSIAN_CELLS),
+            clamp: env_or("TESSERA_AMB_CLAMP", OUTLIER_LIMIT),
             use_gradients: true,
             use_corral: std::env::var("TESSERA_NO_CORRAL").as_deref() != Ok("1"),
             minarad,
@@ -711,11 +705,32 @@ impl Ambient {
 }
 
 /// One hemisphere cell: the running sum of its samples.
+/// Default cell limit of the mesh a new value's Hessian is taken from: `-ad 1024` (18 × 57
+/// cells) and `-ad 512` (13 × 41) are thinned to 9 × 28 evenly spaced rings and columns (see
+/// [`super::hessian::subsample_grid`]); radii change by under 1% in a room, the Hessian's
+/// cost falls from about a quarter of a render to a few percent (docs/ambient.md).
+pub const HESSIAN_CELLS: usize = 256;
+
+/// Default outlier limit of a cached value's cells (see [`clamp_outliers`]).
+pub const OUTLIER_LIMIT: f64 = 2.0;
+
+/// A setting from the environment (an experiment switch), else its default.
+fn env_or<T: std::str::FromStr>(name: &str, default: T) -> T {
+    std::env::var(name)
+        .ok()
+        .and_then(|s| s.parse().ok())
+        .unwrap_or(default)
+}
+
 /// Limits every cell's brightness to `f` × the sum of all the other cells' brightness
 /// (scaling its colour), so that one sample that caught a rare bright path (a highlight seen
 /// from below a glossy object, a caustic) cannot make the whole value: with few cells such a
 /// spike would otherwise be spread over the value's radii.
+/// Hemispheres of fewer than 16 cells are left alone.
 pub fn clamp_outliers(cells: &mut [Color], f: f64) {
+    if cells.len() < 16 {
+        return;
+    }
     let b: Vec<f64> = cells.iter().map(|c| bright(*c)).collect();
     let total: f64 = b.iter().sum();
     if !(total > 0.0 && total.is_finite()) {
@@ -853,6 +868,41 @@ mod tests {
     const X: DVec3 = DVec3::X;
     const Y: DVec3 = DVec3::Y;
     const Z: DVec3 = DVec3::Z;
+
+    #[test]
+    fn one_dominant_cell_is_clamped_to_the_others_sum() {
+        let grey = |x: f64| Color::splat(x);
+        // 51 cells of 0.003 and one highlight of 9 (the spheres case): the highlight may
+        // bring at most f × 51 × 0.003.
+        let mut cells = vec![grey(0.003); 52];
+        cells[17] = Color::new(18.0, 9.0, 0.0);
+        let before = bright(cells[17]);
+        clamp_outliers(&mut cells, 1.0);
+        let others = 51.0 * bright(grey(0.003));
+        assert!((bright(cells[17]) - others).abs() < 1e-12 * others);
+        // Its colour keeps its proportions; the other cells are untouched.
+        assert!((cells[17].x / cells[17].y - 2.0).abs() < 1e-12 && cells[17].z == 0.0);
+        assert!(cells
+            .iter()
+            .enumerate()
+            .all(|(i, c)| i == 17 || *c == grey(0.003)));
+        assert!(bright(cells[17]) < before);
+        // A bright but not dominant region (a window over 8 of 52 cells) is left alone.
+        let mut window = vec![grey(0.01); 52];
+        for c in &mut window[20..28] {
+            *c = grey(2.0);
+        }
+        let copy = window.clone();
+        clamp_outliers(&mut window, 1.0);
+        assert_eq!(window, copy);
+        // Black and single-cell hemispheres are left alone.
+        let mut black = vec![Color::ZERO; 9];
+        clamp_outliers(&mut black, 1.0);
+        assert!(black.iter().all(|c| *c == Color::ZERO));
+        let mut one = vec![grey(5.0)];
+        clamp_outliers(&mut one, 1.0);
+        assert_eq!(one[0], grey(5.0));
+    }
 
     #[test]
     fn sectors_follow_atan2_in_the_value_frame() {

@@ -503,6 +503,98 @@ mod tests {
         }
     }
 
+    /// The hit points of a stratified hemisphere (cell centres) above the floor point `p` of
+    /// the box `lo`..`hi`, relative to `p`.
+    fn room(p: DVec3, lo: DVec3, hi: DVec3, m: usize, nphi: usize) -> Vec<DVec3> {
+        let mut pts = Vec::new();
+        for j in 0..m {
+            for k in 0..nphi {
+                let s2 = (j as f64 + 0.5) / m as f64;
+                let phi = 2.0 * PI * (k as f64 + 0.5) / nphi as f64;
+                let st = s2.sqrt();
+                let d = DVec3::new(st * phi.cos(), st * phi.sin(), (1.0 - s2).sqrt());
+                let t = (0..3)
+                    .filter(|&i| d[i].abs() > 1e-12)
+                    .map(|i| {
+                        let wall = if d[i] > 0.0 { hi[i] } else { lo[i] };
+                        (wall - p[i]) / d[i]
+                    })
+                    .fold(f64::INFINITY, f64::min);
+                pts.push(d * t);
+            }
+        }
+        pts
+    }
+
+    #[test]
+    fn a_rotated_frame_gives_the_same_hessian() {
+        // The same mesh expressed in a rotated world frame: the tangent-frame Hessian is a
+        // property of the mesh alone.
+        let (m, nphi) = (6, 19);
+        let (pts, b) = hemisphere(7, m, nphi);
+        let h0 = hessian(&pts, &b, m, nphi, DVec3::Z, DVec3::X, DVec3::Y).unwrap();
+        let rot = glam::DQuat::from_axis_angle(DVec3::new(0.3, -0.8, 0.5).normalize(), 1.1);
+        let moved: Vec<DVec3> = pts.iter().map(|p| rot * *p).collect();
+        let h1 = hessian(
+            &moved,
+            &b,
+            m,
+            nphi,
+            rot * DVec3::Z,
+            rot * DVec3::X,
+            rot * DVec3::Y,
+        )
+        .unwrap();
+        let scale = h0.iter().map(|x| x.abs()).fold(0.0, f64::max);
+        for i in 0..3 {
+            assert!((h0[i] - h1[i]).abs() <= 1e-9 * scale, "{h0:?} vs {h1:?}");
+        }
+    }
+
+    #[test]
+    fn thinned_grids_keep_the_first_and_last_ring() {
+        assert_eq!(
+            subsample_grid(5, 16, 256),
+            ((0..5).collect(), (0..16).collect())
+        );
+        for (m, nphi, max) in [(18, 57, 256), (13, 41, 256), (26, 82, 128), (40, 126, 300)] {
+            let (rows, cols) = subsample_grid(m, nphi, max);
+            assert_eq!(rows[0], 0);
+            assert_eq!(*rows.last().unwrap(), m - 1);
+            assert!(rows.windows(2).all(|w| w[0] < w[1]), "{rows:?}");
+            assert!(cols.windows(2).all(|w| w[0] < w[1]), "{cols:?}");
+            assert!(*cols.last().unwrap() < nphi);
+            let cells = rows.len() * cols.len();
+            assert!(
+                cells <= max * 5 / 4 && cells >= max / 2,
+                "{m}x{nphi} -> {cells}"
+            );
+        }
+    }
+
+    #[test]
+    fn a_thinned_mesh_gives_nearly_the_same_radii_in_a_room() {
+        // Floor points of a box room, seen through an 18 x 57 mesh (-ad 1024) and through
+        // the same mesh thinned to 256 cells: the radii agree to within 5% (measured: 0.1–1%).
+        let (lo, hi) = (DVec3::new(-2.0, -1.5, 0.0), DVec3::new(3.0, 2.5, 2.2));
+        let (m, nphi) = (18, 57);
+        let b = vec![1.0; m * nphi];
+        for p in [
+            DVec3::new(0.0, 0.0, 0.0),
+            DVec3::new(2.5, 0.3, 0.0),
+            DVec3::new(-1.6, 2.1, 0.0),
+        ] {
+            let pts = room(p, lo, hi, m, nphi);
+            let (n, u, v) = (DVec3::Z, DVec3::X, DVec3::Y);
+            let full = hessian_radii(&hessian(&pts, &b, m, nphi, n, u, v).unwrap()).unwrap();
+            let thin = hessian_radii(&hessian_subsampled(&pts, &b, m, nphi, n, u, v, 256).unwrap())
+                .unwrap();
+            for (a, t) in [(full.1, thin.1), (full.2, thin.2)] {
+                assert!((t / a - 1.0).abs() < 0.05, "at {p}: {full:?} vs {thin:?}");
+            }
+        }
+    }
+
     #[test]
     fn jet_arithmetic_follows_the_chain_rule() {
         // g(δu, δv) = atan2(√(1 + δu² + 3δuδv), 2 + δv) / (1 + δu), checked against
