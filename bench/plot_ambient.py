@@ -30,7 +30,8 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
-LEVELS = [0.03, 0.05, 0.1, 0.2, 0.3]
+# Error levels of the ratio table (AMB_LEVELS="0.02 0.05" to choose others).
+LEVELS = [float(x) for x in os.environ.get("AMB_LEVELS", "0.015 0.02 0.03 0.05 0.1 0.2").split()]
 COLORS = {"rpict": "tab:blue", "tpict": "tab:orange"}
 
 
@@ -89,6 +90,7 @@ def main():
         groups.setdefault((r["scene"], r["ab"]), []).append(r)
 
     ratio_rows = []
+    overlap_rows = []
     for (scene, ab), rs in sorted(groups.items()):
         fig, ax = plt.subplots(figsize=(5.2, 4.0), dpi=80)
         fronts = {}
@@ -105,7 +107,7 @@ def main():
                     color=COLORS[ren], label=f"{ren} (Pareto front)")
         if (scene, ab) in refnoise:
             ax.axhline(refnoise[(scene, ab)], color="gray", ls="--", lw=1,
-                       label="noise of the averaged reference")
+                       label="half the references' RMS difference")
         ax.set_xscale("log")
         ax.set_yscale("log")
         ax.xaxis.set_minor_formatter(matplotlib.ticker.NullFormatter())
@@ -124,6 +126,17 @@ def main():
         for lev in LEVELS:
             tr, tt = time_at(rf, lev), time_at(tf, lev)
             ratio_rows.append((scene, ab, lev, tr, tt, tr / tt if tr and tt else None))
+        # Over the whole overlap of the two fronts' error ranges: 25 log-spaced levels.
+        if rf and tf:
+            hi = min(rf[0][1], tf[0][1])
+            lo = max(rf[-1][1], tf[-1][1])
+            if hi > lo:
+                dense = [r for r in (time_at(rf, e) / time_at(tf, e)
+                                     for e in np.geomspace(lo, hi, 25)
+                                     if time_at(rf, e) and time_at(tf, e))]
+                if dense:
+                    overlap_rows.append((scene, ab, lo, hi, min(dense), float(np.median(dense)),
+                                         max(dense)))
         # At rpict's best (lowest) error on its front.
         if rf:
             lev = rf[-1][1]
@@ -148,6 +161,11 @@ def main():
         md.append("")
         md.append(f"Geometric mean over {len(ratios)} matched levels: "
                   f"{float(np.exp(np.mean(np.log(ratios)))):.2f} (min {min(ratios):.2f}, max {max(ratios):.2f}).")
+    if overlap_rows:
+        md += ["", "Over the overlap of both fronts (25 log-spaced error levels):", "",
+               "| scene | -ab | errors | min | median | max |", "|---|---|---|---|---|---|"]
+        for (scene, ab, lo, hi, mn, med, mx) in overlap_rows:
+            md.append(f"| {scene} | {ab} | {lo:.3f}–{hi:.3f} | {mn:.2f} | {med:.2f} | {mx:.2f} |")
     with open(os.path.join(out, "ratios.md"), "w") as fh:
         fh.write("\n".join(md) + "\n")
     print("\n".join(md))
