@@ -389,6 +389,14 @@ impl Ambient {
             if v.lvl > level || (v.lvl == level && v.weight < 0.9 * rweight) {
                 return;
             }
+            // Most candidates of the grid cells are out of reach: |P − P_v| < aa·max(rad)
+            // is necessary for the elliptical test below (its terms are components of the
+            // offset in an orthonormal frame over radii ≤ max(rad)), and cheap.
+            let dd = p - v.pos;
+            let reach = aa * v.rad[0].max(v.rad[1]);
+            if dd.length_squared() >= reach * reach {
+                return;
+            }
             let d = v.n.dot(n);
             if d <= 0.0 {
                 return;
@@ -398,7 +406,6 @@ impl Ambient {
             if dr2 >= maxangle * maxangle {
                 return;
             }
-            let dd = p - v.pos;
             let dn = dd.dot(v.n);
             if dn < behind {
                 return;
