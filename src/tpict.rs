@@ -574,6 +574,10 @@ fn render_frames(
                     }
                 }
             }
+            if frame == start {
+                // As rpict: standard input held no view line (`VIEW=`, `rview ...`).
+                log.warn("no output produced");
+            }
         }
     }
     Ok(())

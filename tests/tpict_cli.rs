@@ -1055,3 +1055,30 @@ fn radiance_reads_tpicts_pictures() {
     assert!(img.pixels.iter().any(|q| largest(*q) > 0.01));
     assert_rgbe_close(&img, &theirs, "pvalue vs read_picture");
 }
+
+/// Standard input without a view line (`VIEW=`, `rview ...`): like rpict, nothing is rendered
+/// and a warning says so (no silent success).
+#[test]
+fn sequence_without_view_lines_warns() {
+    let t = workdir();
+    let p = t.path();
+    let mut c = tpict_in(p);
+    c.args([
+        "-x", "8", "-y", "8", "-ab", "0", "-S", "1", "-o", "f%d.hdr", "room.rad",
+    ])
+    .stdin(Stdio::piped())
+    .stdout(Stdio::piped())
+    .stderr(Stdio::piped());
+    let mut child = c.spawn().unwrap();
+    child
+        .stdin
+        .take()
+        .unwrap()
+        .write_all(b"-vtv -vp 0 -4 1.5 -vd 0 1 -0.3\n")
+        .unwrap();
+    let o = child.wait_with_output().unwrap();
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(o.status.success(), "{err}");
+    assert!(err.contains("warning - no output produced"), "{err}");
+    assert!(!p.join("f1.hdr").exists());
+}
