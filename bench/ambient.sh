@@ -25,12 +25,8 @@
 #                          no -a option reduces) out of the error (docs/benchmarks.md)
 #   REF_EXTRA=""           more options for both references, e.g. "-lw 1e-5": the ray weight
 #                          limit caps the divisions of an ambient value at 0.5/lw (rpict, tpict)
-#   REF_RES=$RES           resolution of the references. Keep it equal to RES: with -pj 0
-#                          each run samples the pixel centres, and a reference sampling other
-#                          points adds the runs' sub-pixel aliasing (highlights, silhouettes),
-#                          not ambient error, to every error
 #   REF_DIR=dir            keep the reference pictures there and reuse them when present
-#                          (named by scene, -ab, REF_RES, REF_AD, EXTRA and REF_EXTRA; delete
+#                          (named by scene, -ab, RES, REF_AD, EXTRA and REF_EXTRA; delete
 #                          to re-render)
 #   FLOOR=0.01             relative floor of the error denominator (x mean reference)
 #   OUT=docs/benchmarks-ambient   where runs.tsv and references.tsv go (TAG=x -> runs-x.tsv)
@@ -50,7 +46,6 @@ AA_LIST=${AA_LIST-"0.3 0.2 0.15 0.1"}
 AD_LIST=${AD_LIST:-"128 512 1024"}
 AS_LIST=${AS_LIST:-"0 128"}
 REF_AD=${REF_AD:-2048}
-REF_RES=${REF_RES:-$RES}
 REF_DIR=${REF_DIR:-}
 REF_EXTRA=${REF_EXTRA:-}
 EXTRA=${EXTRA:-}
@@ -117,10 +112,12 @@ for s in $SCENES; do
         common=(-vf "$s.vf" -x "$RES" -y "$RES" -ps 1 -pj 0 -ab "$ab" $EXTRA)
         cd "$sdir"
         # --- references ---
-        refc=(-vf "$s.vf" -x "$REF_RES" -y "$REF_RES" -ps 1 -pj 0 -ab "$ab" -aa 0 -ad "$REF_AD" -as 0)
+        # References at the runs' resolution: with -pj 0 both sample the same pixel centres
+        # (other points would add the runs' sub-pixel aliasing, not ambient error).
+        refc=(-vf "$s.vf" -x "$RES" -y "$RES" -ps 1 -pj 0 -ab "$ab" -aa 0 -ad "$REF_AD" -as 0)
         # shellcheck disable=SC2206
         refc+=($EXTRA $REF_EXTRA)
-        key="$s-ab$ab-$REF_RES-ad$REF_AD$(echo "$EXTRA $REF_EXTRA" | tr -d ' ')"
+        key="$s-ab$ab-$RES-ad$REF_AD$(echo "$EXTRA $REF_EXTRA" | tr -d ' ')"
         if [[ -n $REF_DIR && -s "$REF_DIR/$key-rref.hdr" && -s "$REF_DIR/$key-tref.hdr" ]]; then
             cp "$REF_DIR/$key-rref.hdr" "$TMP/rref.hdr"
             cp "$REF_DIR/$key-tref.hdr" "$TMP/tref.hdr"

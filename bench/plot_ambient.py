@@ -132,9 +132,8 @@ def main():
             hi = min(rf[0][1], tf[0][1])
             lo = max(rf[-1][1], tf[-1][1])
             if hi > lo:
-                dense = [r for r in (time_at(rf, e) / time_at(tf, e)
-                                     for e in np.geomspace(lo, hi, 25)
-                                     if time_at(rf, e) and time_at(tf, e))]
+                pairs = [(time_at(rf, e), time_at(tf, e)) for e in np.geomspace(lo, hi, 25)]
+                dense = [a / b for a, b in pairs if a and b]
                 if dense:
                     overlap_rows.append((scene, ab, lo, hi, min(dense), float(np.median(dense)),
                                          max(dense)))

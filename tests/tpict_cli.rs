@@ -731,7 +731,9 @@ const VIEWS: &str = "VIEW= -vtv -vp 0 -4 1.5 -vd 0 1 -0.3 -vu 0 0 1 -vh 40 -vv 4
                      VIEW= -vp 1 -4 1.5\n\
                      rview -vtv -vp 2 -4 1.5 -vd 0 1 -0.3 -vh 30 -vv 30\n";
 
-fn sequence(p: &Path, extra: &[&str]) -> Output {
+/// Run `tpict -x 24 -y 24 -ab 0 -ps 1 -S 1 extra... room.rad` in `p` with `views` on its
+/// standard input.
+fn sequence_run(p: &Path, extra: &[&str], views: &[u8]) -> Output {
     let mut c = tpict_in(p);
     c.args(["-x", "24", "-y", "24", "-ab", "0", "-ps", "1", "-S", "1"])
         .args(extra)
@@ -740,13 +742,12 @@ fn sequence(p: &Path, extra: &[&str]) -> Output {
         .stdout(Stdio::piped())
         .stderr(Stdio::piped());
     let mut child = c.spawn().unwrap();
-    child
-        .stdin
-        .take()
-        .unwrap()
-        .write_all(VIEWS.as_bytes())
-        .unwrap();
-    let o = child.wait_with_output().unwrap();
+    child.stdin.take().unwrap().write_all(views).unwrap();
+    child.wait_with_output().unwrap()
+}
+
+fn sequence(p: &Path, extra: &[&str]) -> Output {
+    let o = sequence_run(p, extra, VIEWS.as_bytes());
     assert!(
         o.status.success(),
         "sequence failed: {}",
@@ -1062,21 +1063,7 @@ fn radiance_reads_tpicts_pictures() {
 fn sequence_without_view_lines_warns() {
     let t = workdir();
     let p = t.path();
-    let mut c = tpict_in(p);
-    c.args([
-        "-x", "8", "-y", "8", "-ab", "0", "-S", "1", "-o", "f%d.hdr", "room.rad",
-    ])
-    .stdin(Stdio::piped())
-    .stdout(Stdio::piped())
-    .stderr(Stdio::piped());
-    let mut child = c.spawn().unwrap();
-    child
-        .stdin
-        .take()
-        .unwrap()
-        .write_all(b"-vtv -vp 0 -4 1.5 -vd 0 1 -0.3\n")
-        .unwrap();
-    let o = child.wait_with_output().unwrap();
+    let o = sequence_run(p, &["-o", "f%d.hdr"], b"-vtv -vp 0 -4 1.5 -vd 0 1 -0.3\n");
     let err = String::from_utf8_lossy(&o.stderr);
     assert!(o.status.success(), "{err}");
     assert!(err.contains("warning - no output produced"), "{err}");

@@ -10,7 +10,7 @@
 //! gradient as Radiance does. Lookups apply Radiance's acceptance tests and weights.
 
 use super::cache::{AmbientCache, CachedValue};
-pub use super::hessian::{hessian, hessian_radii, hessian_subsampled};
+pub use super::hessian::{hessian, hessian_radii};
 use crate::color::{bright, Color};
 use crate::material::normal::any_perpendicular;
 use crate::radopt::RenderParams;
@@ -602,8 +602,9 @@ impl Ambient {
             return None;
         }
         let mut lval: Vec<Color> = cells.iter().map(|c| c.mean()).collect();
+        let mut lb: Vec<f64> = lval.iter().map(|c| bright(*c)).collect();
         if cached && self.clamp > 0.0 {
-            clamp_outliers(&mut lval, self.clamp);
+            clamp_outliers(&mut lval, &mut lb, self.clamp);
         }
         let dist: Vec<f64> = cells.iter().map(|c| c.dist(self.max_dist)).collect();
         let count = ncells as f64;
@@ -616,7 +617,6 @@ impl Ambient {
                 g.1 += 1;
             }
         }
-        let lb: Vec<f64> = lval.iter().map(|c| bright(*c)).collect();
         // Gradients (Ward & Heckbert 1992) of the brightness, relative to the value.
         // Gradients, radii and light-leak flags serve interpolation only: an uncached
         // estimate (-aa 0) is used once and needs none of them.
@@ -630,7 +630,7 @@ impl Ambient {
         // mean distance (isotropic).
         let hess = if cached && complete && self.use_hessian && m > 1 && nphi > 2 {
             let pts: Vec<DVec3> = cells.iter().map(|c| c.hit).collect();
-            hessian_subsampled(&pts, &lb, m, nphi, n, u0, v0, self.hessian_cells)
+            hessian(&pts, &lb, m, nphi, n, u0, v0, self.hessian_cells)
                 .and_then(|h| hessian_radii(&h))
         } else {
             None
@@ -732,21 +732,22 @@ fn env_or<T: std::str::FromStr>(name: &str, default: T) -> T {
 /// Limits every cell's brightness to `f` × the sum of all the other cells' brightness
 /// (scaling its colour), so that one sample that caught a rare bright path (a highlight seen
 /// from below a glossy object, a caustic) cannot make the whole value: with few cells such a
-/// spike would otherwise be spread over the value's radii.
-/// Hemispheres of fewer than 16 cells are left alone.
-pub fn clamp_outliers(cells: &mut [Color], f: f64) {
+/// spike would otherwise be spread over the value's radii. `b` holds the cells' brightness
+/// and is scaled with them. Hemispheres of fewer than 16 cells are left alone.
+pub fn clamp_outliers(cells: &mut [Color], b: &mut [f64], f: f64) {
     if cells.len() < 16 {
         return;
     }
-    let b: Vec<f64> = cells.iter().map(|c| bright(*c)).collect();
     let total: f64 = b.iter().sum();
     if !(total > 0.0 && total.is_finite()) {
         return;
     }
-    for (c, &bi) in cells.iter_mut().zip(&b) {
-        let cap = f * (total - bi);
-        if bi > cap && bi > 0.0 {
-            *c *= cap.max(0.0) / bi;
+    for (c, bi) in cells.iter_mut().zip(b.iter_mut()) {
+        let cap = f * (total - *bi);
+        if *bi > cap && *bi > 0.0 {
+            let k = cap.max(0.0) / *bi;
+            *c *= k;
+            *bi *= k;
         }
     }
 }
@@ -879,12 +880,20 @@ mod tests {
     #[test]
     fn one_dominant_cell_is_clamped_to_the_others_sum() {
         let grey = |x: f64| Color::splat(x);
+        let clamp = |cells: &mut [Color], f: f64| {
+            let mut b: Vec<f64> = cells.iter().map(|c| bright(*c)).collect();
+            clamp_outliers(cells, &mut b, f);
+            // The brightness is scaled with the colours.
+            for (c, bi) in cells.iter().zip(&b) {
+                assert!((bright(*c) - bi).abs() <= 1e-12 * bi.abs().max(1e-300));
+            }
+        };
         // 51 cells of 0.003 and one highlight of 9 (the spheres case): the highlight may
         // bring at most f × 51 × 0.003.
         let mut cells = vec![grey(0.003); 52];
         cells[17] = Color::new(18.0, 9.0, 0.0);
         let before = bright(cells[17]);
-        clamp_outliers(&mut cells, 1.0);
+        clamp(&mut cells, 1.0);
         let others = 51.0 * bright(grey(0.003));
         assert!((bright(cells[17]) - others).abs() < 1e-12 * others);
         // Its colour keeps its proportions; the other cells are untouched.
@@ -900,14 +909,14 @@ mod tests {
             *c = grey(2.0);
         }
         let copy = window.clone();
-        clamp_outliers(&mut window, 1.0);
+        clamp(&mut window, 1.0);
         assert_eq!(window, copy);
         // Black and single-cell hemispheres are left alone.
         let mut black = vec![Color::ZERO; 9];
-        clamp_outliers(&mut black, 1.0);
+        clamp(&mut black, 1.0);
         assert!(black.iter().all(|c| *c == Color::ZERO));
         let mut one = vec![grey(5.0)];
-        clamp_outliers(&mut one, 1.0);
+        clamp(&mut one, 1.0);
         assert_eq!(one[0], grey(5.0));
     }
 

@@ -191,8 +191,13 @@ impl EdgeTerm for Jet {
 /// shading point) as a jet in the point's tangent-plane offset along `u` and `v`
 /// (an orthonormal frame with `n`).
 pub fn edge_jet(a: DVec3, c: DVec3, n: DVec3, u: DVec3, v: DVec3) -> Jet {
-    let local = |p: DVec3| DVec3::new(p.dot(u), p.dot(v), p.dot(n));
-    edge_jet_local(local(a), local(c))
+    edge_jet_local(in_frame(a, n, u, v), in_frame(c, n, u, v))
+}
+
+/// `p` in the tangent frame: (p·u, p·v, p·n).
+#[inline]
+fn in_frame(p: DVec3, n: DVec3, u: DVec3, v: DVec3) -> DVec3 {
+    DVec3::new(p.dot(u), p.dot(v), p.dot(n))
 }
 
 /// [`edge_jet`] with `a` and `c` given in the tangent frame itself (x along u, y along v,
@@ -342,23 +347,11 @@ impl<'a> Mesh<'a> {
 /// The 2×2 tangent-plane Hessian `[h_uu, h_uv, h_vv]` (per unit length²) of the normalised
 /// irradiance of the mesh of hit points `pts[j*nphi + k]` (relative to the shading point, m
 /// rings of nphi cells, brightness `b`) at the shading point with normal `n` and tangent
-/// frame (`u`, `v`): exact derivatives by [`Jet`]s (see the module documentation). Returns
-/// None for a degenerate mesh.
-pub fn hessian(
-    pts: &[DVec3],
-    b: &[f64],
-    m: usize,
-    nphi: usize,
-    n: DVec3,
-    u: DVec3,
-    v: DVec3,
-) -> Option<[f64; 3]> {
-    hessian_subsampled(pts, b, m, nphi, n, u, v, usize::MAX)
-}
-
-/// [`hessian`] of a mesh thinned to at most about `max_cells` cells by [`subsample_grid`].
+/// frame (`u`, `v`): exact derivatives by [`Jet`]s (see the module documentation), of the
+/// mesh thinned to at most about `max_cells` cells by [`subsample_grid`] (`usize::MAX`: the
+/// whole mesh). Returns None for a degenerate mesh.
 #[allow(clippy::too_many_arguments)]
-pub fn hessian_subsampled(
+pub fn hessian(
     pts: &[DVec3],
     b: &[f64],
     m: usize,
@@ -377,7 +370,7 @@ pub fn hessian_subsampled(
     for &j in &rows {
         for &k in &cols {
             let p = pts[j * nphi + k];
-            local.push(DVec3::new(p.dot(u), p.dot(v), p.dot(n)));
+            local.push(in_frame(p, n, u, v));
             lb.push(b[j * nphi + k]);
         }
     }
@@ -486,7 +479,7 @@ mod tests {
             let (m, nphi) = (4 + (seed as usize % 5), 13 + 3 * (seed as usize % 4));
             let (pts, b) = hemisphere(seed, m, nphi);
             let mesh = Mesh::new(&pts, &b, m, nphi).unwrap();
-            let exact = hessian(&pts, &b, m, nphi, n, u, v).unwrap();
+            let exact = hessian(&pts, &b, m, nphi, n, u, v, usize::MAX).unwrap();
             let dmin = pts.iter().map(|p| p.length()).fold(f64::INFINITY, f64::min);
             let approx = numerical(&mesh, n, u, v, 2e-3 * dmin);
             let scale = exact.iter().map(|x| x.abs()).fold(0.0, f64::max);
@@ -532,7 +525,7 @@ mod tests {
         // property of the mesh alone.
         let (m, nphi) = (6, 19);
         let (pts, b) = hemisphere(7, m, nphi);
-        let h0 = hessian(&pts, &b, m, nphi, DVec3::Z, DVec3::X, DVec3::Y).unwrap();
+        let h0 = hessian(&pts, &b, m, nphi, DVec3::Z, DVec3::X, DVec3::Y, usize::MAX).unwrap();
         let rot = glam::DQuat::from_axis_angle(DVec3::new(0.3, -0.8, 0.5).normalize(), 1.1);
         let moved: Vec<DVec3> = pts.iter().map(|p| rot * *p).collect();
         let h1 = hessian(
@@ -543,6 +536,7 @@ mod tests {
             rot * DVec3::Z,
             rot * DVec3::X,
             rot * DVec3::Y,
+            usize::MAX,
         )
         .unwrap();
         let scale = h0.iter().map(|x| x.abs()).fold(0.0, f64::max);
@@ -586,9 +580,9 @@ mod tests {
         ] {
             let pts = room(p, lo, hi, m, nphi);
             let (n, u, v) = (DVec3::Z, DVec3::X, DVec3::Y);
-            let full = hessian_radii(&hessian(&pts, &b, m, nphi, n, u, v).unwrap()).unwrap();
-            let thin = hessian_radii(&hessian_subsampled(&pts, &b, m, nphi, n, u, v, 256).unwrap())
-                .unwrap();
+            let full =
+                hessian_radii(&hessian(&pts, &b, m, nphi, n, u, v, usize::MAX).unwrap()).unwrap();
+            let thin = hessian_radii(&hessian(&pts, &b, m, nphi, n, u, v, 256).unwrap()).unwrap();
             for (a, t) in [(full.1, thin.1), (full.2, thin.2)] {
                 assert!((t / a - 1.0).abs() < 0.05, "at {p}: {full:?} vs {thin:?}");
             }
@@ -638,6 +632,6 @@ mod tests {
         assert!(Mesh::new(&pts, &b, 4, 12).is_none());
         let mut z = pts.clone();
         z[5] = DVec3::ZERO;
-        assert!(hessian(&z, &b, 4, 13, DVec3::Z, DVec3::X, DVec3::Y).is_none());
+        assert!(hessian(&z, &b, 4, 13, DVec3::Z, DVec3::X, DVec3::Y, usize::MAX).is_none());
     }
 }
