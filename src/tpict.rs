@@ -418,6 +418,8 @@ pub struct AmbientReport {
     pub leak_tests: u64,
     /// Cached values rejected because a wall blocked the leak test.
     pub leak_rejects: u64,
+    /// Shadow rays at sample hits answered from their footprint's cube, not traced.
+    pub shadows_reused: u64,
 }
 
 impl AmbientReport {
@@ -440,6 +442,7 @@ impl AmbientReport {
             corral_values: s.corral_values.load(Ordering::Relaxed),
             leak_tests: s.leak_tests.load(Ordering::Relaxed),
             leak_rejects: s.leak_rejects.load(Ordering::Relaxed),
+            shadows_reused: s.shadows_reused.load(Ordering::Relaxed),
         }
     }
 }

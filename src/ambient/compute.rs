@@ -47,6 +47,9 @@ pub struct AmbientStats {
     pub leak_tests: AtomicU64,
     /// Cached values rejected at a lookup because a leak-test ray was blocked.
     pub leak_rejects: AtomicU64,
+    /// Shadow rays at sample hits answered from their footprint's cube instead of traced
+    /// (see [`crate::light::viscache`]).
+    pub shadows_reused: AtomicU64,
 }
 
 impl AmbientStats {
@@ -202,6 +205,9 @@ pub fn corral_target(p: DVec3, n: DVec3, pv: DVec3, nv: DVec3, offset: f64) -> D
     }
 }
 
+/// Identities of calculations ([`Ambient::owner`]).
+static NEXT_OWNER: AtomicU64 = AtomicU64::new(1);
+
 /// The ambient calculation with its shared cache.
 pub struct Ambient {
     /// The shared cache.
@@ -227,6 +233,11 @@ pub struct Ambient {
     pub hessian_cells: usize,
     /// Outlier limit of a cached value's cells (0: none): see [`clamp_outliers`].
     pub clamp: f64,
+    /// Reuse shadow rays of sample hits within their footprints ([`crate::light::viscache`]);
+    /// default true, `TESSERA_REUSE_SHADOWS=0` turns it off.
+    pub reuse_shadows: bool,
+    /// This calculation's identity for per-thread caches.
+    pub owner: u64,
     av: Color,
     /// `-aw`: weight of `-av` in the moving log-average (0: `-av` stays fixed).
     aw: f64,
@@ -269,6 +280,8 @@ impl Ambient {
             clamp: env_or("TESSERA_AMB_CLAMP", OUTLIER_LIMIT),
             use_gradients: true,
             use_corral: std::env::var("TESSERA_NO_CORRAL").as_deref() != Ok("1"),
+            reuse_shadows: std::env::var("TESSERA_REUSE_SHADOWS").as_deref() != Ok("0"),
+            owner: NEXT_OWNER.fetch_add(1, Ordering::Relaxed),
             minarad,
             maxarad,
             max_dist: 10.0 * size + 1000.0,
@@ -550,6 +563,14 @@ impl Ambient {
         let ncells = m * nphi;
         let mut cells = vec![Cell::default(); ncells];
         let mut traced = 0u64;
+        // A sample ray stands for its cell: about 2π/cells steradians, a footprint of radius
+        // about √(2π/cells)/2 per unit distance (cached values only; the uncached estimate
+        // keeps every shadow ray).
+        let spread = if cached {
+            0.5 * (2.0 * PI / ncells as f64).sqrt()
+        } else {
+            0.0
+        };
         // One jittered sample in cell (j, k): its value, distance and direction.
         let mut shoot = |j: usize, k: usize, rng: &mut Sampler| -> Option<(Color, f64, DVec3)> {
             let (r1, r2) = rng.next2();
@@ -560,6 +581,7 @@ impl Ambient {
             let dir = n * ct + (u0 * phi.cos() + v0 * phi.sin()) * st;
             let mut r = tr.spawn(ray, hit, dir, RayKind::Ambient, Color::splat(coef))?;
             r.amb_level = lvl + 1;
+            r.spread = spread;
             traced += 1;
             let (c, t) = tr.trace_dist(&r, rng);
             Some((c, t.clamp(FTINY, self.max_dist), dir))

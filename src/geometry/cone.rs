@@ -168,6 +168,17 @@ impl Cone {
         let rel = p - self.p0;
         let z = rel.dot(self.axis);
         let radv = rel - self.axis * z;
+        let u = turn_fraction(radv, self.e1, self.e2);
+        let v = (z / self.len).clamp(0.0, 1.0);
+        (self.normal_at(p), (u, v))
+    }
+
+    /// Unit front normal at a point on the surface (no surface coordinates: the tracer's
+    /// case, which saves the angle's atan2).
+    pub fn normal_at(&self, p: DVec3) -> DVec3 {
+        let rel = p - self.p0;
+        let z = rel.dot(self.axis);
+        let radv = rel - self.axis * z;
         let rho = radv.length();
         let n = if rho > 0.0 {
             (radv / rho - self.axis * self.slope).normalize_or(radv / rho)
@@ -176,10 +187,11 @@ impl Cone {
         } else {
             -self.axis
         };
-        let n = if self.kind.inward() { -n } else { n };
-        let u = turn_fraction(radv, self.e1, self.e2);
-        let v = (z / self.len).clamp(0.0, 1.0);
-        (n, (u, v))
+        if self.kind.inward() {
+            -n
+        } else {
+            n
+        }
     }
 
     /// Axis-aligned bounds (exact for the two end circles).

@@ -233,6 +233,18 @@ impl Surface {
         }
     }
 
+    /// Unit front normal at a point on the surface: [`Surface::hit_geom`] without the
+    /// surface coordinates, which the tracer does not need.
+    #[inline]
+    pub fn normal_at(&self, point: DVec3) -> DVec3 {
+        match self {
+            Surface::Polygon(s) => s.normal,
+            Surface::Sphere(s) => s.normal_at(point),
+            Surface::Cone(s) => s.normal_at(point),
+            Surface::Ring(s) => s.normal,
+        }
+    }
+
     /// Axis-aligned bounds (relative frame), not yet padded.
     pub fn bounds(&self) -> (DVec3, DVec3) {
         match self {

@@ -4,11 +4,13 @@
 //! Radiance's run-long per-source statistics).
 
 use super::source::SourceSample;
+use super::viscache::{self, VisQuery};
 use crate::color::{bright, Color};
 use crate::render::ray::Hit;
 use crate::render::sampler::Sampler;
 use crate::render::trace::Tracer;
 use glam::DVec3;
+use std::sync::atomic::Ordering;
 
 /// Shadow rays always traced before the adaptive test may stop (Radiance's MINSHADCNT).
 const MIN_SHADOW_TESTS: usize = 2;
@@ -33,6 +35,7 @@ pub fn direct(
     hit: &Hit,
     coef: &dyn Fn(DVec3, f64) -> Color,
     rng: &mut Sampler,
+    vis: Option<&VisQuery>,
 ) -> Color {
     let lights = tr.lights;
     if lights.sources.is_empty() {
@@ -41,7 +44,7 @@ pub fn direct(
     // The buffers are taken out of the thread-local (and put back below), so a nested call
     // would only allocate afresh, never alias them.
     let mut scratch = SCRATCH.with(|s| std::mem::take(&mut *s.borrow_mut()));
-    let result = direct_with(tr, weight, hit, coef, rng, &mut scratch);
+    let result = direct_with(tr, weight, hit, coef, rng, vis, &mut scratch);
     SCRATCH.with(|s| *s.borrow_mut() = scratch);
     result
 }
@@ -52,6 +55,7 @@ fn direct_with(
     hit: &Hit,
     coef: &dyn Fn(DVec3, f64) -> Color,
     rng: &mut Sampler,
+    vis: Option<&VisQuery>,
     scratch: &mut Scratch,
 ) -> Color {
     let lights = tr.lights;
@@ -100,7 +104,20 @@ fn direct_with(
         }
         let (_, c, k) = cands[i];
         let s = &samples[k];
-        let t = tr.shadow(p, s.dir, s.dist, s.src, hit.antimatter, rng);
+        let t = match vis {
+            Some(q) => {
+                let (t, traced) = viscache::shadow(q, s.src, || {
+                    tr.shadow(p, s.dir, s.dist, s.src, hit.antimatter, rng)
+                });
+                if !traced {
+                    if let Some(a) = tr.ambient {
+                        a.stats.shadows_reused.fetch_add(1, Ordering::Relaxed);
+                    }
+                }
+                t
+            }
+            None => tr.shadow(p, s.dir, s.dist, s.src, hit.antimatter, rng),
+        };
         let st = &mut stats[s.src];
         st.0 += bright(t).clamp(0.0, 1.0);
         st.1 += 1;

@@ -47,6 +47,9 @@ pub struct Ray {
     pub amb_level: u32,
     /// Factor a survivor of Russian roulette must multiply its result by.
     pub gain: f64,
+    /// For a cached ambient value's sample ray: the radius of the ray's footprint per unit
+    /// distance (the hemisphere cell it stands for); 0 for every other ray.
+    pub spread: f64,
     /// Antimatter materials whose volumes contain the ray origin.
     pub antimatter: [Option<MatId>; MAX_ANTIMATTER],
 }
@@ -64,6 +67,7 @@ impl Ray {
             depth: 0,
             amb_level: 0,
             gain: 1.0,
+            spread: 0.0,
             antimatter: [None; MAX_ANTIMATTER],
         }
     }

@@ -7,6 +7,7 @@ use crate::ambient::Ambient;
 use crate::color::{sanitize, Color};
 use crate::light::direct::direct;
 use crate::light::source::LightSet;
+use crate::light::viscache::VisQuery;
 use crate::material::emitter::EmitterKind;
 use crate::material::{MatId, Material};
 use crate::radopt::RenderParams;
@@ -83,7 +84,7 @@ impl<'a> Tracer<'a> {
         let facing = |i: usize| -> bool {
             let s = &objs[i].surface;
             match s.intersect(org, dir, tmax) {
-                Some(t) => s.hit_geom(org, dir, t).normal.dot(dir) < 0.0,
+                Some(t) => s.normal_at(org + dir * t).dot(dir) < 0.0,
                 None => false,
             }
         };
@@ -123,20 +124,21 @@ impl<'a> Tracer<'a> {
                 |a, b| self.prefer(a, b, org, dir, tmax),
             )?;
             let obj = &scene.objects[i];
-            let g = obj.surface.hit_geom(org, dir, t);
-            let back = g.normal.dot(dir) > 0.0;
+            let point = org + dir * t;
+            let normal = obj.surface.normal_at(point);
+            let back = normal.dot(dir) > 0.0;
             let mut hit = Hit {
                 obj: i,
                 t: travelled + t,
-                point: g.point,
-                normal: g.normal,
+                point,
+                normal,
                 back,
                 flat: obj.surface.is_flat(),
                 material: obj.material,
                 antimatter: am,
             };
             let advance = |org: &mut DVec3, travelled: &mut f64| {
-                *org = g.point;
+                *org = point;
                 *travelled += t;
             };
             if self.cuts(&am, obj.material) {
@@ -163,14 +165,14 @@ impl<'a> Tracer<'a> {
                     }
                     if was_inside {
                         let mut probe = *ray;
-                        probe.org = g.point;
+                        probe.org = point;
                         probe.tmax = f64::INFINITY;
                         probe.antimatter = am;
                         if let Some(next) = self.intersect(&probe) {
                             if next.back && next.material.is_some() && list.contains(&next.material)
                             {
                                 hit.material = list.first().copied().flatten();
-                                hit.normal = -g.normal;
+                                hit.normal = -normal;
                                 hit.back = false;
                                 hit.antimatter = inside_state;
                                 return Some(hit);
@@ -356,6 +358,7 @@ impl<'a> Tracer<'a> {
             depth,
             amb_level: parent.amb_level,
             gain,
+            spread: 0.0,
             antimatter: hit.antimatter,
         })
     }
@@ -369,7 +372,13 @@ impl<'a> Tracer<'a> {
         coef: &dyn Fn(DVec3, f64) -> Color,
         rng: &mut Sampler,
     ) -> Color {
-        direct(self, ray.weight, hit, coef, rng)
+        let vis = match self.ambient {
+            Some(a) if a.reuse_shadows && ray.spread > 0.0 => {
+                VisQuery::new(a.owner, hit.obj, hit.back, hit.t * ray.spread, hit.point)
+            }
+            _ => None,
+        };
+        direct(self, ray.weight, hit, coef, rng, vis.as_ref())
     }
 
     /// Use an irradiance cache for indirect light.
