@@ -531,7 +531,11 @@ fn shadow_reuse_saves_rays_and_keeps_the_picture() {
     let reused = |st: &serde_json::Value| st["ambient"]["shadows_reused"].as_u64().unwrap();
     let rays = |st: &serde_json::Value| st["total_rays"].as_u64().unwrap();
     let (reference, st) = render(&["-aa", "0", "-ad", "512", "-as", "0"], true, "ref");
-    assert_eq!(reused(&st), 0, "the uncached calculation traces every shadow ray");
+    assert_eq!(
+        reused(&st),
+        0,
+        "the uncached calculation traces every shadow ray"
+    );
     let cached = ["-aa", ".15", "-ad", "512", "-as", "0"];
     let (on, st_on) = render(&cached, true, "on");
     let (off, st_off) = render(&cached, false, "off");

@@ -70,14 +70,15 @@ impl Glass {
         let n = if hit.back { -hit.normal } else { hit.normal };
         let cos1 = -ray.dir.dot(n);
         let (refl, trans) = self.coefficients(cos1);
-        let mut result = Color::ZERO;
-        if let Some(r) = tr.spawn(ray, hit, ray.dir, RayKind::Transmitted, trans) {
-            result += trans * tr.trace(&r, rng);
-        }
-        if let Some(r) = tr.spawn(ray, hit, reflect(ray.dir, n), RayKind::Reflected, refl) {
-            result += refl * tr.trace(&r, rng);
-        }
-        result
+        tr.split(
+            ray,
+            hit,
+            &[
+                (ray.dir, RayKind::Transmitted, trans),
+                (reflect(ray.dir, n), RayKind::Reflected, refl),
+            ],
+            rng,
+        )
     }
 
     /// What a shadow ray sees through the glass.
@@ -163,7 +164,6 @@ impl Dielectric {
             absorb(col1.z, hit.t),
         );
         let ci = (-ray.dir.dot(n)).clamp(0.0, 1.0);
-        let mut result = Color::ZERO;
         let (refl, refr) = match fresnel(n1, n2, ci) {
             Some((r, ct)) => {
                 let eta = n1 / n2;
@@ -172,19 +172,17 @@ impl Dielectric {
             }
             None => (1.0, None),
         };
+        let mut branches = [(DVec3::ZERO, RayKind::Transmitted, Color::ZERO); 2];
+        let mut count = 0;
         if let Some((tw, tdir)) = refr {
-            let c = atten * tw;
-            if let Some(r) = tr.spawn(ray, hit, tdir, RayKind::Transmitted, c) {
-                result += c * tr.trace(&r, rng);
-            }
+            branches[count] = (tdir, RayKind::Transmitted, atten * tw);
+            count += 1;
         }
-        let c = atten * refl;
         if refl > FTINY {
-            if let Some(r) = tr.spawn(ray, hit, reflect(ray.dir, n), RayKind::Reflected, c) {
-                result += c * tr.trace(&r, rng);
-            }
+            branches[count] = (reflect(ray.dir, n), RayKind::Reflected, atten * refl);
+            count += 1;
         }
-        result
+        tr.split(ray, hit, &branches[..count], rng)
     }
 }
 

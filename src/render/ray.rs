@@ -50,6 +50,10 @@ pub struct Ray {
     /// For a cached ambient value's sample ray: the radius of the ray's footprint per unit
     /// distance (the hemisphere cell it stands for); 0 for every other ray.
     pub spread: f64,
+    /// True for a cached ambient value's sample ray and everything it spawns: its result is
+    /// averaged with the value's other samples, so specular splits follow one branch
+    /// ([`crate::render::trace::Tracer::split`]).
+    pub sample_path: bool,
     /// Antimatter materials whose volumes contain the ray origin.
     pub antimatter: [Option<MatId>; MAX_ANTIMATTER],
 }
@@ -68,6 +72,7 @@ impl Ray {
             amb_level: 0,
             gain: 1.0,
             spread: 0.0,
+            sample_path: false,
             antimatter: [None; MAX_ANTIMATTER],
         }
     }

@@ -4,7 +4,7 @@
 use super::ray::{Hit, Ray, RayKind, MAX_ANTIMATTER};
 use super::sampler::Sampler;
 use crate::ambient::Ambient;
-use crate::color::{sanitize, Color};
+use crate::color::{bright, sanitize, Color};
 use crate::light::direct::direct;
 use crate::light::source::LightSet;
 use crate::light::viscache::VisQuery;
@@ -194,6 +194,57 @@ impl<'a> Tracer<'a> {
         self.trace_dist(ray, rng).0
     }
 
+    /// The light of a specular split: a ray per branch `(direction, kind, coefficient)`,
+    /// each weighted by its coefficient.
+    ///
+    /// Below a cached value's sample ray ([`Ray::sample_path`], the sample ray's own split
+    /// excepted) one branch is followed instead, chosen with probability in proportion to
+    /// its coefficient's brightness and divided by it: the same expectation for one ray per
+    /// split instead of a tree of them. A sample ray that enters a glass sphere otherwise
+    /// spawns rays at every internal reflection until their weight falls below `-lw`, each
+    /// lit where it lands. The added variance is averaged with the value's hundreds of other
+    /// samples. The sample ray's own split stays whole: choosing there (a window pane's
+    /// reflection against the sky behind it) cost 10–15% more error on the glassy scene for
+    /// 4% fewer instructions.
+    pub fn split(
+        &self,
+        ray: &Ray,
+        hit: &Hit,
+        branches: &[(DVec3, RayKind, Color)],
+        rng: &mut Sampler,
+    ) -> Color {
+        let mut result = Color::ZERO;
+        if ray.sample_path && ray.kind != RayKind::Ambient {
+            let total: f64 = branches.iter().map(|b| bright(b.2).max(0.0)).sum();
+            if !(total > 0.0 && total.is_finite()) {
+                return result;
+            }
+            let mut u = rng.uniform() * total;
+            let last = branches.iter().rposition(|b| bright(b.2) > 0.0);
+            for (i, &(dir, kind, coef)) in branches.iter().enumerate() {
+                let b = bright(coef).max(0.0);
+                if b <= 0.0 {
+                    continue;
+                }
+                if u < b || Some(i) == last {
+                    let c = coef * (total / b);
+                    if let Some(r) = self.spawn(ray, hit, dir, kind, c) {
+                        result += c * self.trace(&r, rng);
+                    }
+                    return result;
+                }
+                u -= b;
+            }
+            return result;
+        }
+        for &(dir, kind, coef) in branches {
+            if let Some(r) = self.spawn(ray, hit, dir, kind, coef) {
+                result += coef * self.trace(&r, rng);
+            }
+        }
+        result
+    }
+
     /// [`Tracer::trace`] that also returns the distance of the first hit (infinite when the
     /// ray hits nothing), so that the pixel loop need not intersect primary rays twice.
     pub fn trace_dist(&self, ray: &Ray, rng: &mut Sampler) -> (Color, f64) {
@@ -359,6 +410,7 @@ impl<'a> Tracer<'a> {
             amb_level: parent.amb_level,
             gain,
             spread: 0.0,
+            sample_path: parent.sample_path,
             antimatter: hit.antimatter,
         })
     }
