@@ -582,6 +582,7 @@ impl Ambient {
             let mut r = tr.spawn(ray, hit, dir, RayKind::Ambient, Color::splat(coef))?;
             r.amb_level = lvl + 1;
             r.spread = spread;
+            r.reach = 0.0;
             r.sample_path = cached;
             traced += 1;
             let (c, t) = tr.trace_dist(&r, rng);

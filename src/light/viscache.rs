@@ -16,8 +16,10 @@
 //! disagreement marks the cube as a shadow edge, where every query traces its own ray from
 //! then on. What remains is a cube whose small lit (or shadowed) part none of its rays found:
 //! a blur of shadow edges within less than the footprint's diameter, which shrinks with the
-//! footprint as `-ad` grows. Rays that are not samples of a cached value (eye rays, specular
-//! rays, every ray of the uncached `-aa 0` calculation) always trace their shadow rays.
+//! footprint as `-ad` grows. A sample ray's specular descendants (through glass, off a
+//! mirror) keep its spread: their footprint is the spread times the whole path's length.
+//! Other rays (eye rays and their specular rays, every ray of the uncached `-aa 0`
+//! calculation) always trace their shadow rays.
 //!
 //! The grid lives in a thread-local, direct-mapped table of 2^[`SLOTS_LOG2`] slots tied to
 //! one calculation (an owner id) and cleared when another calculation uses the thread; a cube

@@ -47,9 +47,12 @@ pub struct Ray {
     pub amb_level: u32,
     /// Factor a survivor of Russian roulette must multiply its result by.
     pub gain: f64,
-    /// For a cached ambient value's sample ray: the radius of the ray's footprint per unit
-    /// distance (the hemisphere cell it stands for); 0 for every other ray.
+    /// On a cached ambient value's sample path: the radius of the sample's footprint per
+    /// unit distance travelled (the hemisphere cell it stands for), kept by the rays the
+    /// sample ray spawns; 0 elsewhere.
     pub spread: f64,
+    /// On a sample path: the distance from the sample ray's origin to this ray's origin.
+    pub reach: f64,
     /// True for a cached ambient value's sample ray and everything it spawns: its result is
     /// averaged with the value's other samples, so specular splits follow one branch
     /// ([`crate::render::trace::Tracer::split`]).
@@ -72,6 +75,7 @@ impl Ray {
             amb_level: 0,
             gain: 1.0,
             spread: 0.0,
+            reach: 0.0,
             sample_path: false,
             antimatter: [None; MAX_ANTIMATTER],
         }

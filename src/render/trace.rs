@@ -409,7 +409,12 @@ impl<'a> Tracer<'a> {
             depth,
             amb_level: parent.amb_level,
             gain,
-            spread: 0.0,
+            spread: parent.spread,
+            reach: if parent.spread > 0.0 {
+                parent.reach + hit.t
+            } else {
+                0.0
+            },
             sample_path: parent.sample_path,
             antimatter: hit.antimatter,
         })
@@ -426,7 +431,8 @@ impl<'a> Tracer<'a> {
     ) -> Color {
         let vis = match self.ambient {
             Some(a) if a.reuse_shadows && ray.spread > 0.0 => {
-                VisQuery::new(a.owner, hit.obj, hit.back, hit.t * ray.spread, hit.point)
+                let footprint = (ray.reach + hit.t) * ray.spread;
+                VisQuery::new(a.owner, hit.obj, hit.back, footprint, hit.point)
             }
             _ => None,
         };
