@@ -62,6 +62,12 @@ pub struct CachedValue {
 
 type Key = (u32, i64, i64, i64);
 
+/// One step of the multiply–rotate mix (as FxHash) used for grid and cube keys.
+#[inline]
+pub(crate) fn fx_mix(h: u64, x: u64) -> u64 {
+    (h.rotate_left(5) ^ x).wrapping_mul(0x517C_C1B7_2722_0A95)
+}
+
 /// A fast hasher for grid keys (a multiply–rotate mix of the four integers, as FxHash): the
 /// standard SipHash took a sixth of an `-ab 2` render's time in lookups. The keys are cell
 /// coordinates, not input an adversary chooses.
@@ -71,7 +77,7 @@ struct KeyHasher(u64);
 impl KeyHasher {
     #[inline]
     fn mix(&mut self, x: u64) {
-        self.0 = (self.0.rotate_left(5) ^ x).wrapping_mul(0x517C_C1B7_2722_0A95);
+        self.0 = fx_mix(self.0, x);
     }
 }
 

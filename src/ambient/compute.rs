@@ -735,7 +735,6 @@ impl Ambient {
     }
 }
 
-/// One hemisphere cell: the running sum of its samples.
 /// Default cell limit of the mesh a new value's Hessian is taken from: `-ad 1024` (18 × 57
 /// cells) and `-ad 512` (13 × 41) are thinned to 9 × 28 evenly spaced rings and columns (see
 /// [`super::hessian::subsample_grid`]); radii change by under 1% in a room, the Hessian's
@@ -776,6 +775,7 @@ pub fn clamp_outliers(cells: &mut [Color], b: &mut [f64], f: f64) {
     }
 }
 
+/// One hemisphere cell: the running sum of its samples.
 #[derive(Clone, Copy, Default)]
 struct Cell {
     sum: Color,

@@ -165,20 +165,29 @@ impl Cone {
 
     /// Front normal and (u, v) at a point on the surface.
     pub fn normal_uv_at(&self, p: DVec3) -> (DVec3, (f64, f64)) {
-        let rel = p - self.p0;
-        let z = rel.dot(self.axis);
-        let radv = rel - self.axis * z;
+        let (z, radv) = self.axial(p);
         let u = turn_fraction(radv, self.e1, self.e2);
         let v = (z / self.len).clamp(0.0, 1.0);
-        (self.normal_at(p), (u, v))
+        (self.normal_from(radv), (u, v))
     }
 
     /// Unit front normal at a point on the surface (no surface coordinates: the tracer's
     /// case, which saves the angle's atan2).
     pub fn normal_at(&self, p: DVec3) -> DVec3 {
+        self.normal_from(self.axial(p).1)
+    }
+
+    /// A point's height along the axis from `p0` and its offset from the axis.
+    #[inline]
+    fn axial(&self, p: DVec3) -> (f64, DVec3) {
         let rel = p - self.p0;
         let z = rel.dot(self.axis);
-        let radv = rel - self.axis * z;
+        (z, rel - self.axis * z)
+    }
+
+    /// The front normal at a surface point whose offset from the axis is `radv`.
+    #[inline]
+    fn normal_from(&self, radv: DVec3) -> DVec3 {
         let rho = radv.length();
         let n = if rho > 0.0 {
             (radv / rho - self.axis * self.slope).normalize_or(radv / rho)

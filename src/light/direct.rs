@@ -93,6 +93,8 @@ fn direct_with(
     let stats = &mut scratch.stats;
     stats.clear();
     stats.resize(lights.sources.len(), (0.0, 0));
+    // Shadow answers reused from the sample's footprint (one counter update per call).
+    let mut reused = 0u64;
     let mut untested_from = n;
     for (tested, i) in (0..n).enumerate() {
         if thresh > 0.0 && tested >= MIN_SHADOW_TESTS {
@@ -109,11 +111,7 @@ fn direct_with(
                 let (t, traced) = viscache::shadow(q, s.src, || {
                     tr.shadow(p, s.dir, s.dist, s.src, hit.antimatter, rng)
                 });
-                if !traced {
-                    if let Some(a) = tr.ambient {
-                        a.stats.shadows_reused.fetch_add(1, Ordering::Relaxed);
-                    }
-                }
+                reused += u64::from(!traced);
                 t
             }
             None => tr.shadow(p, s.dir, s.dist, s.src, hit.antimatter, rng),
@@ -122,6 +120,11 @@ fn direct_with(
         st.0 += bright(t).clamp(0.0, 1.0);
         st.1 += 1;
         result += c * t;
+    }
+    if reused > 0 {
+        if let Some(a) = tr.ambient {
+            a.stats.shadows_reused.fetch_add(reused, Ordering::Relaxed);
+        }
     }
     if untested_from < n {
         let (all_vis, all_n) = stats

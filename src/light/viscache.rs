@@ -29,6 +29,7 @@ use std::cell::RefCell;
 
 use glam::DVec3;
 
+use crate::ambient::cache::fx_mix;
 use crate::color::{bright, Color};
 
 /// Shadow rays a cube must have traced, all agreeing, before it answers without one.
@@ -77,17 +78,17 @@ impl VisQuery {
         if c.abs().max_element() > 1e15 {
             return None;
         }
-        let mut h = mix(owner, obj as u64);
-        h = mix(h, (level as u64) << 1 | u64::from(back));
+        let mut h = fx_mix(owner, obj as u64);
+        h = fx_mix(h, (level as u64) << 1 | u64::from(back));
         for x in [c.x, c.y, c.z] {
-            h = mix(h, floor_i64(x) as u64);
+            h = fx_mix(h, floor_i64(x) as u64);
         }
         Some(VisQuery { owner, cube: h })
     }
 
     /// The slot tag of this cube toward source `src` (never 0, which marks an empty slot).
     fn tag(&self, src: usize) -> u64 {
-        mix(self.cube, src as u64).max(1)
+        fx_mix(self.cube, src as u64).max(1)
     }
 }
 
@@ -121,11 +122,6 @@ struct VisCache {
 
 thread_local! {
     static VIS: RefCell<VisCache> = RefCell::default();
-}
-
-#[inline]
-fn mix(h: u64, x: u64) -> u64 {
-    (h.rotate_left(5) ^ x).wrapping_mul(0x517C_C1B7_2722_0A95)
 }
 
 /// The transmission toward source `src` for a query: reused from its cube when the cube is
