@@ -5,7 +5,9 @@ use glam::DVec3;
 use std::f64::consts::PI;
 use std::path::{Path, PathBuf};
 use std::sync::atomic::Ordering;
-use tessera::ambient::compute::{cell_variances, hessian, hessian_radii, Ambient};
+use tessera::ambient::compute::{
+    cell_variances, hessian, hessian_radii, super_sample_shares, Ambient,
+};
 use tessera::light::LightSet;
 use tessera::radopt::RenderParams;
 use tessera::render::{render_region, FrameSetup, RenderProgress, Tracer};
@@ -216,6 +218,39 @@ fn cell_variance_wraps_in_phi() {
     assert!(v[nphi + 3] > 0.0 && v[nphi + 1] > 0.0 && v[2 * nphi + 3] > 0.0);
     assert_eq!(v[nphi + 2], 0.0);
     assert!(v[nphi] > 0.0);
+}
+
+/// Super-sampling shares follow the standard deviation (a brightness twice as high draws twice
+/// the rays, not four times), reach two cells beyond a bright one through the blur, and are
+/// zero on a uniform hemisphere.
+#[test]
+fn super_sample_shares_follow_the_blurred_deviation() {
+    let (m, nphi) = (8, 24);
+    let mut b = vec![1.0; m * nphi];
+    assert!(super_sample_shares(&b, m, nphi).iter().all(|&s| s == 0.0));
+    b[4 * nphi + 10] = 50.0;
+    let s1 = super_sample_shares(&b, m, nphi);
+    let v = cell_variances(&b, m, nphi);
+    // Two columns away: no variance of its own, but a share from the blur.
+    assert_eq!(v[4 * nphi + 12], 0.0);
+    assert!(s1[4 * nphi + 12] > 0.0);
+    // Three away: nothing.
+    assert_eq!(s1[4 * nphi + 13], 0.0);
+    // The bright cell and its neighbours get the largest shares.
+    let max = s1.iter().cloned().fold(0.0, f64::max);
+    assert_eq!(s1[4 * nphi + 10], max);
+    assert!(s1[4 * nphi + 11] > 0.3 * max);
+    // Linear in the contrast: doubling every difference doubles every share.
+    let b2: Vec<f64> = b.iter().map(|x| 1.0 + 2.0 * (x - 1.0)).collect();
+    let s2 = super_sample_shares(&b2, m, nphi);
+    for (a, c) in s1.iter().zip(&s2) {
+        assert!((c - 2.0 * a).abs() <= 1e-9 * (1.0 + a), "{a} {c}");
+    }
+    // Wraps in φ like the variances: column 0 next to column nphi − 1.
+    let mut b3 = vec![1.0; m * nphi];
+    b3[4 * nphi] = 50.0;
+    let s3 = super_sample_shares(&b3, m, nphi);
+    assert!(s3[4 * nphi + nphi - 2] > 0.0 && s3[4 * nphi + 2] > 0.0);
 }
 
 /// Gradient extrapolation reduces the error of the cached picture against an uncached

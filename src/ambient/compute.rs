@@ -598,19 +598,20 @@ impl Ambient {
             }
         }
         let complete = cells.iter().all(|c| c.count > 0);
-        // Super-sampling (-as): extra rays where neighbouring cells differ most.
+        // Super-sampling (-as): extra rays where neighbouring cells differ most, in proportion
+        // to the cells' estimated standard deviations (Neyman allocation).
         let extra = (self.as_ * wt).floor();
         if complete && ncells > 49 && extra >= 4.0 * m as f64 {
             let b: Vec<f64> = cells.iter().map(|c| bright(c.mean())).collect();
-            let var = cell_variances(&b, m, nphi);
-            let vsum: f64 = var.iter().sum();
-            if vsum > 0.0 {
+            let share = super_sample_shares(&b, m, nphi);
+            let ssum: f64 = share.iter().sum();
+            if ssum > 0.0 {
                 // Systematic allocation: cell i gets floor(acc_i) − floor(acc_{i−1}) rays with
                 // acc the running share of `extra`, so the total is exactly `extra`.
                 let mut acc = rng.next2().0;
-                for (idx, vi) in var.iter().enumerate() {
+                for (idx, si) in share.iter().enumerate() {
                     let before = acc.floor();
-                    acc += extra * vi / vsum;
+                    acc += extra * si / ssum;
                     let nextra = (acc.floor() - before) as usize;
                     let (j, k) = (idx / nphi, idx % nphi);
                     for _ in 0..nextra {
@@ -833,6 +834,32 @@ pub fn cell_variances(b: &[f64], m: usize, nphi: usize) -> Vec<f64> {
                 }
             }
             out[j * nphi + k] = if cnt > 0 { s / cnt as f64 } else { 0.0 };
+        }
+    }
+    out
+}
+
+/// How super-sampling shares its extra rays among the cells (not normalised): the estimated
+/// standard deviation of each cell, so that a cell's extra rays are proportional to it — the
+/// allocation that minimises the variance of a stratified mean for a given number of samples
+/// (Neyman). The variance estimate of [`cell_variances`] is first blurred (half the cell's own,
+/// half the mean of its 3×3 neighbourhood, wrapping in φ, clamped at the pole and horizon), so a
+/// small bright patch (a sunlit spot) that one cell's sample found also draws rays into the
+/// cells around it, which may hold the rest of the patch unseen by their first sample.
+pub fn super_sample_shares(b: &[f64], m: usize, nphi: usize) -> Vec<f64> {
+    let var = cell_variances(b, m, nphi);
+    let mut out = vec![0.0; m * nphi];
+    for j in 0..m {
+        for k in 0..nphi {
+            let mut s = 0.0;
+            for dj in -1i64..=1 {
+                let jj = (j as i64 + dj).clamp(0, m as i64 - 1) as usize;
+                for dk in -1i64..=1 {
+                    let kk = (k as i64 + dk).rem_euclid(nphi as i64) as usize;
+                    s += var[jj * nphi + kk];
+                }
+            }
+            out[j * nphi + k] = (0.5 * var[j * nphi + k] + 0.5 * s / 9.0).sqrt();
         }
     }
     out
