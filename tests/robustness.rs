@@ -1,7 +1,8 @@
 //! Robustness and analytic checks of tpict through the real binary: degenerate geometry and
 //! grazing views never give non-finite pixels; a scene moved far from the origin renders the
 //! same; a diffuse plane under a sphere light has the radiance ρ/π·E of the inverse-square
-//! and cosine laws; a concave polygon with a hole covers exactly its pixels.
+//! and cosine laws, and beside a mirror it gains the mirror's reflectance times the
+//! irradiance of the light's image (a virtual source); a concave polygon with a hole covers exactly its pixels.
 
 mod common;
 
@@ -26,7 +27,13 @@ fn tpict_in(dir: &Path) -> Command {
 
 fn workdir() -> tempfile::TempDir {
     let t = tempfile::tempdir().unwrap();
-    for f in ["room.rad", "room.vf", "lamp.rad", "degenerate.rad"] {
+    for f in [
+        "room.rad",
+        "room.vf",
+        "lamp.rad",
+        "mirrorlamp.rad",
+        "degenerate.rad",
+    ] {
         std::fs::copy(scenes().join(f), t.path().join(f)).unwrap();
     }
     t
@@ -222,6 +229,48 @@ fn diffuse_plane_under_sphere_light_follows_inverse_square_and_cosine() {
         for c in img.get(1, 1) {
             let rel = (c as f64 - want).abs() / want;
             assert!(rel < 0.01, "point ({x},{y}): {c}, want {want:.5}");
+        }
+    }
+}
+
+/// The floor of `mirrorlamp.rad` at (x, y, 0): the lamp's irradiance plus the mirror's
+/// reflectance (.6) times that of its image at (6, 0, 2); every path to the image crosses
+/// the mirror plane x = 3 on the mirror (|y| < 10, 0 < z < 10).
+fn mirror_floor_radiance(x: f64, y: f64) -> f64 {
+    let (l, r, h, rho, rho_m) = (100.0, 0.1, 2.0, 0.5, 0.6);
+    let e = |dx: f64| {
+        let d2 = dx * dx + y * y + h * h;
+        std::f64::consts::PI * l * r * r / d2 * (h / d2.sqrt())
+    };
+    rho / std::f64::consts::PI * (e(x) + rho_m * e(x - 6.0))
+}
+
+#[test]
+fn virtual_source_in_a_mirror_adds_its_reflectance_times_the_image() {
+    let t = workdir();
+    let p = t.path();
+    // Parallel view straight down over x in [-3, 2], y in [-2.5, 2.5]: the image's share of
+    // the irradiance goes from 6% (x = -3) to 42% (x = 2).
+    let n = 11;
+    let args: Vec<&str> = "-vtl -vp -0.5 0 1 -vd 0 0 -1 -vu 0 1 0 -vh 5 -vv 5 -x 11 -y 11 \
+        -ps 1 -pj 0 -ab 0 -av 0 0 0 -dt 0 mirrorlamp.rad"
+        .split_whitespace()
+        .collect();
+    let img = render(p, &args, "mirrorlamp.hdr");
+    assert_eq!((img.width, img.height), (n, n));
+    for j in 0..n {
+        for i in 0..n {
+            let x = -0.5 + ((i as f64 + 0.5) / n as f64 - 0.5) * 5.0;
+            let y = (0.5 - (j as f64 + 0.5) / n as f64) * 5.0;
+            let want = mirror_floor_radiance(x, y);
+            for c in img.get(i, j) {
+                let rel = (c as f64 - want).abs() / want;
+                assert!(
+                    rel < 0.01,
+                    "pixel ({i},{j}) at ({x:.2},{y:.2}): {c}, want {want:.5} ({:.2}% off)",
+                    rel * 100.0
+                );
+            }
         }
     }
 }

@@ -74,8 +74,6 @@ pub struct Relay {
     pub normal: DVec3,
     /// Plane offset: `normal · x = offset` on the mirror.
     pub offset: f64,
-    /// Mirror reflectance.
-    pub color: Color,
     /// Index of the source it reflects.
     pub real: usize,
 }
@@ -324,7 +322,6 @@ impl LightSet {
                         obj: mi,
                         normal,
                         offset,
-                        color: mirror.color,
                         real: si,
                     }),
                 });
@@ -359,11 +356,8 @@ impl LightSet {
             None => (p, None),
         };
         if let EmitterKind::Glow { maxrad } = src.emitter.kind {
-            let c = match &src.relay {
-                Some(_) => src.center,
-                None => src.center,
-            };
-            if (p - c).length() > maxrad {
+            // A virtual source's centre is the mirrored one: the distance is the path's length.
+            if (p - src.center).length() > maxrad {
                 return;
             }
         }

@@ -494,8 +494,10 @@ impl<'a> Tracer<'a> {
             } else {
                 dist
             };
+            // The mirror's reflectance is already in the virtual source's radiance (its
+            // potential), so the transmission here is that of the two legs only.
             let real = self.shadow_real(hit.point, rdir, rest, relay.real, hit.antimatter, rng);
-            return t * relay.color * real;
+            return t * real;
         }
         self.shadow_real(org, dir, dist, si, antimatter, rng)
     }
