@@ -572,8 +572,11 @@ impl Ambient {
             0.0
         };
         // One jittered sample in cell (j, k): its value, distance and direction.
-        let mut shoot = |j: usize, k: usize, rng: &mut Sampler| -> Option<(Color, f64, DVec3)> {
-            let (r1, r2) = rng.next2();
+        let mut shoot = |j: usize,
+                         k: usize,
+                         (r1, r2): (f64, f64),
+                         rng: &mut Sampler|
+         -> Option<(Color, f64, DVec3)> {
             let s2 = (j as f64 + r1) / m as f64;
             let st = s2.sqrt();
             let ct = (1.0 - s2).max(0.0).sqrt();
@@ -590,7 +593,8 @@ impl Ambient {
         };
         for j in 0..m {
             for k in 0..nphi {
-                if let Some((c, t, dir)) = shoot(j, k, rng) {
+                let r = rng.next2();
+                if let Some((c, t, dir)) = shoot(j, k, r, rng) {
                     let cell = &mut cells[j * nphi + k];
                     cell.add(c, t);
                     cell.hit = dir * t;
@@ -609,13 +613,27 @@ impl Ambient {
                 // Systematic allocation: cell i gets floor(acc_i) − floor(acc_{i−1}) rays with
                 // acc the running share of `extra`, so the total is exactly `extra`.
                 let mut acc = rng.next2().0;
+                let mut perm: Vec<usize> = Vec::new();
                 for (idx, si) in share.iter().enumerate() {
                     let before = acc.floor();
                     acc += extra * si / ssum;
                     let nextra = (acc.floor() - before) as usize;
                     let (j, k) = (idx / nphi, idx % nphi);
-                    for _ in 0..nextra {
-                        if let Some((c, t, _)) = shoot(j, k, rng) {
+                    // A cell's extra samples form a Latin hypercube over it: stratified in
+                    // both directions, each sample still uniform over the whole cell.
+                    perm.clear();
+                    perm.extend(0..nextra);
+                    for a in (1..nextra).rev() {
+                        let b = ((rng.uniform() * (a + 1) as f64) as usize).min(a);
+                        perm.swap(a, b);
+                    }
+                    for (i, &pi) in perm.iter().enumerate() {
+                        let (u, v) = rng.next2();
+                        let r = (
+                            (i as f64 + u) / nextra as f64,
+                            (pi as f64 + v) / nextra as f64,
+                        );
+                        if let Some((c, t, _)) = shoot(j, k, r, rng) {
                             cells[idx].add(c, t);
                         }
                     }
