@@ -275,6 +275,87 @@ fn virtual_source_in_a_mirror_adds_its_reflectance_times_the_image() {
     }
 }
 
+/// A mirror shelf with an alternate material under a lamp, a grey floor and back wall, seen
+/// by a view that never sees the shelf itself; `shelf` is the shelf's material line.
+fn shelf_scene(shelf: &str) -> String {
+    format!(
+        "void light bright 0 0 3 50 50 50\n\
+         bright sphere lamp 0 0 4 0 0 2 0.1\n\
+         void plastic grey 0 0 5 .5 .5 .5 0 0\n\
+         void plastic blue 0 0 5 .1 .2 .6 0 0\n\
+         {shelf}\n\
+         grey polygon floor 0 0 12 -5 -5 0 5 -5 0 5 5 0 -5 5 0\n\
+         grey polygon back 0 0 12 -5 3 0 5 3 0 5 3 4 -5 3 4\n\
+         shelfmat polygon shelf 0 0 12 -1 1 1 1 1 1 1 2 1 -1 2 1\n"
+    )
+}
+
+/// Rays descended from an ambient sample see a mirror, not its alternate material (as rpict
+/// does): a picture of the wall just above the shelf (whose indirect light comes partly off
+/// the shelf; the view does not see the shelf) is the same with `mirror shelfmat 1 blue` as with a bare mirror, and differs
+/// from the one where the shelf is made of the alternate itself. A mirror seen from behind is
+/// black (`-bv+`) or invisible (`-bv-`).
+#[test]
+fn mirrors_alternate_is_not_seen_by_ambient_rays_and_mirrors_have_no_back() {
+    let t = workdir();
+    let p = t.path();
+    for (name, shelf) in [
+        ("alt", "void mirror shelfmat 1 blue 0 3 .8 .8 .8"),
+        ("bare", "void mirror shelfmat 0 0 3 .8 .8 .8"),
+        ("blue", "void plastic shelfmat 0 0 5 .1 .2 .6 0 0"),
+    ] {
+        std::fs::write(p.join(format!("shelf_{name}.rad")), shelf_scene(shelf)).unwrap();
+    }
+    let args = |scene: &str| -> Vec<String> {
+        "-vtv -vp 0 -1 1.5 -vd 0 1 0 -vu 0 0 1 -vh 40 -vv 10 -x 24 -y 8 -ps 1 -pj 0 \
+         -ab 1 -aa 0 -ad 256"
+            .split_whitespace()
+            .map(String::from)
+            .chain([scene.to_string()])
+            .collect()
+    };
+    let pic = |name: &str| {
+        let a = args(&format!("shelf_{name}.rad"));
+        let a: Vec<&str> = a.iter().map(String::as_str).collect();
+        render(p, &a, &format!("{name}.hdr"))
+    };
+    let (alt, bare, blue) = (pic("alt"), pic("bare"), pic("blue"));
+    assert_eq!(
+        alt.pixels, bare.pixels,
+        "ambient rays must see the mirror, not its alternate"
+    );
+    let sum = |img: &Image| -> f64 { img.pixels.iter().map(|p| p[1] as f64).sum() };
+    let diff: f64 = alt
+        .pixels
+        .iter()
+        .zip(&blue.pixels)
+        .map(|(a, b)| (a[1] - b[1]).abs() as f64)
+        .sum::<f64>()
+        / sum(&alt);
+    assert!(
+        diff > 0.01,
+        "the mirror's indirect light must differ from blue's: {diff}"
+    );
+    // From below the shelf, looking up through it at the lamp: black, or the lamp with -bv-.
+    let below = |extra: &str, out: &str| {
+        let a: Vec<String> = "-vtv -vp 0 1.9 0.5 -vd 0 -1.9 1.5 -vu 0 0 1 -vh 1 -vv 1 -x 1 -y 1 \
+            -ps 1 -pj 0 -ab 0"
+            .split_whitespace()
+            .chain(extra.split_whitespace())
+            .map(String::from)
+            .chain(["shelf_bare.rad".to_string()])
+            .collect();
+        let a: Vec<&str> = a.iter().map(String::as_str).collect();
+        render(p, &a, out).get(0, 0)
+    };
+    assert_eq!(below("", "back.hdr"), [0.0; 3], "a mirror has no back");
+    let through = below("-bv-", "back_invisible.hdr");
+    assert!(
+        through[0] > 0.0,
+        "-bv- sees through a mirror's back: {through:?}"
+    );
+}
+
 // ---------------------------------------------------------------------------------------
 // Polygon coverage
 

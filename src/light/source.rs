@@ -527,9 +527,25 @@ impl LightSet {
             }
         }
         if let Some(r) = relay {
-            for s in &mut out[start..] {
-                s.dir = reflect(s.dir, r.normal);
+            // Mirror the directions back, and keep only the samples whose path crosses the
+            // mirror itself: the others cannot be relayed, whatever else is in the way, and
+            // would otherwise reach the adaptive shadow test's untested estimate.
+            let mirror = &scene.objects[r.obj].surface;
+            let mut kept = start;
+            for i in start..out.len() {
+                let dir = reflect(out[i].dir, r.normal);
+                let reach = if out[i].dist.is_finite() {
+                    out[i].dist
+                } else {
+                    f64::MAX
+                };
+                if mirror.intersect(p, dir, reach).is_some() {
+                    out[i].dir = dir;
+                    out.swap(kept, i);
+                    kept += 1;
+                }
             }
+            out.truncate(kept);
         }
     }
 }

@@ -40,10 +40,18 @@ impl Mirror {
         })
     }
 
-    /// Shade a hit on the mirror itself (no alternate): one reflected ray.
+    /// Shade a hit on the mirror itself (no alternate): one reflected ray. A mirror reflects
+    /// from its front only: seen from behind it is black, or invisible with `-bv-` (both
+    /// measured with rpict).
     pub fn shade(&self, tr: &Tracer, ray: &Ray, hit: &Hit, rng: &mut Sampler) -> Color {
-        let n = if hit.back { -hit.normal } else { hit.normal };
-        let dir = reflect(ray.dir, n);
+        if hit.back {
+            return if tr.params.bv {
+                Color::ZERO
+            } else {
+                tr.pass_through(ray, hit, rng)
+            };
+        }
+        let dir = reflect(ray.dir, hit.normal);
         match tr.spawn(ray, hit, dir, RayKind::Reflected, self.color) {
             Some(r) => self.color * tr.trace(&r, rng),
             None => Color::ZERO,

@@ -315,7 +315,12 @@ impl<'a> Tracer<'a> {
             Material::Glass(g) => g.shade(self, ray, hit, rng),
             Material::Dielectric(d) => d.shade(self, ray, hit, rng),
             Material::Mirror(mi) => {
-                if mi.alternate_void {
+                // Rays descended from an ambient sample see the mirror itself, whatever its
+                // alternate material (measured with rpict: the indirect light off a mirror with
+                // an alternate is that of the bare mirror); all other rays see the alternate.
+                if ray.amb_level > 0 {
+                    mi.shade(self, ray, hit, rng)
+                } else if mi.alternate_void {
                     self.pass_through(ray, hit, rng)
                 } else if let Some(alt) = mi.alternate {
                     self.shade(ray, hit, Some(alt), rng)
