@@ -173,6 +173,27 @@ fn floor_radiance(x: f64, y: f64) -> f64 {
     rho / std::f64::consts::PI * e
 }
 
+/// Every pixel of an n × n parallel view straight down (centred on x = `cx`, y = 0, `size`
+/// units square) is within 1% of `want(x, y)` in every channel.
+fn assert_floor_view(img: &Image, n: usize, cx: f64, size: f64, want: fn(f64, f64) -> f64) {
+    assert_eq!((img.width, img.height), (n, n));
+    for j in 0..n {
+        for i in 0..n {
+            let x = cx + ((i as f64 + 0.5) / n as f64 - 0.5) * size;
+            let y = (0.5 - (j as f64 + 0.5) / n as f64) * size;
+            let want = want(x, y);
+            for c in img.get(i, j) {
+                let rel = (c as f64 - want).abs() / want;
+                assert!(
+                    rel < 0.01,
+                    "pixel ({i},{j}) at ({x:.2},{y:.2}): {c}, want {want:.5} ({:.2}% off)",
+                    rel * 100.0
+                );
+            }
+        }
+    }
+}
+
 #[test]
 fn diffuse_plane_under_sphere_light_follows_inverse_square_and_cosine() {
     let t = workdir();
@@ -190,22 +211,7 @@ fn diffuse_plane_under_sphere_light_follows_inverse_square_and_cosine() {
         ],
         "lamp.hdr",
     );
-    assert_eq!((img.width, img.height), (n, n));
-    for j in 0..n {
-        for i in 0..n {
-            let x = ((i as f64 + 0.5) / n as f64 - 0.5) * size;
-            let y = (0.5 - (j as f64 + 0.5) / n as f64) * size;
-            let want = floor_radiance(x, y);
-            for c in img.get(i, j) {
-                let rel = (c as f64 - want).abs() / want;
-                assert!(
-                    rel < 0.01,
-                    "pixel ({i},{j}) at ({x:.2},{y:.2}): {c}, want {want:.5} ({:.2}% off)",
-                    rel * 100.0
-                );
-            }
-        }
-    }
+    assert_floor_view(&img, n, 0.0, size, floor_radiance);
     // A narrow perspective view from above the lamp, off to the side, looking down at a
     // few floor points: the pixel at the image centre sees the point on the view axis.
     for (x, y) in [(1.0, 0.5), (-2.0, 1.5), (0.3, -3.0)] {
@@ -257,22 +263,7 @@ fn virtual_source_in_a_mirror_adds_its_reflectance_times_the_image() {
         .split_whitespace()
         .collect();
     let img = render(p, &args, "mirrorlamp.hdr");
-    assert_eq!((img.width, img.height), (n, n));
-    for j in 0..n {
-        for i in 0..n {
-            let x = -0.5 + ((i as f64 + 0.5) / n as f64 - 0.5) * 5.0;
-            let y = (0.5 - (j as f64 + 0.5) / n as f64) * 5.0;
-            let want = mirror_floor_radiance(x, y);
-            for c in img.get(i, j) {
-                let rel = (c as f64 - want).abs() / want;
-                assert!(
-                    rel < 0.01,
-                    "pixel ({i},{j}) at ({x:.2},{y:.2}): {c}, want {want:.5} ({:.2}% off)",
-                    rel * 100.0
-                );
-            }
-        }
-    }
+    assert_floor_view(&img, n, -0.5, 5.0, mirror_floor_radiance);
 }
 
 /// A mirror shelf with an alternate material under a lamp, a grey floor and back wall, seen

@@ -1,13 +1,16 @@
 //! Specular splits below a cached value's sample ray follow one branch
 //! (`Tracer::split`): the expectation over many draws equals the whole tree's result.
 
+mod common;
+
+use common::scene_from_text;
+
 use glam::DVec3;
 use tessera::light::LightSet;
 use tessera::radopt::RenderParams;
 use tessera::render::ray::{Ray, RayKind};
 use tessera::render::sampler::Sampler;
 use tessera::render::Tracer;
-use tessera::scene::{read_scene_files, ReadOptions, Scene};
 
 /// A water drop and a glass pane between a glowing disk (ahead) and a glowing strip (behind
 /// the viewer, seen in reflection); glows of radius 0 are not light sources, so every
@@ -23,15 +26,7 @@ behind ring strip 0 0 8 0 0 -10 0 0 1 0 8\n";
 
 #[test]
 fn one_branch_per_split_keeps_the_expectation() {
-    let t = tempfile::tempdir().unwrap();
-    let path = t.path().join("s.rad");
-    std::fs::write(&path, SCENE).unwrap();
-    let prims = read_scene_files(
-        &[path.to_string_lossy().into_owned()],
-        &ReadOptions::from_env(),
-    )
-    .unwrap();
-    let scene = Scene::build(&prims).unwrap();
+    let scene = scene_from_text(SCENE);
     let params = RenderParams::default();
     let lights = LightSet::collect(&scene, params.dr);
     let tracer = Tracer::new(&scene, &params, &lights);

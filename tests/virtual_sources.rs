@@ -2,11 +2,14 @@
 //! the mirror itself are offered to the direct calculation, so the adaptive shadow test
 //! (`-dt`) never credits light a mirror cannot relay.
 
+mod common;
+
+use common::scene_from_text;
+
 use glam::DVec3;
 use tessera::light::LightSet;
 use tessera::radopt::RenderParams;
 use tessera::render::sampler::Sampler;
-use tessera::scene::{read_scene_files, ReadOptions, Scene};
 
 /// A square light 2 units above a small mirror (1 × 1, at z = 0, facing up); the light's
 /// image is at z = -2.
@@ -17,15 +20,7 @@ silver polygon mir 0 0 12 -.5 -.5 0 .5 -.5 0 .5 .5 0 -.5 .5 0\n";
 
 #[test]
 fn virtual_samples_are_offered_only_through_the_mirror() {
-    let t = tempfile::tempdir().unwrap();
-    let path = t.path().join("m.rad");
-    std::fs::write(&path, SCENE).unwrap();
-    let prims = read_scene_files(
-        &[path.to_string_lossy().into_owned()],
-        &ReadOptions::from_env(),
-    )
-    .unwrap();
-    let scene = Scene::build(&prims).unwrap();
+    let scene = scene_from_text(SCENE);
     let lights = LightSet::collect(&scene, RenderParams::default().dr);
     let virt = (0..lights.sources.len())
         .find(|&i| lights.sources[i].relay.is_some())

@@ -161,3 +161,18 @@ pub fn assert_finite(img: &Image) {
         );
     }
 }
+
+/// A scene built from Radiance scene text (written to a temporary file and read back as the
+/// renderer reads its input).
+pub fn scene_from_text(text: &str) -> tessera::scene::Scene {
+    use tessera::scene::{read_scene_files, ReadOptions, Scene};
+    let t = tempfile::tempdir().unwrap();
+    let path = t.path().join("scene.rad");
+    std::fs::write(&path, text).unwrap();
+    let prims = read_scene_files(
+        &[path.to_string_lossy().into_owned()],
+        &ReadOptions::from_env(),
+    )
+    .unwrap();
+    Scene::build(&prims).unwrap()
+}
