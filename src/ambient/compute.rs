@@ -836,17 +836,19 @@ pub fn cell_variances(b: &[f64], m: usize, nphi: usize) -> Vec<f64> {
             let c = b[j * nphi + k];
             let mut s = 0.0;
             let mut cnt = 0usize;
+            // The columns k − 1, k, k + 1, wrapping in φ.
+            let cols = [(k + nphi - 1) % nphi, k, (k + 1) % nphi];
             for dj in -1i64..=1 {
                 let jj = j as i64 + dj;
                 if jj < 0 || jj >= m as i64 {
                     continue;
                 }
-                for dk in -1i64..=1 {
-                    if dj == 0 && dk == 0 {
+                let row = jj as usize * nphi;
+                for (ci, &kk) in cols.iter().enumerate() {
+                    if dj == 0 && ci == 1 {
                         continue;
                     }
-                    let kk = (k as i64 + dk).rem_euclid(nphi as i64) as usize;
-                    let d = b[jj as usize * nphi + kk] - c;
+                    let d = b[row + kk] - c;
                     s += d * d;
                     cnt += 1;
                 }
@@ -870,11 +872,11 @@ pub fn super_sample_shares(b: &[f64], m: usize, nphi: usize) -> Vec<f64> {
     for j in 0..m {
         for k in 0..nphi {
             let mut s = 0.0;
+            let cols = [(k + nphi - 1) % nphi, k, (k + 1) % nphi];
             for dj in -1i64..=1 {
-                let jj = (j as i64 + dj).clamp(0, m as i64 - 1) as usize;
-                for dk in -1i64..=1 {
-                    let kk = (k as i64 + dk).rem_euclid(nphi as i64) as usize;
-                    s += var[jj * nphi + kk];
+                let row = (j as i64 + dj).clamp(0, m as i64 - 1) as usize * nphi;
+                for &kk in &cols {
+                    s += var[row + kk];
                 }
             }
             out[j * nphi + k] = (0.5 * var[j * nphi + k] + 0.5 * s / 9.0).sqrt();

@@ -21,6 +21,9 @@ struct Scratch {
     samples: Vec<SourceSample>,
     cands: Vec<(f64, Color, usize)>,
     stats: Vec<(f64, u32)>,
+    /// `⌈n^dc⌉` by candidate count n, for the `dc` in `nshad_dc` (a `powf` per call saved).
+    nshad: Vec<usize>,
+    nshad_dc: f64,
 }
 
 thread_local! {
@@ -82,7 +85,17 @@ fn direct_with(
     // A strict total order (indices are unique), so the unstable sort gives the same order.
     cands.sort_unstable_by(|a, b| b.0.total_cmp(&a.0).then(a.2.cmp(&b.2)));
     let n = cands.len();
-    let nshadcheck = ((n as f64).powf(params.dc).ceil() as usize).max(1);
+    if scratch.nshad_dc.to_bits() != params.dc.to_bits() {
+        scratch.nshad.clear();
+        scratch.nshad_dc = params.dc;
+    }
+    while scratch.nshad.len() <= n {
+        let k = scratch.nshad.len() as f64;
+        scratch
+            .nshad
+            .push((k.powf(params.dc).ceil() as usize).max(1));
+    }
+    let nshadcheck = scratch.nshad[n];
     let thresh = if params.dt > 0.0 {
         params.dt / weight.max(1e-6)
     } else {
