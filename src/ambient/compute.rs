@@ -827,6 +827,12 @@ impl Cell {
     }
 }
 
+/// The columns k − 1, k and k + 1 of a ring of `nphi` cells, wrapping in φ.
+#[inline]
+fn phi_neighbours(k: usize, nphi: usize) -> [usize; 3] {
+    [(k + nphi - 1) % nphi, k, (k + 1) % nphi]
+}
+
 /// Per-cell variance estimate for super-sampling: the mean squared brightness difference with
 /// the (up to 8) neighbouring cells, wrapping in φ, not across the pole or the horizon.
 pub fn cell_variances(b: &[f64], m: usize, nphi: usize) -> Vec<f64> {
@@ -836,8 +842,7 @@ pub fn cell_variances(b: &[f64], m: usize, nphi: usize) -> Vec<f64> {
             let c = b[j * nphi + k];
             let mut s = 0.0;
             let mut cnt = 0usize;
-            // The columns k − 1, k, k + 1, wrapping in φ.
-            let cols = [(k + nphi - 1) % nphi, k, (k + 1) % nphi];
+            let cols = phi_neighbours(k, nphi);
             for dj in -1i64..=1 {
                 let jj = j as i64 + dj;
                 if jj < 0 || jj >= m as i64 {
@@ -872,7 +877,7 @@ pub fn super_sample_shares(b: &[f64], m: usize, nphi: usize) -> Vec<f64> {
     for j in 0..m {
         for k in 0..nphi {
             let mut s = 0.0;
-            let cols = [(k + nphi - 1) % nphi, k, (k + 1) % nphi];
+            let cols = phi_neighbours(k, nphi);
             for dj in -1i64..=1 {
                 let row = (j as i64 + dj).clamp(0, m as i64 - 1) as usize * nphi;
                 for &kk in &cols {
