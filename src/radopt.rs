@@ -618,8 +618,28 @@ pub struct RpictOptions {
     pub amb_flush: usize,
     /// `--amb-force`: use an ambient log whose fingerprint does not match.
     pub amb_force: bool,
+    /// Fill the ambient cache in an overture pass before the picture's own pass (default;
+    /// `--no-overture` turns it off). See [`RpictOptions::overture_step`].
+    pub overture: bool,
     /// Scene files (after the options); `-` is stdin. Empty input means `["-"]`.
     pub scene_files: Vec<String>,
+}
+
+impl RpictOptions {
+    /// Pixel step of the overture pass ([`crate::render::FrameSetup::overture`]): the `-ps`
+    /// spacing when the ambient values are cached (`-ab > 0`, `-aa > 0`, `-ad > 0`) and the
+    /// overture is on, else 0 (no overture).
+    pub fn overture_step(&self) -> usize {
+        let p = &self.params;
+        if self.overture && p.ab > 0 && p.aa > 0.0 && p.ad > 0 {
+            std::env::var("TESSERA_OVERTURE_STEP")
+                .ok()
+                .and_then(|v| v.parse().ok())
+                .unwrap_or(self.ps.max(1))
+        } else {
+            0
+        }
+    }
 }
 
 impl Default for RpictOptions {
@@ -647,6 +667,7 @@ impl Default for RpictOptions {
             amb_log: None,
             amb_flush: 128,
             amb_force: false,
+            overture: true,
             scene_files: Vec::new(),
         }
     }
@@ -802,6 +823,10 @@ fn apply_rpict_option(
         }
         "--amb-force" => {
             o.amb_force = true;
+            1
+        }
+        "--no-overture" => {
+            o.overture = false;
             1
         }
         "-z" => return Err(unsupported(w, "depth buffer output is not implemented")),
@@ -1056,6 +1081,9 @@ pub fn to_args(opts: &RpictOptions) -> Vec<String> {
     }
     if opts.amb_force {
         w.push("--amb-force".into());
+    }
+    if !opts.overture {
+        w.push("--no-overture".into());
     }
     w
 }

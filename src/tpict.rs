@@ -681,6 +681,7 @@ pub fn render_view(
         pt: opts.pt,
         frame,
         irradiance: opts.params.i,
+        overture: opts.overture_step(),
     };
     let progress = RenderProgress::default();
     let start = Instant::now();

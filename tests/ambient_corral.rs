@@ -206,6 +206,7 @@ fn flags_round_trip_through_both_record_formats() {
         gdir: [0.0, 0.05],
         corral: 0x8000_7ff1,
         val: DVec3::new(0.3, 0.2, 0.1),
+        reach: 1.0,
     };
     let origin = DVec3::new(10.0, -3.0, 1.0);
     let rec = v.to_record(origin);

@@ -379,6 +379,7 @@ prop_compose! {
         amb_log in proptest::option::of(name()),
         amb_flush in 1usize..1000,
         amb_force in any::<bool>(),
+        overture in any::<bool>(),
         p in any_params(),
     ) -> RpictOptions {
         RpictOptions {
@@ -386,7 +387,7 @@ prop_compose! {
                          vh, vv, vo, va, vs, vl },
             params: p, x, y, pa, pj, pm, pd, ps, pt, report_interval: t as f64, warnings,
             threads, output, sequence_start: seq, error_file, allow_commands, stats_file,
-            amb_log, amb_flush, amb_force,
+            amb_log, amb_flush, amb_force, overture,
             scene_files: vec!["scene.rad".into()],
         }
     }

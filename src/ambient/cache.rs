@@ -58,6 +58,11 @@ pub struct CachedValue {
     pub corral: u32,
     /// Value (mean incoming radiance over the cosine-weighted hemisphere).
     pub val: Color,
+    /// Interpolation reach (≥ 1, at most [`super::compute::REACH_MAX`]): the value serves
+    /// lookups out to `reach · aa` in its normalised distance, not only `aa`. It is the room
+    /// the Hessian's radii leave beyond the radii used (which `-ar`'s largest radius and the
+    /// 1:2 aspect limit may have shrunk); 1 for values from Radiance files.
+    pub reach: f64,
 }
 
 type Key = (u32, i64, i64, i64);
@@ -195,7 +200,7 @@ impl AmbientCache {
 
     /// Insert a value.
     pub fn insert(&self, v: CachedValue) {
-        let l = self.level_for(v.rad[1].max(v.rad[0]));
+        let l = self.level_for(v.rad[1].max(v.rad[0]) * v.reach.max(1.0));
         let s = self.cell_size(l);
         let key = (
             l,
@@ -286,6 +291,7 @@ impl CachedValue {
             gdir: [f(self.gdir[0]), f(self.gdir[1])],
             corral: self.corral,
             val: [f(self.val.x), f(self.val.y), f(self.val.z)],
+            reach: f(self.reach),
         }
     }
 
@@ -305,6 +311,11 @@ impl CachedValue {
             gdir: [r.gdir[0] as f64, r.gdir[1] as f64],
             corral: r.corral,
             val: Color::new(r.val[0] as f64, r.val[1] as f64, r.val[2] as f64),
+            reach: if r.reach.is_finite() {
+                (r.reach as f64).clamp(1.0, super::compute::REACH_MAX)
+            } else {
+                1.0
+            },
         }
     }
 }

@@ -229,6 +229,9 @@ pub struct Ambient {
     as_: f64,
     /// Anisotropic radii from the Hessian (default true; else the harmonic mean distance).
     pub use_hessian: bool,
+    /// Give new values the interpolation reach their Hessian radii leave room for (default
+    /// true; else every value's reach is 1, as in Radiance). See [`CachedValue::reach`].
+    pub use_reach: bool,
     /// Cells of the mesh the Hessian is taken from at most (thinned evenly beyond).
     pub hessian_cells: usize,
     /// Outlier limit of a cached value's cells (0: none): see [`clamp_outliers`].
@@ -276,6 +279,7 @@ impl Ambient {
             ad: params.ad as f64,
             as_: params.as_.max(0) as f64,
             use_hessian: true,
+            use_reach: true,
             hessian_cells: env_or("TESSERA_HESSIAN_CELLS", HESSIAN_CELLS),
             clamp: env_or("TESSERA_AMB_CLAMP", OUTLIER_LIMIT),
             use_gradients: true,
@@ -398,6 +402,10 @@ impl Ambient {
         let behind = -self.minarad * aa;
         let mut sum = Color::ZERO;
         let mut wsum = 0.0;
+        // Whether a value passes Radiance's own tests (reach 1): else a new value is due, even
+        // when values of a larger reach contribute, so values stay as dense as rpict's.
+        let mut near = false;
+        let aa0 = aa;
         self.cache.for_each_near(p, |v| {
             if v.lvl > level || (v.lvl == level && v.weight < 0.9 * rweight) {
                 return;
@@ -406,6 +414,7 @@ impl Ambient {
             // is necessary for the elliptical test below (its terms are components of the
             // offset in an orthonormal frame over radii ≤ max(rad)), and cheap.
             let dd = p - v.pos;
+            let aa = aa0 * v.reach;
             let reach = aa * v.rad[0].max(v.rad[1]);
             if dd.length_squared() >= reach * reach {
                 return;
@@ -450,11 +459,12 @@ impl Ambient {
             if self.use_corral && v.corral != 0 && self.leaks(v, p, n, du, dv, occluded) {
                 return;
             }
+            near |= dt2 < aa0 * aa0;
             let w = (1.0 - dr2.sqrt() / maxangle) * (1.0 - dt2.sqrt() / aa);
             sum += v.val * (f * w);
             wsum += w;
         });
-        (wsum > FTINY).then(|| sum / wsum)
+        (near && wsum > FTINY).then(|| sum / wsum)
     }
 
     /// The light-leak test of a flagged value `v` seen from `p` (normal `n`), whose offset in
@@ -685,6 +695,7 @@ impl Ambient {
                 (u0, [r, r])
             }
         };
+        let hess_rad = hess.map(|(_, r0, r1)| [r0.min(r1), r0.max(r1)]);
         let mut u = u;
         let mut v = n.cross(u);
         let mut gp = [gpos.dot(u) * scale, gpos.dot(v) * scale];
@@ -717,12 +728,25 @@ impl Ambient {
             gp = [gp[0] / glen, gp[1] / glen];
         }
         let _ = v;
+        // The room the Hessian leaves beyond the radii used: where `-ar`'s largest radius or
+        // the 1:2 aspect limit shrank them, interpolating farther stays within the Hessian's
+        // error target, and averages more values' noise.
+        let reach = match hess_rad {
+            Some(h) if self.use_reach => {
+                let s = wt.sqrt();
+                (h[0] / s / rad[0])
+                    .min(h[1] / s / rad[1])
+                    .clamp(1.0, REACH_MAX)
+            }
+            _ => 1.0,
+        };
+        let reach = if reach.is_finite() { reach } else { 1.0 };
         let corral = if self.use_corral && cached && m >= CORRAL_MIN_DIVISIONS {
             let hits: Vec<Option<DVec3>> = cells
                 .iter()
                 .map(|c| (c.count > 0).then_some(c.hit))
                 .collect();
-            corral_flags(&hits, m, nphi, n, u0, u, rad, self.aa)
+            corral_flags(&hits, m, nphi, n, u0, u, rad, self.aa * reach)
         } else {
             0
         };
@@ -750,6 +774,7 @@ impl Ambient {
             gdir: gd,
             corral,
             val,
+            reach,
         })
     }
 }
@@ -759,6 +784,9 @@ impl Ambient {
 /// [`super::hessian::subsample_grid`]); radii change by under 1% in a room, the Hessian's
 /// cost falls from about a quarter of a render to a few percent (docs/ambient.md).
 pub const HESSIAN_CELLS: usize = 256;
+
+/// Largest interpolation reach of a value ([`CachedValue::reach`]), in units of `-aa`.
+pub const REACH_MAX: f64 = 2.0;
 
 /// Default outlier limit of a cached value's cells (see [`clamp_outliers`]).
 pub const OUTLIER_LIMIT: f64 = 2.0;
@@ -1141,6 +1169,49 @@ mod tests {
     }
 
     #[test]
+    fn a_wider_reach_adds_weight_but_never_replaces_a_new_value() {
+        let params = RenderParams {
+            ab: 1,
+            aa: 0.2,
+            ..RenderParams::default()
+        };
+        let amb = Ambient::new(&params, 10.0, 1).unwrap();
+        let value = |x: f64, v: f64, reach: f64| CachedValue {
+            id: ValueId::default(),
+            pos: DVec3::new(x, 0.0, 0.0),
+            n: Z,
+            u: X,
+            lvl: 0,
+            weight: 1.0,
+            rad: [1.0, 1.0],
+            gpos: [0.0; 2],
+            gdir: [0.0; 2],
+            corral: 0,
+            val: Color::splat(v),
+            reach,
+        };
+        let mut clear = |_: DVec3, _: DVec3, _: f64| false;
+        // Reach 2 at the origin: the normalised distance 0.3 is beyond aa = 0.2 but within
+        // 2·aa. Alone, it does not spare a new value there.
+        amb.cache.insert(value(0.0, 1.0, 2.0));
+        let p = DVec3::new(0.3, 0.0, 0.0);
+        assert!(amb.interpolate(p, Z, 0, 1.0, &mut clear).is_none());
+        assert!(amb
+            .interpolate(DVec3::new(0.1, 0.0, 0.0), Z, 0, 1.0, &mut clear)
+            .is_some());
+        // With a reach-1 value within aa of p, the wide value joins the average with the hat
+        // weight 1 − 0.3/0.4 = 0.25 (the near value at 0.05 weighs 1 − 0.05/0.2 = 0.75).
+        amb.cache.insert(value(0.35, 3.0, 1.0));
+        let got = amb.interpolate(p, Z, 0, 1.0, &mut clear).unwrap();
+        let want = (0.25 * 1.0 + 0.75 * 3.0) / (0.25 + 0.75);
+        assert!((got.x - want).abs() < 1e-9, "{got} vs {want}");
+        // Beyond 2·aa it is out of reach: only the near value counts.
+        let far = DVec3::new(0.45, 0.0, 0.0);
+        let got = amb.interpolate(far, Z, 0, 1.0, &mut clear).unwrap();
+        assert!((got.x - 3.0).abs() < 1e-9, "{got}");
+    }
+
+    #[test]
     fn lookup_tests_flagged_values_only_in_their_sectors() {
         let params = RenderParams {
             ab: 1,
@@ -1163,6 +1234,7 @@ mod tests {
             gdir: [0.0; 2],
             corral,
             val: Color::splat(1.0),
+            reach: 1.0,
         });
         let mut asked = Vec::new();
         let mut blocked = |o: DVec3, d: DVec3, t: f64| {

@@ -6,9 +6,10 @@
 //! ```text
 //! header:  "TSRAMBLOG\n" | version u32 | fingerprint [u8;32] | options_len u32 | options (UTF-8)
 //!          | CRC32 of all the header bytes before it (u32)
-//! frames:  payload_len u32 | CRC32(payload) u32 | payload (133 bytes in version 1)
+//! frames:  payload_len u32 | CRC32(payload) u32 | payload (137 bytes; 133 in version 1)
 //! payload: id.origin u64 | id.seq u64 | pos 3×f64 | ndir 3×f64 | udir 3×f64 | lvl u8
 //!          | weight f32 | rad 2×f32 | gpos 2×f32 | gdir 2×f32 | corral u32 | val 3×f32
+//!          | reach f32 (version 2; absent in version 1 and read as 1)
 //! ```
 //!
 //! A writer ([`LogWriter`]) queues records and appends each batch with one `write()`, so a
@@ -29,10 +30,12 @@ use super::{AmbRecord, ValueId};
 
 /// Magic bytes at the start of every log.
 pub const LOG_MAGIC: &[u8; 10] = b"TSRAMBLOG\n";
-/// Version of the log format written by this code.
-pub const LOG_VERSION: u32 = 1;
-/// Size of a version-1 record payload.
-pub const PAYLOAD_SIZE: usize = 133;
+/// Version of the log format written by this code (version 1 logs are read too).
+pub const LOG_VERSION: u32 = 2;
+/// Size of a record payload as written (version 2).
+pub const PAYLOAD_SIZE: usize = 137;
+/// Size of a version-1 record payload (without `reach`): the shortest payload accepted.
+pub const PAYLOAD_SIZE_V1: usize = 133;
 /// Size of a frame's prefix (length and CRC).
 pub const FRAME_PREFIX: usize = 8;
 /// Longest option text accepted in a header.
@@ -178,7 +181,7 @@ fn parse_header(path: &Path, data: &[u8], file_len: u64) -> Result<(LogHeader, u
     }
     let u32at = |o: usize| u32::from_le_bytes([data[o], data[o + 1], data[o + 2], data[o + 3]]);
     let version = u32at(10);
-    if version != LOG_VERSION {
+    if !(1..=LOG_VERSION).contains(&version) {
         return Err(AmbLogError::Version {
             path: path.to_path_buf(),
             found: version,
@@ -280,13 +283,15 @@ pub fn encode_payload(r: &AmbRecord) -> [u8; PAYLOAD_SIZE] {
     for c in r.val {
         put(&c.to_le_bytes());
     }
+    put(&r.reach.to_le_bytes());
     debug_assert_eq!(o, PAYLOAD_SIZE);
     b
 }
 
-/// Decode a payload (at least [`PAYLOAD_SIZE`] bytes; later bytes are ignored).
+/// Decode a payload: at least [`PAYLOAD_SIZE_V1`] bytes (a version-1 payload, whose `reach`
+/// is 1); bytes after the version-2 fields are ignored.
 pub fn decode_payload(b: &[u8]) -> Option<AmbRecord> {
-    if b.len() < PAYLOAD_SIZE {
+    if b.len() < PAYLOAD_SIZE_V1 {
         return None;
     }
     let mut o = 0;
@@ -312,6 +317,11 @@ pub fn decode_payload(b: &[u8]) -> Option<AmbRecord> {
     }
     let corral = u32::from_le_bytes(take(4).try_into().unwrap_or([0; 4]));
     let val = [f32_(take(4)), f32_(take(4)), f32_(take(4))];
+    let reach = if b.len() >= PAYLOAD_SIZE {
+        f32_(take(4))
+    } else {
+        1.0
+    };
     Some(AmbRecord {
         id: ValueId { origin, seq },
         pos: vecs[0],
@@ -324,6 +334,7 @@ pub fn decode_payload(b: &[u8]) -> Option<AmbRecord> {
         gdir: [f6[4], f6[5]],
         corral,
         val,
+        reach,
     })
 }
 
@@ -370,7 +381,7 @@ fn scan_frames(data: &[u8], base: u64) -> (Vec<AmbRecord>, usize, LogTail) {
         }
         let len = u32::from_le_bytes([rest[0], rest[1], rest[2], rest[3]]) as usize;
         let crc = u32::from_le_bytes([rest[4], rest[5], rest[6], rest[7]]);
-        if !(PAYLOAD_SIZE..=MAX_PAYLOAD).contains(&len) {
+        if !(PAYLOAD_SIZE_V1..=MAX_PAYLOAD).contains(&len) {
             let reason = format!("bad frame length {len}");
             return (out, pos, LogTail::Corrupt { offset, reason });
         }
@@ -702,6 +713,7 @@ mod tests {
             gdir: [0.5, 0.6],
             corral: 0xdeadbeef,
             val: [1.0, 2.0, 3.0],
+            reach: 1.5,
         };
         let b = encode_payload(&r);
         assert_eq!(&b[0..8], &7u64.to_le_bytes());
@@ -710,7 +722,12 @@ mod tests {
         assert_eq!(&b[89..93], &0.5f32.to_le_bytes());
         assert_eq!(&b[117..121], &0xdeadbeefu32.to_le_bytes());
         assert_eq!(&b[129..133], &3.0f32.to_le_bytes());
+        assert_eq!(&b[133..137], &1.5f32.to_le_bytes());
         assert_eq!(decode_payload(&b), Some(r));
+        // A version-1 payload (no reach) reads with reach 1.
+        let v1 = decode_payload(&b[..PAYLOAD_SIZE_V1]).unwrap();
+        assert_eq!(v1.reach, 1.0);
+        assert_eq!(AmbRecord { reach: 1.5, ..v1 }, r);
         let h = LogHeader::new([0xab; 32], "-ab 1");
         let hb = h.to_bytes();
         assert_eq!(hb.len(), 50 + 5 + 4);

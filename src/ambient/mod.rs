@@ -55,6 +55,8 @@ pub struct AmbRecord {
     pub corral: u32,
     /// Irradiance-like value (RGB).
     pub val: [f32; 3],
+    /// Interpolation reach in units of `-aa` (≥ 1; Tessera's log only, 1 for Radiance files).
+    pub reach: f32,
 }
 
 impl AmbRecord {
@@ -74,5 +76,7 @@ impl AmbRecord {
             && self.gpos.iter().all(|&v| fin32(v))
             && self.gdir.iter().all(|&v| fin32(v))
             && self.val.iter().all(|&v| fin32(v) && v >= 0.0)
+            && self.reach.is_finite()
+            && self.reach >= 1.0
     }
 }

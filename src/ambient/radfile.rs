@@ -290,6 +290,7 @@ pub fn decode_record(b: &[u8; RECORD_SIZE]) -> AmbRecord {
         gdir: [pf(49) as f32, pf(54) as f32],
         corral: u32at(59),
         val: rgbe_to_float([b[63], b[64], b[65], b[66]]),
+        reach: 1.0,
     }
 }
 

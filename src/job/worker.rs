@@ -381,6 +381,7 @@ fn work(
             pt: m.options.pt,
             frame: fp.index,
             irradiance: m.options.params.i,
+            overture: m.options.overture_step(),
         };
         let amb_before = ambient
             .as_ref()

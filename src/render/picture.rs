@@ -31,6 +31,10 @@ pub struct FrameSetup<'a> {
     pub frame: u32,
     /// Irradiance output (`-i`).
     pub irradiance: bool,
+    /// Pixel step of the overture: a first pass over every `overture`-th pixel row and column
+    /// that only fills the ambient cache (its colours are discarded), so that the picture's
+    /// own pass interpolates every pixel from all the values around it. 0: no overture.
+    pub overture: usize,
 }
 
 /// Counters updated while rendering.
@@ -138,8 +142,11 @@ pub fn render_region(
         return out;
     }
     let ps = fs.ps.max(1);
+    let overture_rows = overture(tr, fs, x0, y0, x1, y1, progress);
     if ps == 1 {
-        progress.rows_total.store(h, Ordering::Relaxed);
+        progress
+            .rows_total
+            .store(overture_rows + h, Ordering::Relaxed);
         out.par_chunks_mut(w).enumerate().for_each(|(row, line)| {
             let mut rays = 0;
             for (i, px) in line.iter_mut().enumerate() {
@@ -156,7 +163,9 @@ pub fn render_region(
     let cy1 = y1.div_ceil(ps);
     let cx0 = x0 / ps;
     let cx1 = x1.div_ceil(ps);
-    progress.rows_total.store(cy1 - cy0, Ordering::Relaxed);
+    progress
+        .rows_total
+        .store(overture_rows + cy1 - cy0, Ordering::Relaxed);
     let bands: Vec<Vec<(usize, usize, [f32; 3])>> = (cy0..cy1)
         .into_par_iter()
         .map(|cy| {
@@ -180,6 +189,37 @@ pub fn render_region(
         }
     }
     out
+}
+
+/// The overture pass of [`render_region`] (see [`FrameSetup::overture`]): samples the pixels
+/// of the region on the global grid of step `fs.overture` and discards their colours; the
+/// ambient values they make stay in the cache. Returns the number of pixel rows it sampled
+/// (counted in `progress` as they finish).
+fn overture(
+    tr: &Tracer,
+    fs: &FrameSetup,
+    x0: usize,
+    y0: usize,
+    x1: usize,
+    y1: usize,
+    progress: &RenderProgress,
+) -> usize {
+    let step = fs.overture;
+    if step == 0 {
+        return 0;
+    }
+    let first = |a: usize| a.div_ceil(step) * step;
+    let rows: Vec<usize> = (first(y0)..y1).step_by(step).collect();
+    progress.rows_total.store(2 * rows.len(), Ordering::Relaxed);
+    rows.par_iter().for_each(|&y| {
+        let mut rays = 0;
+        for x in (first(x0)..x1).step_by(step) {
+            sample_pixel(tr, fs, x, y, &mut rays);
+        }
+        progress.rays.fetch_add(rays, Ordering::Relaxed);
+        progress.rows_done.fetch_add(1, Ordering::Relaxed);
+    });
+    rows.len()
 }
 
 fn to_f32(c: Color) -> [f32; 3] {
