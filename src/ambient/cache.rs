@@ -2,8 +2,11 @@
 //!
 //! Values are kept in a multi-level hashed grid: a value of radius `r` lives at the level
 //! whose cell size is the smallest power-of-two multiple of the base size that is at least
-//! twice its reach (`aa·r`), in the cell containing its position. A lookup at point P checks,
-//! per level in use, the 2×2×2 cells nearest P — every value whose reach covers P is there.
+//! twice its reach (`aa·reach·r`), in the cell containing its position. A lookup at point P
+//! checks, per level in use, the 2×2×2 cells nearest P — every value whose reach covers P is
+//! there. A cell keeps each value's position and squared reach in a compact array beside the
+//! values, and a lookup scans that array, handing on only the values whose reach sphere holds
+//! P (most values in the eight cells are out of reach).
 //! The grid is split into shards, each behind its own `RwLock`: lookups only take short read
 //! locks on the shards they touch (no global lock), inserts a write lock on one shard. A
 //! shard holds blocks of 8×8×8 cells of a level, so a lookup's 2×2×2 cells mostly need one
@@ -106,7 +109,15 @@ impl Hasher for KeyHasher {
     }
 }
 
-type Grid = HashMap<Key, Vec<CachedValue>, BuildHasherDefault<KeyHasher>>;
+/// The values of one grid cell, with a compact copy of what the lookup's first test needs.
+#[derive(Default)]
+struct CellList {
+    /// Position and squared reach (`(aa·reach·max(rad))²`) of each value.
+    reach: Vec<[f64; 4]>,
+    vals: Vec<CachedValue>,
+}
+
+type Grid = HashMap<Key, CellList, BuildHasherDefault<KeyHasher>>;
 
 /// The shared cache.
 pub struct AmbientCache {
@@ -200,7 +211,9 @@ impl AmbientCache {
 
     /// Insert a value.
     pub fn insert(&self, v: CachedValue) {
-        let l = self.level_for(v.rad[1].max(v.rad[0]) * v.reach.max(1.0));
+        let r = v.rad[1].max(v.rad[0]) * v.reach.max(1.0);
+        let l = self.level_for(r);
+        let rr = self.aa * r;
         let s = self.cell_size(l);
         let key = (
             l,
@@ -209,7 +222,9 @@ impl AmbientCache {
             (v.pos.z / s).floor() as i64,
         );
         if let Ok(mut shard) = self.shards[shard_of(&key)].write() {
-            shard.entry(key).or_default().push(v);
+            let cell = shard.entry(key).or_default();
+            cell.reach.push([v.pos.x, v.pos.y, v.pos.z, rr * rr]);
+            cell.vals.push(v);
         }
         self.levels_used.fetch_or(1u64 << l, Ordering::Relaxed);
         self.max_level_seen.fetch_max(l, Ordering::Relaxed);
@@ -221,7 +236,7 @@ impl AmbientCache {
         }
     }
 
-    /// Call `f` for every value whose cell could reach point `p`.
+    /// Call `f` for every value whose reach sphere (radius `aa·reach·max(rad)`) holds `p`.
     pub fn for_each_near(&self, p: DVec3, mut f: impl FnMut(&CachedValue)) {
         let used = self.levels_used.load(Ordering::Relaxed);
         let top = self.max_level_seen.load(Ordering::Relaxed);
@@ -251,8 +266,13 @@ impl AmbientCache {
                     for j in i..8 {
                         if shard[j] == shard[i] && done & (1 << j) == 0 {
                             done |= 1 << j;
-                            if let Some(list) = grid.get(&keys[j]) {
-                                list.iter().for_each(&mut f);
+                            if let Some(cell) = grid.get(&keys[j]) {
+                                for (k, r) in cell.reach.iter().enumerate() {
+                                    let d = [p.x - r[0], p.y - r[1], p.z - r[2]];
+                                    if d[0] * d[0] + d[1] * d[1] + d[2] * d[2] < r[3] {
+                                        f(&cell.vals[k]);
+                                    }
+                                }
                             }
                         }
                     }
@@ -266,8 +286,8 @@ impl AmbientCache {
         let mut out = Vec::with_capacity(self.len() as usize);
         for s in &self.shards {
             if let Ok(shard) = s.read() {
-                for list in shard.values() {
-                    out.extend_from_slice(list);
+                for cell in shard.values() {
+                    out.extend_from_slice(&cell.vals);
                 }
             }
         }
