@@ -619,10 +619,16 @@ pub struct RpictOptions {
     /// `--amb-force`: use an ambient log whose fingerprint does not match.
     pub amb_force: bool,
     /// Fill the ambient cache in an overture pass before the picture's own pass (default;
-    /// `--no-overture` turns it off). See [`RpictOptions::overture_step`].
+    /// `--no-overture` turns it off). See [`RpictOptions::overture_step`]. Manifests written
+    /// before the option existed read as on.
+    #[serde(default = "default_true")]
     pub overture: bool,
     /// Scene files (after the options); `-` is stdin. Empty input means `["-"]`.
     pub scene_files: Vec<String>,
+}
+
+fn default_true() -> bool {
+    true
 }
 
 impl RpictOptions {
@@ -1132,5 +1138,30 @@ mod tests {
         p.apply_option(&words("-ae foo")).unwrap();
         let e = p.apply_option(&words("-ai bar")).unwrap_err();
         assert!(e.to_string().contains("cannot mix"), "{e}");
+    }
+
+    #[test]
+    fn overture_runs_only_for_cached_ambient_and_can_be_turned_off() {
+        let parse = |a: &str| match parse_rpict_args(&words(a)).unwrap() {
+            Command::Render(o) => *o,
+            c => panic!("{c:?}"),
+        };
+        assert_eq!(parse("-ab 1 s.rad").overture_step(), 4);
+        assert_eq!(parse("-ab 1 -ps 1 s.rad").overture_step(), 1);
+        assert_eq!(parse("-ab 1 -ps 8 s.rad").overture_step(), 8);
+        // No cache: nothing to fill.
+        assert_eq!(parse("-ab 0 s.rad").overture_step(), 0);
+        assert_eq!(parse("-ab 1 -aa 0 s.rad").overture_step(), 0);
+        assert_eq!(parse("-ab 1 -ad 0 s.rad").overture_step(), 0);
+        let off = parse("-ab 1 --no-overture s.rad");
+        assert_eq!(off.overture_step(), 0);
+        // The option survives the round trip through words (job manifests, `-defaults`).
+        let w = to_args(&off);
+        assert!(w.contains(&"--no-overture".to_string()), "{w:?}");
+        // A manifest written before the option existed reads as on.
+        let mut json = serde_json::to_value(parse("-ab 1 s.rad")).unwrap();
+        json.as_object_mut().unwrap().remove("overture");
+        let back: RpictOptions = serde_json::from_value(json).unwrap();
+        assert!(back.overture);
     }
 }

@@ -455,3 +455,49 @@ fn measure_radii_and_supersampling() {
         }
     }
 }
+
+/// The overture's tracer (`fill_only`) skips direct light at eye-path shading points (their
+/// colour is discarded) but not inside a new value's sampling: the values it makes are the
+/// ones a full pass makes.
+#[test]
+fn fill_only_tracer_skips_direct_light_of_eye_paths_only() {
+    let s = load("spheres.rad", "spheres.vf");
+    let params = RenderParams {
+        ab: 1,
+        aa: 0.2,
+        ad: 64,
+        ..RenderParams::default()
+    };
+    let vf = s.view.frame().unwrap();
+    let (org, dir, tmax) = vf.ray(0.5, 0.2).unwrap();
+    let ray = tessera::render::ray::Ray::primary(org - s.scene.origin, dir, tmax);
+    let full = Tracer::new(&s.scene, &params, &s.lights);
+    let fill = Tracer {
+        fill_only: true,
+        ..Tracer::new(&s.scene, &params, &s.lights)
+    };
+    let mut rng = tessera::render::sampler::Sampler::for_pixel(0, 1, 2, 0);
+    let lit = full.trace(&ray, &mut rng);
+    let mut rng = tessera::render::sampler::Sampler::for_pixel(0, 1, 2, 0);
+    let unlit = fill.trace(&ray, &mut rng);
+    assert!(lit.max_element() > 0.0, "the view's floor is lit: {lit}");
+    assert_eq!(
+        unlit,
+        tessera::color::Color::ZERO,
+        "no direct light, no -av"
+    );
+    // The same values: filling with either tracer makes identical caches.
+    let values = |tr: &Tracer| {
+        let amb = Ambient::new(&params, s.scene.size, 1).unwrap();
+        let t = Tracer {
+            ambient: Some(&amb),
+            ..*tr
+        };
+        let mut rng = tessera::render::sampler::Sampler::for_pixel(0, 1, 2, 0);
+        t.trace(&ray, &mut rng);
+        let v = amb.cache.all();
+        assert_eq!(v.len(), 1);
+        (v[0].val, v[0].rad)
+    };
+    assert_eq!(values(&full), values(&fill));
+}

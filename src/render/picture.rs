@@ -208,6 +208,11 @@ fn overture(
     if step == 0 {
         return 0;
     }
+    // Eye paths skip direct light: only the ambient values this pass makes are kept.
+    let tr = &Tracer {
+        fill_only: true,
+        ..*tr
+    };
     let first = |a: usize| a.div_ceil(step) * step;
     let rows: Vec<usize> = (first(y0)..y1).step_by(step).collect();
     progress.rows_total.store(2 * rows.len(), Ordering::Relaxed);

@@ -25,6 +25,10 @@ pub struct Tracer<'a> {
     pub lights: &'a LightSet,
     /// The irradiance cache (None: constant `-av` ambient only).
     pub ambient: Option<&'a Ambient>,
+    /// Fill the cache only (the ambient overture): shading points of eye paths (ambient
+    /// level 0) skip direct light, whose colour the overture discards. Points inside a new
+    /// value's sampling (level > 0) are lit as always: the value needs their light.
+    pub fill_only: bool,
 }
 
 /// How far a shadow ray toward a sample at distance `dist` needs to look: the sample lies on
@@ -54,6 +58,7 @@ impl<'a> Tracer<'a> {
             params,
             lights,
             ambient: None,
+            fill_only: false,
         }
     }
 
@@ -434,6 +439,9 @@ impl<'a> Tracer<'a> {
         coef: &dyn Fn(DVec3, f64) -> Color,
         rng: &mut Sampler,
     ) -> Color {
+        if self.fill_only && ray.amb_level == 0 {
+            return Color::ZERO;
+        }
         let vis = match self.ambient {
             Some(a) if a.reuse_shadows && ray.spread > 0.0 => {
                 let footprint = (ray.reach + hit.t) * ray.spread;
