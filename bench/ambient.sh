@@ -23,8 +23,12 @@
 #                          "-st 1": rough specular reflections go into the ambient term
 #                          instead of being sampled, which takes their per-pixel noise (which
 #                          no -a option reduces) out of the error (docs/benchmarks.md)
-#   REF_EXTRA=""           more options for both references, e.g. "-lw 1e-5": the ray weight
-#                          limit caps the divisions of an ambient value at 0.5/lw (rpict, tpict)
+#   REF_EXTRA=""           more options for both references, e.g. "-lw 1e-8": the ray weight
+#                          limit caps the divisions of an ambient value at 0.5/lw (rpict, tpict),
+#                          and below an uncached sample ray (weight 0.5/REF_AD) it also drops
+#                          weak reflections (a 6% mirror-like plastic, a pane's Fresnel
+#                          reflection) that cached pictures keep: use a limit far below
+#                          0.5/REF_AD times the weakest such coefficient (docs/benchmarks.md)
 #   REF_DIR=dir            keep the reference pictures there and reuse them when present
 #                          (named by scene, -ab, RES, REF_AD, EXTRA and REF_EXTRA; delete
 #                          to re-render)
