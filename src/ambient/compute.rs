@@ -1168,6 +1168,24 @@ mod tests {
         assert_eq!(corral_flags(&holes, m, nphi, Z, u0, u, rad, aa), 0);
     }
 
+    /// A level-0 value at `pos` facing +z, radii 1, no gradients, grey `val`.
+    fn unit_value(pos: DVec3, val: f64, corral: u32, reach: f64) -> CachedValue {
+        CachedValue {
+            id: ValueId::default(),
+            pos,
+            n: Z,
+            u: X,
+            lvl: 0,
+            weight: 1.0,
+            rad: [1.0, 1.0],
+            gpos: [0.0; 2],
+            gdir: [0.0; 2],
+            corral,
+            val: Color::splat(val),
+            reach,
+        }
+    }
+
     #[test]
     fn a_wider_reach_adds_weight_but_never_replaces_a_new_value() {
         let params = RenderParams {
@@ -1176,20 +1194,7 @@ mod tests {
             ..RenderParams::default()
         };
         let amb = Ambient::new(&params, 10.0, 1).unwrap();
-        let value = |x: f64, v: f64, reach: f64| CachedValue {
-            id: ValueId::default(),
-            pos: DVec3::new(x, 0.0, 0.0),
-            n: Z,
-            u: X,
-            lvl: 0,
-            weight: 1.0,
-            rad: [1.0, 1.0],
-            gpos: [0.0; 2],
-            gdir: [0.0; 2],
-            corral: 0,
-            val: Color::splat(v),
-            reach,
-        };
+        let value = |x: f64, v: f64, reach: f64| unit_value(DVec3::new(x, 0.0, 0.0), v, 0, reach);
         let mut clear = |_: DVec3, _: DVec3, _: f64| false;
         // Reach 2 at the origin: the normalised distance 0.3 is beyond aa = 0.2 but within
         // 2·aa. Alone, it does not spare a new value there.
@@ -1222,20 +1227,7 @@ mod tests {
         amb.use_corral = true;
         // A value at the origin facing +z, radius 1, a wall flagged toward +x (sectors 30..1).
         let corral = (1u32 << 30) | (1 << 31) | 1 | 2;
-        amb.cache.insert(CachedValue {
-            id: ValueId::default(),
-            pos: DVec3::ZERO,
-            n: Z,
-            u: X,
-            lvl: 0,
-            weight: 1.0,
-            rad: [1.0, 1.0],
-            gpos: [0.0; 2],
-            gdir: [0.0; 2],
-            corral,
-            val: Color::splat(1.0),
-            reach: 1.0,
-        });
+        amb.cache.insert(unit_value(DVec3::ZERO, 1.0, corral, 1.0));
         let mut asked = Vec::new();
         let mut blocked = |o: DVec3, d: DVec3, t: f64| {
             asked.push((o, d, t));
