@@ -46,6 +46,10 @@ pub struct Polygon {
     iv: usize,
     /// Edges in the projection.
     edges: Vec<Edge2>,
+    /// For a convex polygon, the sign of its turn in the projection (+1 counter-clockwise):
+    /// the inside test is then one half-plane test per edge. None for concave polygons,
+    /// polygons with holes and degenerate ones (the general crossing test).
+    convex: Option<f64>,
     /// 2-D bounding box of the projection, grown by `FTINY`.
     lo2: [f64; 2],
     hi2: [f64; 2],
@@ -175,6 +179,7 @@ impl Polygon {
             lo2[k] -= FTINY;
             hi2[k] += FTINY;
         }
+        let convex = convex_turn(&edges);
         Ok((
             Polygon {
                 verts,
@@ -185,6 +190,7 @@ impl Polygon {
                 iu,
                 iv,
                 edges,
+                convex,
                 lo2,
                 hi2,
                 lo,
@@ -219,12 +225,26 @@ impl Polygon {
         self.area > 0.0 && self.contains_projected([p[self.iu], p[self.iv]])
     }
 
-    /// Even–odd crossing test in the projection; points within `FTINY` of an edge are inside.
+    /// Inside test in the projection; points within `FTINY` of an edge are inside. Convex
+    /// polygons test the half-plane of each edge, grown by `FTINY` (which also admits points
+    /// within about `FTINY / sin(half the corner angle)` of a corner); the others use
+    /// [`Polygon::contains_crossing`].
     #[inline]
     fn contains_projected(&self, p: [f64; 2]) -> bool {
         if p[0] < self.lo2[0] || p[0] > self.hi2[0] || p[1] < self.lo2[1] || p[1] > self.hi2[1] {
             return false;
         }
+        match self.convex {
+            Some(s) => self.edges.iter().all(|ed| {
+                let cross = ed.e[0] * (p[1] - ed.a[1]) - ed.e[1] * (p[0] - ed.a[0]);
+                s * cross >= -FTINY * ed.len
+            }),
+            None => self.contains_crossing(p),
+        }
+    }
+
+    /// Even–odd crossing test in the projection; points within `FTINY` of an edge are inside.
+    fn contains_crossing(&self, p: [f64; 2]) -> bool {
         let mut inside = false;
         for ed in &self.edges {
             let rx = p[0] - ed.a[0];
@@ -259,6 +279,36 @@ impl Polygon {
     pub fn bounds(&self) -> (DVec3, DVec3) {
         (self.lo, self.hi)
     }
+}
+
+/// The turn sign (+1 counter-clockwise, −1 clockwise) of a strictly convex, simple polygon
+/// given by its projected edges; None when any edge is degenerate, two consecutive edges are
+/// collinear or turn the other way, or the edges wind around more than once.
+fn convex_turn(edges: &[Edge2]) -> Option<f64> {
+    let n = edges.len();
+    if n < 3 || edges.iter().any(|e| e.len.is_nan() || e.len <= 0.0) {
+        return None;
+    }
+    let mut sign = 0.0;
+    let mut winding = 0.0;
+    for i in 0..n {
+        let (a, b) = (edges[i].e, edges[(i + 1) % n].e);
+        let cross = a[0] * b[1] - a[1] * b[0];
+        let dot = a[0] * b[0] + a[1] * b[1];
+        // Strictly turning, relative to the edges' lengths.
+        if cross.abs() <= 1e-12 * edges[i].len * edges[(i + 1) % n].len {
+            return None;
+        }
+        let s = cross.signum();
+        if sign == 0.0 {
+            sign = s;
+        } else if s != sign {
+            return None;
+        }
+        winding += cross.atan2(dot);
+    }
+    // One turn around: the exterior angles sum to ±2π (a pentagram sums to ±4π).
+    ((winding.abs() - 2.0 * std::f64::consts::PI).abs() < 1e-6).then_some(sign)
 }
 
 #[cfg(test)]
@@ -320,5 +370,91 @@ mod tests {
         assert!(!p.contains(DVec3::new(2.0, 1.5, 0.0)));
         assert!(!p.contains(DVec3::new(-1.0, 1.0, 0.0)));
         assert!(!p.contains(DVec3::new(5.0, 1.0, 0.0)));
+    }
+
+    /// The half-plane test of convex polygons agrees with the crossing test everywhere but
+    /// within a few `FTINY` of a corner; concave polygons, holes and stars keep the crossing
+    /// test.
+    #[test]
+    fn convex_fast_path_agrees_with_the_crossing_test() {
+        let mut seed = 0x9E37_79B9_7F4A_7C15u64;
+        let mut rnd = || {
+            seed ^= seed << 13;
+            seed ^= seed >> 7;
+            seed ^= seed << 17;
+            (seed >> 11) as f64 / (1u64 << 53) as f64
+        };
+        let mut tested = 0;
+        for case in 0..40 {
+            // A convex polygon: sorted random angles on an ellipse, in a random plane
+            // orientation (either winding).
+            let n = 3 + case % 6;
+            let mut ang: Vec<f64> = (0..n).map(|_| rnd() * std::f64::consts::TAU).collect();
+            ang.sort_by(f64::total_cmp);
+            if case % 2 == 1 {
+                ang.reverse();
+            }
+            let (a, b) = (0.5 + 2.0 * rnd(), 0.5 + 2.0 * rnd());
+            let (ux, uy) = (
+                DVec3::new(1.0, 0.3 * rnd(), 0.2),
+                DVec3::new(-0.1, 1.0, 0.4 * rnd()),
+            );
+            let verts: Vec<DVec3> = ang
+                .iter()
+                .map(|t| ux * (a * t.cos()) + uy * (b * t.sin()))
+                .collect();
+            let Ok((p, _)) = Polygon::new(verts.clone()) else {
+                continue;
+            };
+            if p.area <= 1e-3 || p.convex.is_none() {
+                continue;
+            }
+            tested += 1;
+            for _ in 0..2000 {
+                // Points near the polygon, many near its edges.
+                let k = (rnd() * n as f64) as usize % n;
+                let e0 = verts[k];
+                let e1 = verts[(k + 1) % n];
+                let q = if rnd() < 0.5 {
+                    let t = rnd();
+                    e0 + (e1 - e0) * t + p.normal.cross(e1 - e0).normalize() * (rnd() - 0.5) * 8e-6
+                } else {
+                    DVec3::new(rnd() * 6.0 - 3.0, rnd() * 6.0 - 3.0, 0.0)
+                };
+                let q = q - p.normal * (p.normal.dot(q) - p.offset);
+                let pp = [q[p.iu], q[p.iv]];
+                let in_box =
+                    !(pp[0] < p.lo2[0] || pp[0] > p.hi2[0] || pp[1] < p.lo2[1] || pp[1] > p.hi2[1]);
+                let fast = p.contains_projected(pp);
+                let slow = in_box && p.contains_crossing(pp);
+                if fast != slow {
+                    let near = verts.iter().map(|v| v.distance(q)).fold(f64::MAX, f64::min);
+                    assert!(
+                        near < 200.0 * FTINY,
+                        "case {case}: {q} differs, {near} from a corner"
+                    );
+                }
+            }
+        }
+        assert!(tested >= 30, "only {tested} convex cases");
+        // Not convex: a chevron, a pentagram.
+        let chevron = Polygon::new(vec![
+            DVec3::new(0.0, 0.0, 0.0),
+            DVec3::new(4.0, 0.0, 0.0),
+            DVec3::new(4.0, 2.0, 0.0),
+            DVec3::new(2.0, 1.0, 0.0),
+            DVec3::new(0.0, 2.0, 0.0),
+        ])
+        .unwrap()
+        .0;
+        assert!(chevron.convex.is_none());
+        let star: Vec<DVec3> = (0..5)
+            .map(|i| {
+                let t = i as f64 * 4.0 * std::f64::consts::PI / 5.0;
+                DVec3::new(t.cos(), t.sin(), 0.0)
+            })
+            .collect();
+        assert!(Polygon::new(star).unwrap().0.convex.is_none());
+        assert!(sq().convex.is_some());
     }
 }
