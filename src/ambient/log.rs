@@ -700,6 +700,27 @@ mod tests {
     use super::*;
 
     #[test]
+    fn version_one_headers_are_read_and_later_versions_refused() {
+        let h = LogHeader::new([0xcd; 32], "-ab 2");
+        let with_version = |v: u32| {
+            let mut b = h.to_bytes();
+            b[10..14].copy_from_slice(&v.to_le_bytes());
+            let n = b.len() - 4;
+            let crc = crc32fast::hash(&b[..n]);
+            b[n..].copy_from_slice(&crc.to_le_bytes());
+            b
+        };
+        let v1 = with_version(1);
+        let (got, len) = parse_header(Path::new("x"), &v1, v1.len() as u64).unwrap();
+        assert_eq!((got.version, len), (1, v1.len() as u64));
+        let v3 = with_version(LOG_VERSION + 1);
+        assert!(matches!(
+            parse_header(Path::new("x"), &v3, v3.len() as u64),
+            Err(AmbLogError::Version { found, .. }) if found == LOG_VERSION + 1
+        ));
+    }
+
+    #[test]
     fn payload_layout() {
         let r = AmbRecord {
             id: ValueId { origin: 7, seq: 9 },
