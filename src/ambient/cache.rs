@@ -2,15 +2,14 @@
 //!
 //! Values are kept in a multi-level hashed grid: a value of radius `r` lives at the level
 //! whose cell size is the smallest power-of-two multiple of the base size that is at least
-//! twice its reach (`aa·reach·r`), in the cell containing its position. A lookup at point P
-//! checks, per level in use, the 2×2×2 cells nearest P — every value whose reach covers P is
-//! there. A cell keeps each value's position and squared reach in a compact array beside the
-//! values, and a lookup scans that array, handing on only the values whose reach sphere holds
-//! P (most values in the eight cells are out of reach).
+//! twice its reach (`aa·reach·r`), filed (as a shared pointer) in every cell of that level its
+//! reach sphere touches — at most 2×2×2. A lookup at point P reads, per level in use, the one
+//! cell holding P: every value whose reach covers P is there. A cell keeps each value's
+//! position and squared reach in a compact array beside the values, and a lookup scans that
+//! array, handing on only the values whose reach sphere holds P.
 //! The grid is split into shards, each behind its own `RwLock`: lookups only take short read
-//! locks on the shards they touch (no global lock), inserts a write lock on one shard. A
-//! shard holds blocks of 8×8×8 cells of a level, so a lookup's 2×2×2 cells mostly need one
-//! lock per level.
+//! locks on the shards they touch (no global lock), inserts write locks on the shards of
+//! their cells, one at a time. A shard holds blocks of 8×8×8 cells of a level.
 
 use super::ValueId;
 use crate::color::Color;
@@ -18,7 +17,7 @@ use glam::DVec3;
 use std::collections::HashMap;
 use std::hash::{BuildHasherDefault, Hasher};
 use std::sync::atomic::{AtomicU32, AtomicU64, Ordering};
-use std::sync::{OnceLock, RwLock};
+use std::sync::{Arc, OnceLock, RwLock};
 
 /// Receives every value this process computes (e.g. to append it to a shared log).
 pub trait ValueSink: Send + Sync {
@@ -114,7 +113,7 @@ impl Hasher for KeyHasher {
 struct CellList {
     /// Position and squared reach (`(aa·reach·max(rad))²`) of each value.
     reach: Vec<[f64; 4]>,
-    vals: Vec<CachedValue>,
+    vals: Vec<Arc<CachedValue>>,
 }
 
 type Grid = HashMap<Key, CellList, BuildHasherDefault<KeyHasher>>;
@@ -209,22 +208,31 @@ impl AmbientCache {
         self.base * (1u64 << level) as f64
     }
 
-    /// Insert a value.
+    /// Insert a value: it is filed in every cell of its level that its reach sphere
+    /// touches (at most 2×2×2, as the cells are at least twice the reach), so a lookup reads
+    /// one cell per level.
     pub fn insert(&self, v: CachedValue) {
         let r = v.rad[1].max(v.rad[0]) * v.reach.max(1.0);
         let l = self.level_for(r);
         let rr = self.aa * r;
         let s = self.cell_size(l);
-        let key = (
-            l,
-            (v.pos.x / s).floor() as i64,
-            (v.pos.y / s).floor() as i64,
-            (v.pos.z / s).floor() as i64,
-        );
-        if let Ok(mut shard) = self.shards[shard_of(&key)].write() {
-            let cell = shard.entry(key).or_default();
-            cell.reach.push([v.pos.x, v.pos.y, v.pos.z, rr * rr]);
-            cell.vals.push(v);
+        // Padded so that rounding never leaves out a cell the sphere touches.
+        let pad = rr * (1.0 + 1e-6) + 1e-9 * s;
+        let lo = ((v.pos - DVec3::splat(pad)) / s).floor();
+        let hi = ((v.pos + DVec3::splat(pad)) / s).floor();
+        let shared = Arc::new(v);
+        let entry = [v.pos.x, v.pos.y, v.pos.z, rr * rr];
+        for x in lo.x as i64..=hi.x as i64 {
+            for y in lo.y as i64..=hi.y as i64 {
+                for z in lo.z as i64..=hi.z as i64 {
+                    let key = (l, x, y, z);
+                    if let Ok(mut shard) = self.shards[shard_of(&key)].write() {
+                        let cell = shard.entry(key).or_default();
+                        cell.reach.push(entry);
+                        cell.vals.push(Arc::clone(&shared));
+                    }
+                }
+            }
         }
         self.levels_used.fetch_or(1u64 << l, Ordering::Relaxed);
         self.max_level_seen.fetch_max(l, Ordering::Relaxed);
@@ -236,6 +244,17 @@ impl AmbientCache {
         }
     }
 
+    /// The cell of level `l` holding `p`.
+    fn key_at(&self, l: u32, p: DVec3) -> Key {
+        let s = self.cell_size(l);
+        (
+            l,
+            (p.x / s).floor() as i64,
+            (p.y / s).floor() as i64,
+            (p.z / s).floor() as i64,
+        )
+    }
+
     /// Call `f` for every value whose reach sphere (radius `aa·reach·max(rad)`) holds `p`.
     pub fn for_each_near(&self, p: DVec3, mut f: impl FnMut(&CachedValue)) {
         let used = self.levels_used.load(Ordering::Relaxed);
@@ -244,36 +263,13 @@ impl AmbientCache {
             if used & (1u64 << l) == 0 {
                 continue;
             }
-            let s = self.cell_size(l);
-            let q = p / s - DVec3::splat(0.5);
-            let (x0, y0, z0) = (q.x.floor() as i64, q.y.floor() as i64, q.z.floor() as i64);
-            let keys: [Key; 8] = std::array::from_fn(|i| {
-                (
-                    l,
-                    x0 + (i & 1) as i64,
-                    y0 + (i >> 1 & 1) as i64,
-                    z0 + (i >> 2) as i64,
-                )
-            });
-            let shard: [usize; 8] = std::array::from_fn(|i| shard_of(&keys[i]));
-            // Each shard is locked once for all of its cells among the eight.
-            let mut done = 0u8;
-            for i in 0..8 {
-                if done & (1 << i) != 0 {
-                    continue;
-                }
-                if let Ok(grid) = self.shards[shard[i]].read() {
-                    for j in i..8 {
-                        if shard[j] == shard[i] && done & (1 << j) == 0 {
-                            done |= 1 << j;
-                            if let Some(cell) = grid.get(&keys[j]) {
-                                for (k, r) in cell.reach.iter().enumerate() {
-                                    let d = [p.x - r[0], p.y - r[1], p.z - r[2]];
-                                    if d[0] * d[0] + d[1] * d[1] + d[2] * d[2] < r[3] {
-                                        f(&cell.vals[k]);
-                                    }
-                                }
-                            }
+            let key = self.key_at(l, p);
+            if let Ok(grid) = self.shards[shard_of(&key)].read() {
+                if let Some(cell) = grid.get(&key) {
+                    for (k, r) in cell.reach.iter().enumerate() {
+                        let d = [p.x - r[0], p.y - r[1], p.z - r[2]];
+                        if d[0] * d[0] + d[1] * d[1] + d[2] * d[2] < r[3] {
+                            f(&cell.vals[k]);
                         }
                     }
                 }
@@ -286,8 +282,13 @@ impl AmbientCache {
         let mut out = Vec::with_capacity(self.len() as usize);
         for s in &self.shards {
             if let Ok(shard) = s.read() {
-                for cell in shard.values() {
-                    out.extend_from_slice(&cell.vals);
+                // Each value once: from the cell holding its position.
+                for (key, cell) in shard.iter() {
+                    for v in &cell.vals {
+                        if self.key_at(key.0, v.pos) == *key {
+                            out.push(**v);
+                        }
+                    }
                 }
             }
         }
@@ -337,5 +338,79 @@ impl CachedValue {
                 1.0
             },
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn value(pos: DVec3, rad: f64, reach: f64, seq: u64) -> CachedValue {
+        CachedValue {
+            id: ValueId { origin: 1, seq },
+            pos,
+            n: DVec3::Z,
+            u: DVec3::X,
+            lvl: 0,
+            weight: 1.0,
+            rad: [rad, rad],
+            gpos: [0.0; 2],
+            gdir: [0.0; 2],
+            corral: 0,
+            val: Color::splat(1.0),
+            reach,
+        }
+    }
+
+    /// Every lookup finds exactly the values whose reach sphere holds the point (brute force
+    /// over random values of many sizes, positions on and near cell boundaries), and `all`
+    /// returns each value once although it is filed in up to eight cells.
+    #[test]
+    fn lookups_find_exactly_the_values_in_reach() {
+        let aa = 0.2;
+        let cache = AmbientCache::new(0.01, aa, 1);
+        let mut seed = 0x2545_F491_4F6C_DD1Du64;
+        let mut rnd = || {
+            seed ^= seed << 13;
+            seed ^= seed >> 7;
+            seed ^= seed << 17;
+            (seed >> 11) as f64 / (1u64 << 53) as f64
+        };
+        let mut vals = Vec::new();
+        for seq in 0..400 {
+            // Positions snapped near multiples of the base cell size half of the time.
+            let mut pos = DVec3::new(rnd(), rnd(), rnd()) * 4.0 - DVec3::splat(2.0);
+            if seq % 2 == 0 {
+                pos = (pos / 0.004).round() * 0.004 + DVec3::splat(1e-12 * (rnd() - 0.5));
+            }
+            let v = value(pos, 0.01 + rnd() * rnd() * 2.0, 1.0 + rnd(), seq);
+            cache.insert(v);
+            vals.push(v);
+        }
+        for _ in 0..3000 {
+            let v = vals[(rnd() * vals.len() as f64) as usize % vals.len()];
+            let r = aa * v.rad[0] * v.reach;
+            // Points inside the value's reach, some right at its edge.
+            let dir = DVec3::new(rnd() - 0.5, rnd() - 0.5, rnd() - 0.5).normalize_or(DVec3::X);
+            let t = if rnd() < 0.3 { 0.999_999 } else { rnd() };
+            let p = v.pos + dir * (r * t);
+            let mut found = Vec::new();
+            cache.for_each_near(p, |c| found.push(c.id.seq));
+            found.sort_unstable();
+            let mut want: Vec<u64> = vals
+                .iter()
+                .filter(|c| {
+                    let rr = aa * c.rad[0] * c.reach;
+                    (p - c.pos).length_squared() < rr * rr
+                })
+                .map(|c| c.id.seq)
+                .collect();
+            want.sort_unstable();
+            assert_eq!(found, want, "at {p}");
+        }
+        let mut all: Vec<u64> = cache.all().iter().map(|c| c.id.seq).collect();
+        all.sort_unstable();
+        assert_eq!(all, (0..400).collect::<Vec<_>>());
+        assert_eq!(cache.len(), 400);
     }
 }
