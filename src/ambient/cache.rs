@@ -369,13 +369,8 @@ mod tests {
     fn lookups_find_exactly_the_values_in_reach() {
         let aa = 0.2;
         let cache = AmbientCache::new(0.01, aa, 1);
-        let mut seed = 0x2545_F491_4F6C_DD1Du64;
-        let mut rnd = || {
-            seed ^= seed << 13;
-            seed ^= seed >> 7;
-            seed ^= seed << 17;
-            (seed >> 11) as f64 / (1u64 << 53) as f64
-        };
+        let mut rng = crate::render::sampler::Sampler::for_pixel(0, 1, 2, 3);
+        let mut rnd = || rng.uniform();
         let mut vals = Vec::new();
         for seq in 0..400 {
             // Positions snapped near multiples of the base cell size half of the time.

@@ -406,19 +406,15 @@ impl Ambient {
         // when values of a larger reach contribute, so values stay as dense as rpict's.
         let mut near = false;
         let aa0 = aa;
+        // The cache hands on only values whose reach sphere (|P − P_v| < aa·reach·max(rad),
+        // implied by the elliptical test below) holds P.
         self.cache.for_each_near(p, |v| {
             if v.lvl > level || (v.lvl == level && v.weight < 0.9 * rweight) {
                 return;
             }
-            // Most candidates of the grid cells are out of reach: |P − P_v| < aa·max(rad)
-            // is necessary for the elliptical test below (its terms are components of the
-            // offset in an orthonormal frame over radii ≤ max(rad)), and cheap.
             let dd = p - v.pos;
+            // This value's acceptance limit: -aa times its reach.
             let aa = aa0 * v.reach;
-            let reach = aa * v.rad[0].max(v.rad[1]);
-            if dd.length_squared() >= reach * reach {
-                return;
-            }
             let d = v.n.dot(n);
             if d <= 0.0 {
                 return;

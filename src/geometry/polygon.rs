@@ -377,13 +377,8 @@ mod tests {
     /// test.
     #[test]
     fn convex_fast_path_agrees_with_the_crossing_test() {
-        let mut seed = 0x9E37_79B9_7F4A_7C15u64;
-        let mut rnd = || {
-            seed ^= seed << 13;
-            seed ^= seed >> 7;
-            seed ^= seed << 17;
-            (seed >> 11) as f64 / (1u64 << 53) as f64
-        };
+        let mut rng = crate::render::sampler::Sampler::for_pixel(0, 4, 5, 6);
+        let mut rnd = || rng.uniform();
         let mut tested = 0;
         for case in 0..40 {
             // A convex polygon: sorted random angles on an ellipse, in a random plane

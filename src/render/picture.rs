@@ -142,11 +142,16 @@ pub fn render_region(
         return out;
     }
     let ps = fs.ps.max(1);
-    let overture_rows = overture(tr, fs, x0, y0, x1, y1, progress);
+    // Cells of the global grid: pixels [cx*ps, (cx+1)*ps) × [cy*ps, (cy+1)*ps).
+    let cy0 = y0 / ps;
+    let cy1 = y1.div_ceil(ps);
+    let overture_rows = overture_rows(fs, y0, y1);
+    let rows = if ps == 1 { h } else { cy1 - cy0 };
+    progress
+        .rows_total
+        .store(overture_rows.len() + rows, Ordering::Relaxed);
+    overture(tr, fs, x0, x1, &overture_rows, progress);
     if ps == 1 {
-        progress
-            .rows_total
-            .store(overture_rows + h, Ordering::Relaxed);
         out.par_chunks_mut(w).enumerate().for_each(|(row, line)| {
             let mut rays = 0;
             for (i, px) in line.iter_mut().enumerate() {
@@ -158,14 +163,8 @@ pub fn render_region(
         });
         return out;
     }
-    // Cells of the global grid: pixels [cx*ps, (cx+1)*ps) × [cy*ps, (cy+1)*ps).
-    let cy0 = y0 / ps;
-    let cy1 = y1.div_ceil(ps);
     let cx0 = x0 / ps;
     let cx1 = x1.div_ceil(ps);
-    progress
-        .rows_total
-        .store(overture_rows + cy1 - cy0, Ordering::Relaxed);
     let bands: Vec<Vec<(usize, usize, [f32; 3])>> = (cy0..cy1)
         .into_par_iter()
         .map(|cy| {
@@ -191,40 +190,42 @@ pub fn render_region(
     out
 }
 
+/// The rows `[y0, y1)` of the overture's global grid of step `fs.overture` (none at 0).
+fn overture_rows(fs: &FrameSetup, y0: usize, y1: usize) -> Vec<usize> {
+    match fs.overture {
+        0 => Vec::new(),
+        step => (y0.div_ceil(step) * step..y1).step_by(step).collect(),
+    }
+}
+
 /// The overture pass of [`render_region`] (see [`FrameSetup::overture`]): samples the pixels
-/// of the region on the global grid of step `fs.overture` and discards their colours; the
-/// ambient values they make stay in the cache. Returns the number of pixel rows it sampled
-/// (counted in `progress` as they finish).
+/// of the grid rows `rows` between columns `x0` and `x1` and discards their colours; the
+/// ambient values they make stay in the cache. Each row counts in `progress`.
 fn overture(
     tr: &Tracer,
     fs: &FrameSetup,
     x0: usize,
-    y0: usize,
     x1: usize,
-    y1: usize,
+    rows: &[usize],
     progress: &RenderProgress,
-) -> usize {
+) {
     let step = fs.overture;
-    if step == 0 {
-        return 0;
+    if rows.is_empty() {
+        return;
     }
     // Eye paths skip direct light: only the ambient values this pass makes are kept.
     let tr = &Tracer {
         fill_only: true,
         ..*tr
     };
-    let first = |a: usize| a.div_ceil(step) * step;
-    let rows: Vec<usize> = (first(y0)..y1).step_by(step).collect();
-    progress.rows_total.store(2 * rows.len(), Ordering::Relaxed);
     rows.par_iter().for_each(|&y| {
         let mut rays = 0;
-        for x in (first(x0)..x1).step_by(step) {
+        for x in (x0.div_ceil(step) * step..x1).step_by(step) {
             sample_pixel(tr, fs, x, y, &mut rays);
         }
         progress.rays.fetch_add(rays, Ordering::Relaxed);
         progress.rows_done.fetch_add(1, Ordering::Relaxed);
     });
-    rows.len()
 }
 
 fn to_f32(c: Color) -> [f32; 3] {
