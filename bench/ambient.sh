@@ -5,7 +5,7 @@
 #   1. two converged references with pure Monte Carlo sampling (no irradiance cache):
 #        rpict -aa 0 -ad REF_AD -as 0   and   tpict -aa 0 -ad REF_AD -as 0
 #      their agreement (relative RMS, mean luminance) goes to references.tsv;
-#      the reference used for the sweep is their average (pcomb), reduced like the runs.
+#      the reference used for the sweep is the average of the two, reduced like the runs.
 #   2. a sweep over -aa x -ad x -as for both renderers, single-threaded (tpict -n 1),
 #      recording CPU time (user+sys, /usr/bin/time) and the error against the reference.
 # Pictures are RES x RES with -ps 1 -pj 0 (no pixel-sampling noise), then reduced with
@@ -34,7 +34,7 @@
 #                          to re-render)
 #   FLOOR=0.01             relative floor of the error denominator (x mean reference)
 #   OUT=docs/benchmarks-ambient   where runs.tsv and references.tsv go (TAG=x -> runs-x.tsv)
-#   TESSERA_RADIANCE_BIN   folder holding rpict, oconv, pfilt, pvalue, pcomb
+#   TESSERA_RADIANCE_BIN   folder holding rpict, oconv, pfilt, pvalue
 #   NO_BUILD=1 / TPICT=path
 #   REPEAT=1               runs of each setting; the CPU time recorded is the smallest (the
 #                          pictures, and so the errors, are the same every time)
@@ -142,11 +142,12 @@ for s in $SCENES; do
                 echo "$rc $tc" >"$REF_DIR/$key-cpu"
             fi
         fi
-        pcomb -e 'ro=(ri(1)+ri(2))/2;go=(gi(1)+gi(2))/2;bo=(bi(1)+bi(2))/2' \
-            -o "$TMP/rref.hdr" -o "$TMP/tref.hdr" >"$TMP/aref.hdr"
         bright "$TMP/rref.hdr" "$TMP/rref.b"
         bright "$TMP/tref.hdr" "$TMP/tref.b"
-        bright "$TMP/aref.hdr" "$TMP/aref.b"
+        # The average is taken of the reduced brightness, in floating point: averaging the
+        # pictures with pcomb re-encodes every pixel as RGBE, and a mean that falls halfway
+        # between two mantissa steps is rounded up (+0.1% over the picture).
+        paste "$TMP/rref.b" "$TMP/tref.b" | awk '{ printf "%.7e\n", ($1 + $2) / 2 }' >"$TMP/aref.b"
         row="$s	$ab	$rc	$tc	$(mean_of "$TMP/rref.b")	$(mean_of "$TMP/tref.b")	$(relrms "$TMP/tref.b" "$TMP/rref.b")	$(relrms "$TMP/rref.b" "$TMP/tref.b")"
         echo "$row" >>"$REFS"
         echo "ambient: reference $row" >&2
