@@ -9,6 +9,8 @@ piecewise-linearly in log(error)-log(time); a ratio is given only where the erro
 lies inside both fronts (no extrapolation).
 
 Usage: python3 bench/plot_ambient.py [RESULTS_DIR] [--err err_avgref]
+  --err own   each renderer against its own reference (err_rpictref for rpict's runs,
+              err_tpictref for tpict's): leaves out the references' own difference
 Installs matplotlib and numpy into a venv ($TESSERA_VENV, default
 ~/.cache/tessera-bench-venv) when the running Python lacks them.
 """
@@ -96,7 +98,8 @@ def main():
         fig, ax = plt.subplots(figsize=(5.2, 4.0), dpi=80)
         fronts = {}
         for ren in ("rpict", "tpict"):
-            pts = [(float(r["cpu_s"]), float(r[errcol]), f'{r["aa"]}/{r["ad"]}/{r["as"]}')
+            col = f"err_{ren}ref" if errcol == "own" else errcol
+            pts = [(float(r["cpu_s"]), float(r[col]), f'{r["aa"]}/{r["ad"]}/{r["as"]}')
                    for r in rs if r["renderer"] == ren and float(r["cpu_s"]) > 0]
             if not pts:
                 continue
@@ -145,7 +148,8 @@ def main():
             for r in rs:
                 if r["renderer"] != "rpict":
                     continue
-                e, t = float(r[errcol]), float(r["cpu_s"])
+                col = "err_rpictref" if errcol == "own" else errcol
+                e, t = float(r[col]), float(r["cpu_s"])
                 tt = tf[0][0] if e > tf[0][1] else time_at(tf, e)
                 if tt:
                     per.append(t / tt)

@@ -53,6 +53,7 @@ struct Opts {
     gradients: bool,
     hessian: bool,
     reach: bool,
+    grad_radii: bool,
     overture: usize,
     /// `-st` (rough specular reflections below it go into the ambient term).
     st: f64,
@@ -70,6 +71,7 @@ impl Default for Opts {
             gradients: true,
             hessian: true,
             reach: true,
+            grad_radii: false,
             overture: 0,
             st: RenderParams::default().st,
             frame: 0,
@@ -91,6 +93,7 @@ fn render(s: &Setup, o: Opts) -> (Vec<[f64; 3]>, u64) {
     amb.use_gradients = o.gradients;
     amb.use_hessian = o.hessian;
     amb.use_reach = o.reach;
+    amb.gradient_limits_radii = o.grad_radii;
     let vf = s.view.frame().unwrap();
     let (mut x, mut y, mut pa) = (o.res, o.res, 1.0);
     normaspect(vf.aspect(), &mut pa, &mut x, &mut y);
@@ -404,6 +407,40 @@ fn reach_reduces_noise_where_radii_were_clamped() {
     eprintln!("reach on: rms {with:.4} ({n1} values); off: rms {without:.4} ({n2} values)");
     assert!(with < without, "the reach should help: {with} vs {without}");
     assert!((n1 - n2).abs() <= 0.05 * n2, "value counts {n1} vs {n2}");
+}
+
+/// The gradient no longer shrinks Hessian radii (Radiance's `rad ≤ 1/|gpos|`): the Hessian
+/// sets them from the light's variation, and a gradient made noisy by a few bright cells
+/// shrank them for noise. Fewer values, at about the same error.
+#[test]
+fn hessian_radii_are_not_shrunk_by_the_gradient() {
+    let s = load("spheres.rad", "spheres.vf");
+    let reference = reference(&s, 48, 1024, 2);
+    let (w, _) = dims(&s, 48);
+    let reduced = |a: &[[f64; 3]], b: &[[f64; 3]]| rms(&reduce(a, w, 2), &reduce(b, w, 2));
+    let base = Opts {
+        aa: 0.15,
+        ad: 256,
+        as_: 128,
+        overture: 1,
+        ..Opts::default()
+    };
+    let (free, n1) = mean_err_with(&s, &reference, base, 3, &reduced);
+    let (limited, n2) = mean_err_with(
+        &s,
+        &reference,
+        Opts {
+            grad_radii: true,
+            ..base
+        },
+        3,
+        &reduced,
+    );
+    eprintln!(
+        "gradient limit off: rms {free:.4} ({n1} values); on: rms {limited:.4} ({n2} values)"
+    );
+    assert!(n1 < 0.9 * n2, "fewer values expected: {n1} vs {n2}");
+    assert!(free < 1.15 * limited, "error {free} vs {limited}");
 }
 
 /// Measurements for the report (run with `--ignored --nocapture`): error against an `-aa 0`

@@ -232,6 +232,9 @@ pub struct Ambient {
     /// Give new values the interpolation reach their Hessian radii leave room for (default
     /// true; else every value's reach is 1, as in Radiance). See [`CachedValue::reach`].
     pub use_reach: bool,
+    /// Whether a value's gradient shrinks its radii as in Radiance (`rad_i ≤ 1/|gpos_i|`);
+    /// off by default (docs/ambient.md), `TESSERA_GRADIENT_RADII=1` turns it on.
+    pub gradient_limits_radii: bool,
     /// Cells of the mesh the Hessian is taken from at most (thinned evenly beyond).
     pub hessian_cells: usize,
     /// Outlier limit of a cached value's cells (0: none): see [`clamp_outliers`].
@@ -280,6 +283,7 @@ impl Ambient {
             as_: params.as_.max(0) as f64,
             use_hessian: true,
             use_reach: true,
+            gradient_limits_radii: std::env::var("TESSERA_GRADIENT_RADII").as_deref() == Ok("1"),
             hessian_cells: env_or("TESSERA_HESSIAN_CELLS", HESSIAN_CELLS),
             clamp: env_or("TESSERA_AMB_CLAMP", OUTLIER_LIMIT),
             use_gradients: true,
@@ -696,10 +700,16 @@ impl Ambient {
         let mut v = n.cross(u);
         let mut gp = [gpos.dot(u) * scale, gpos.dot(v) * scale];
         let mut gd = [gdir.dot(u) * scale, gdir.dot(v) * scale];
-        // Radiance's post-processing, in order.
-        for i in 0..2 {
-            if gp[i].abs() * rad[i] > 1.0 {
-                rad[i] = 1.0 / gp[i].abs();
+        // Radiance's post-processing, in order, except that the gradient does not shrink
+        // Hessian radii (`rad_i ≤ 1/|gpos_i|`) unless `gradient_limits_radii`: the Hessian
+        // already sets them from the light's variation, and a noisy gradient (a bright patch
+        // caught by a few cells) would shrink them for noise. The gradient is still capped
+        // to the radii below. Radii from the mean distance (no Hessian) keep the limit.
+        if self.gradient_limits_radii || hess_rad.is_none() {
+            for i in 0..2 {
+                if gp[i].abs() * rad[i] > 1.0 {
+                    rad[i] = 1.0 / gp[i].abs();
+                }
             }
         }
         if rad[0] > rad[1] {
