@@ -63,3 +63,52 @@ fn virtual_samples_are_offered_only_through_the_mirror() {
         }
     }
 }
+
+/// The glows a cached value samples explicitly (`LightSet::sampled_glows`): real, local glows
+/// with a radius of influence; not a glow of radius 0 (never a source), not a light, and not
+/// a glow's image in a mirror (its light reaches a value through the mirror's own samples).
+/// `sample_glow` samples one from beyond that radius, where `sample` gives nothing.
+#[test]
+fn sampled_glows_are_the_real_glows_with_a_radius() {
+    let scene = scene_from_text(
+        "void light panel 0 0 3 10 10 10\n\
+         void glow neon 0 0 4 5 1 1 1.5\n\
+         void glow faint 0 0 4 1 1 1 0\n\
+         void mirror silver 0 0 3 .8 .8 .8\n\
+         panel polygon lamp 0 0 12 -.5 -.5 4 -.5 .5 4 .5 .5 4 .5 -.5 4\n\
+         neon sphere ball 0 0 4 0 0 1 .2\n\
+         faint sphere dim 0 0 4 3 0 1 .2\n\
+         silver polygon mir 0 0 12 -2 -2 0 2 -2 0 2 2 0 -2 2 0\n",
+    );
+    let lights = LightSet::collect(&scene, RenderParams::default().dr);
+    let glows: Vec<(usize, f64)> = lights.sampled_glows().collect();
+    assert_eq!(glows.len(), 1, "only the neon ball: {glows:?}");
+    let (si, maxrad) = glows[0];
+    assert_eq!(maxrad, 1.5);
+    let ball = lights.sources[si].obj.expect("a local source");
+    assert!(lights.is_sampled_glow(ball));
+    // The other objects (the faint glow, the panel, the mirror) are not.
+    let others = (0..scene.objects.len()).filter(|&o| o != ball);
+    assert!(others.clone().count() >= 3);
+    for o in others {
+        assert!(!lights.is_sampled_glow(o), "object {o}");
+    }
+    // The ball's image in the mirror is a (virtual) source, but not a sampled glow.
+    assert!(lights
+        .sources
+        .iter()
+        .any(|s| s.relay.as_ref().is_some_and(|r| r.real == si)));
+    // From 3 units away (beyond the radius): `sample` gives nothing, `sample_glow` a point
+    // on the ball, with its solid angle.
+    let p = DVec3::new(0.0, 3.0, 1.0) - scene.origin;
+    let mut rng = Sampler::for_pixel(0, 0, 0, 0);
+    let mut out = Vec::new();
+    lights.sample(&scene, si, p, 1.0, 0.2, 0.0, &mut rng, &mut out);
+    assert!(out.is_empty());
+    lights.sample_glow(&scene, si, p, 0.2, &mut rng, &mut out);
+    assert_eq!(out.len(), 1);
+    let s = out[0];
+    assert!(s.dist > 2.7 && s.dist < 3.0, "distance {}", s.dist);
+    let omega = 2.0 * std::f64::consts::PI * (1.0 - (1.0 - (0.2f64 / 3.0).powi(2)).sqrt());
+    assert!((s.omega - omega).abs() < 1e-9 * omega);
+}

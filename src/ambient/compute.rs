@@ -11,10 +11,11 @@
 
 use super::cache::{AmbientCache, CachedValue};
 pub use super::hessian::{hessian, hessian_radii};
-use crate::color::{bright, Color};
+use crate::color::{bright, sanitize, Color};
 use crate::material::normal::any_perpendicular;
+use crate::material::MatId;
 use crate::radopt::RenderParams;
-use crate::render::ray::{Hit, Ray, RayKind};
+use crate::render::ray::{Hit, Ray, RayKind, MAX_ANTIMATTER};
 use crate::render::sampler::Sampler;
 use crate::render::trace::Tracer;
 use crate::FTINY;
@@ -232,6 +233,9 @@ pub struct Ambient {
     /// Give new values the interpolation reach their Hessian radii leave room for (default
     /// true; else every value's reach is 1, as in Radiance). See [`CachedValue::reach`].
     pub use_reach: bool,
+    /// Whether cached values sample the scene's glows beyond their radius explicitly
+    /// ([`Ambient::glow_light`]; default true, `TESSERA_GLOW_SAMPLING=0` turns it off).
+    pub sample_glows: bool,
     /// Whether a value's gradient shrinks its radii as in Radiance (`rad_i ≤ 1/|gpos_i|`);
     /// off by default (docs/ambient.md), `TESSERA_GRADIENT_RADII=1` turns it on.
     pub gradient_limits_radii: bool,
@@ -284,6 +288,7 @@ impl Ambient {
             use_hessian: true,
             use_reach: true,
             gradient_limits_radii: std::env::var("TESSERA_GRADIENT_RADII").as_deref() == Ok("1"),
+            sample_glows: std::env::var("TESSERA_GLOW_SAMPLING").as_deref() != Ok("0"),
             hessian_cells: env_or("TESSERA_HESSIAN_CELLS", HESSIAN_CELLS),
             clamp: env_or("TESSERA_AMB_CLAMP", OUTLIER_LIMIT),
             use_gradients: true,
@@ -547,6 +552,43 @@ impl Ambient {
         (rweight, m, cols(m))
     }
 
+    /// The mean radiance (irradiance / π) that the scene's glows with a radius of influence
+    /// bring to `p` (normal `n`) from beyond that radius, where they light a point only
+    /// through its ambient light: each is sampled as a light source ([`glow_samples`] times,
+    /// points nearer than its radius left out), with shadow rays. A value's sample rays
+    /// then do not see these glows (`Ray::glow_sampled`), so the light is counted once. A
+    /// small glow found by a few of a value's hundreds of sample rays is otherwise the
+    /// value's largest source of noise (docs/ambient.md).
+    pub fn glow_light(
+        &self,
+        tr: &Tracer,
+        p: DVec3,
+        n: DVec3,
+        am: [Option<MatId>; MAX_ANTIMATTER],
+        cells: usize,
+        rng: &mut Sampler,
+    ) -> Color {
+        let k = glow_samples(cells);
+        let mut sum = Color::ZERO;
+        let mut buf = Vec::new();
+        for (si, maxrad) in tr.lights.sampled_glows() {
+            for _ in 0..k {
+                buf.clear();
+                tr.lights
+                    .sample_glow(tr.scene, si, p, tr.params.ds, rng, &mut buf);
+                for smp in &buf {
+                    let c = smp.dir.dot(n);
+                    if smp.dist <= maxrad || c <= 0.0 {
+                        continue;
+                    }
+                    let t = tr.shadow(p, smp.dir, smp.dist, si, am, rng);
+                    sum += smp.radiance * t * (c * smp.omega);
+                }
+            }
+        }
+        sanitize(sum / (k as f64 * PI))
+    }
+
     /// Compute a new value at a hit by sampling the hemisphere around `n`.
     fn sample(
         &self,
@@ -571,6 +613,9 @@ impl Ambient {
         let u0 = any_perpendicular(n);
         let v0 = n.cross(u0);
         let ncells = m * nphi;
+        // Glows beyond their radius are sampled explicitly, their emission hidden from the
+        // value's own sample rays (cached values only).
+        let glows = cached && self.sample_glows && tr.lights.sampled_glows().next().is_some();
         let mut cells = vec![Cell::default(); ncells];
         let mut traced = 0u64;
         // A sample ray stands for its cell: about 2π/cells steradians, a footprint of radius
@@ -597,6 +642,7 @@ impl Ambient {
             r.spread = spread;
             r.reach = 0.0;
             r.sample_path = cached;
+            r.glow_sampled = glows;
             traced += 1;
             let (c, t) = tr.trace_dist(&r, rng);
             Some((c, t.clamp(FTINY, self.max_dist), dir))
@@ -661,7 +707,10 @@ impl Ambient {
         }
         let dist: Vec<f64> = cells.iter().map(|c| c.dist(self.max_dist)).collect();
         let count = ncells as f64;
-        let val = lval.iter().fold(Color::ZERO, |a, c| a + *c) / count;
+        let mut val = lval.iter().fold(Color::ZERO, |a, c| a + *c) / count;
+        if glows {
+            val += self.glow_light(tr, hit.point, n, hit.antimatter, ncells, rng);
+        }
         let rsum: f64 = dist.iter().map(|d| 1.0 / d).sum();
         let b = bright(val);
         if self.aw > 0.0 && b > 0.0 && b.is_finite() {
@@ -790,6 +839,13 @@ impl Ambient {
 /// [`super::hessian::subsample_grid`]); radii change by under 1% in a room, the Hessian's
 /// cost falls from about a quarter of a render to a few percent (docs/ambient.md).
 pub const HESSIAN_CELLS: usize = 256;
+
+/// Source samples per glow in [`Ambient::glow_light`] for a value of `cells` hemisphere
+/// cells: one per 32 cells, at least 8 and at most 64 (shadow rays are cheap next to the
+/// value's sample rays, and a partly hidden glow needs several).
+pub fn glow_samples(cells: usize) -> usize {
+    (cells / 32).clamp(8, 64)
+}
 
 /// Largest interpolation reach of a value ([`CachedValue::reach`]), in units of `-aa`.
 pub const REACH_MAX: f64 = 2.0;

@@ -329,6 +329,32 @@ impl LightSet {
         }
     }
 
+    /// The local, real glow sources with a radius of influence (`glow` with radius > 0):
+    /// beyond that radius they light a point only through its ambient (indirect) light, and a
+    /// cached value samples them explicitly there (`Ambient::glow_light`).
+    pub fn sampled_glows(&self) -> impl Iterator<Item = (usize, f64)> + '_ {
+        self.sources
+            .iter()
+            .enumerate()
+            .filter_map(|(i, s)| match s.emitter.kind {
+                EmitterKind::Glow { maxrad }
+                    if maxrad > 0.0
+                        && s.relay.is_none()
+                        && s.distant.is_none()
+                        && s.obj.is_some() =>
+                {
+                    Some((i, maxrad))
+                }
+                _ => None,
+            })
+    }
+
+    /// True when object `obj` is one of [`LightSet::sampled_glows`].
+    pub fn is_sampled_glow(&self, obj: usize) -> bool {
+        self.sampled_glows()
+            .any(|(i, _)| self.sources[i].obj == Some(obj))
+    }
+
     /// Append the samples of source `si` seen from point `p` (relative frame) to `out`.
     /// `scene` is used to drop polygon samples outside the polygon.
     #[allow(clippy::too_many_arguments)]
@@ -342,6 +368,37 @@ impl LightSet {
         dj: f64,
         rng: &mut Sampler,
         out: &mut Vec<SourceSample>,
+    ) {
+        self.sample_within(scene, si, p, weight, ds, dj, rng, out, true)
+    }
+
+    /// [`LightSet::sample`] of a glow from any distance: its radius of influence is ignored
+    /// (each sample's `dist` tells the caller how far its point is).
+    #[allow(clippy::too_many_arguments)]
+    pub fn sample_glow(
+        &self,
+        scene: &Scene,
+        si: usize,
+        p: DVec3,
+        ds: f64,
+        rng: &mut Sampler,
+        out: &mut Vec<SourceSample>,
+    ) {
+        self.sample_within(scene, si, p, 1.0, ds, 1.0, rng, out, false)
+    }
+
+    #[allow(clippy::too_many_arguments)]
+    fn sample_within(
+        &self,
+        scene: &Scene,
+        si: usize,
+        p: DVec3,
+        weight: f64,
+        ds: f64,
+        dj: f64,
+        rng: &mut Sampler,
+        out: &mut Vec<SourceSample>,
+        glow_radius: bool,
     ) {
         let src = &self.sources[si];
         // Virtual sources: sample the real source from the mirrored point, then mirror back.
@@ -357,7 +414,7 @@ impl LightSet {
         };
         if let EmitterKind::Glow { maxrad } = src.emitter.kind {
             // A virtual source's centre is the mirrored one: the distance is the path's length.
-            if (p - src.center).length() > maxrad {
+            if glow_radius && (p - src.center).length() > maxrad {
                 return;
             }
         }

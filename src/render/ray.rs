@@ -57,6 +57,10 @@ pub struct Ray {
     /// averaged with the value's other samples, so specular splits follow one branch
     /// ([`crate::render::trace::Tracer::split`]).
     pub sample_path: bool,
+    /// True for a cached value's sample ray when the value samples the scene's glows
+    /// explicitly (`Ambient::glow_light`): such a ray does not see their emission. Not passed
+    /// on to the rays it spawns.
+    pub glow_sampled: bool,
     /// Antimatter materials whose volumes contain the ray origin.
     pub antimatter: [Option<MatId>; MAX_ANTIMATTER],
 }
@@ -77,6 +81,7 @@ impl Ray {
             spread: 0.0,
             reach: 0.0,
             sample_path: false,
+            glow_sampled: false,
             antimatter: [None; MAX_ANTIMATTER],
         }
     }

@@ -343,6 +343,10 @@ impl<'a> Tracer<'a> {
                     if hit.back && hit.flat {
                         return Color::ZERO;
                     }
+                    // A glow source the value samples explicitly is not seen by its rays.
+                    if ray.glow_sampled && self.lights.is_sampled_glow(hit.obj) {
+                        return Color::ZERO;
+                    }
                     let spot = e.spot_factor(hit.point, ray.org);
                     self.emitter_value(ray, e, hit.t) * spot
                 }
@@ -426,6 +430,7 @@ impl<'a> Tracer<'a> {
                 0.0
             },
             sample_path: parent.sample_path,
+            glow_sampled: false,
             antimatter: hit.antimatter,
         })
     }
