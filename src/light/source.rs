@@ -117,6 +117,8 @@ pub struct LightSet {
     pub sources: Vec<Source>,
     /// Warnings produced while collecting sources.
     pub warnings: Vec<String>,
+    /// [`LightSet::sampled_glows`]: (source index, radius, object), by object.
+    glows: Vec<(usize, f64, usize)>,
 }
 
 /// Map the unit square to the unit disk, area-preserving (Shirley & Chiu 1997).
@@ -274,6 +276,20 @@ impl LightSet {
                 ));
             }
         }
+        set.glows = set
+            .sources
+            .iter()
+            .enumerate()
+            .filter_map(|(i, s)| match (&s.emitter.kind, s.obj) {
+                (&EmitterKind::Glow { maxrad }, Some(obj))
+                    if maxrad > 0.0 && s.relay.is_none() && s.distant.is_none() =>
+                {
+                    Some((i, maxrad, obj))
+                }
+                _ => None,
+            })
+            .collect();
+        set.glows.sort_by_key(|g| g.2);
         set
     }
 
@@ -333,26 +349,12 @@ impl LightSet {
     /// beyond that radius they light a point only through its ambient (indirect) light, and a
     /// cached value samples them explicitly there (`Ambient::glow_light`).
     pub fn sampled_glows(&self) -> impl Iterator<Item = (usize, f64)> + '_ {
-        self.sources
-            .iter()
-            .enumerate()
-            .filter_map(|(i, s)| match s.emitter.kind {
-                EmitterKind::Glow { maxrad }
-                    if maxrad > 0.0
-                        && s.relay.is_none()
-                        && s.distant.is_none()
-                        && s.obj.is_some() =>
-                {
-                    Some((i, maxrad))
-                }
-                _ => None,
-            })
+        self.glows.iter().map(|&(i, r, _)| (i, r))
     }
 
     /// True when object `obj` is one of [`LightSet::sampled_glows`].
     pub fn is_sampled_glow(&self, obj: usize) -> bool {
-        self.sampled_glows()
-            .any(|(i, _)| self.sources[i].obj == Some(obj))
+        self.glows.binary_search_by_key(&obj, |g| g.2).is_ok()
     }
 
     /// Append the samples of source `si` seen from point `p` (relative frame) to `out`.
