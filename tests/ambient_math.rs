@@ -226,6 +226,19 @@ fn mean_err_with(
     (e / frames as f64, n / frames as f64)
 }
 
+/// [`mean_err`] of the pictures reduced k×k (block means of `o.res`-wide pictures).
+fn mean_reduced_err(
+    s: &Setup,
+    reference: &[[f64; 3]],
+    o: Opts,
+    frames: u32,
+    k: usize,
+) -> (f64, f64) {
+    let (w, _) = dims(s, o.res);
+    let reduced = |a: &[[f64; 3]], b: &[[f64; 3]]| rms(&reduce(a, w, k), &reduce(b, w, k));
+    mean_err_with(s, reference, o, frames, &reduced)
+}
+
 /// The hemisphere mesh of a point at height `h` under an infinite uniform plane: the
 /// irradiance does not change under tangential displacement, so the Hessian is ~0 and the
 /// radii are huge. A sphere-like cap (a spot of brightness) gives a finite radius.
@@ -351,8 +364,6 @@ fn gradients_reduce_interpolation_error() {
 fn overture_reduces_interpolation_error() {
     let s = load("curved.rad", "curved.vf");
     let reference = reference_st(&s, 128, 1024, 1, 1.0);
-    let (w, _) = dims(&s, 128);
-    let reduced = |a: &[[f64; 3]], b: &[[f64; 3]]| rms(&reduce(a, w, 4), &reduce(b, w, 4));
     let base = Opts {
         res: 128,
         aa: 0.2,
@@ -360,8 +371,8 @@ fn overture_reduces_interpolation_error() {
         st: 1.0,
         ..Opts::default()
     };
-    let (without, n1) = mean_err_with(&s, &reference, base, 2, &reduced);
-    let (with, n2) = mean_err_with(
+    let (without, n1) = mean_reduced_err(&s, &reference, base, 2, 4);
+    let (with, n2) = mean_reduced_err(
         &s,
         &reference,
         Opts {
@@ -369,7 +380,7 @@ fn overture_reduces_interpolation_error() {
             ..base
         },
         2,
-        &reduced,
+        4,
     );
     eprintln!("overture off: rms {without:.4} ({n1} values); on: rms {with:.4} ({n2} values)");
     assert!(
@@ -390,17 +401,14 @@ fn overture_reduces_interpolation_error() {
 fn reach_reduces_noise_where_radii_were_clamped() {
     let s = load("glassy.rad", "glassy.vf");
     let reference = reference(&s, 48, 1024, 2);
-    // Errors of the pictures reduced 2×2.
-    let (w, _) = dims(&s, 48);
-    let reduced = |a: &[[f64; 3]], b: &[[f64; 3]]| rms(&reduce(a, w, 2), &reduce(b, w, 2));
     let base = Opts {
         aa: 0.2,
         ad: 256,
         overture: 1,
         ..Opts::default()
     };
-    let (with, n1) = mean_err_with(&s, &reference, base, 3, &reduced);
-    let (without, n2) = mean_err_with(
+    let (with, n1) = mean_reduced_err(&s, &reference, base, 3, 2);
+    let (without, n2) = mean_reduced_err(
         &s,
         &reference,
         Opts {
@@ -408,7 +416,7 @@ fn reach_reduces_noise_where_radii_were_clamped() {
             ..base
         },
         3,
-        &reduced,
+        2,
     );
     eprintln!("reach on: rms {with:.4} ({n1} values); off: rms {without:.4} ({n2} values)");
     assert!(with < without, "the reach should help: {with} vs {without}");
@@ -422,8 +430,6 @@ fn reach_reduces_noise_where_radii_were_clamped() {
 fn hessian_radii_are_not_shrunk_by_the_gradient() {
     let s = load("spheres.rad", "spheres.vf");
     let reference = reference(&s, 48, 1024, 2);
-    let (w, _) = dims(&s, 48);
-    let reduced = |a: &[[f64; 3]], b: &[[f64; 3]]| rms(&reduce(a, w, 2), &reduce(b, w, 2));
     let base = Opts {
         aa: 0.15,
         ad: 256,
@@ -431,8 +437,8 @@ fn hessian_radii_are_not_shrunk_by_the_gradient() {
         overture: 1,
         ..Opts::default()
     };
-    let (free, n1) = mean_err_with(&s, &reference, base, 3, &reduced);
-    let (limited, n2) = mean_err_with(
+    let (free, n1) = mean_reduced_err(&s, &reference, base, 3, 2);
+    let (limited, n2) = mean_reduced_err(
         &s,
         &reference,
         Opts {
@@ -440,7 +446,7 @@ fn hessian_radii_are_not_shrunk_by_the_gradient() {
             ..base
         },
         3,
-        &reduced,
+        2,
     );
     eprintln!(
         "gradient limit off: rms {free:.4} ({n1} values); on: rms {limited:.4} ({n2} values)"
@@ -457,8 +463,6 @@ fn hessian_radii_are_not_shrunk_by_the_gradient() {
 fn glows_beyond_their_radius_are_sampled_explicitly() {
     let s = load("mirrors.rad", "mirrors.vf");
     let reference = reference(&s, 40, 1024, 2);
-    let (w, _) = dims(&s, 40);
-    let reduced = |a: &[[f64; 3]], b: &[[f64; 3]]| rms(&reduce(a, w, 2), &reduce(b, w, 2));
     let base = Opts {
         res: 40,
         aa: 0.2,
@@ -466,8 +470,8 @@ fn glows_beyond_their_radius_are_sampled_explicitly() {
         overture: 1,
         ..Opts::default()
     };
-    let (on, n1) = mean_err_with(&s, &reference, base, 3, &reduced);
-    let (off, n2) = mean_err_with(
+    let (on, n1) = mean_reduced_err(&s, &reference, base, 3, 2);
+    let (off, n2) = mean_reduced_err(
         &s,
         &reference,
         Opts {
@@ -475,7 +479,7 @@ fn glows_beyond_their_radius_are_sampled_explicitly() {
             ..base
         },
         3,
-        &reduced,
+        2,
     );
     // The picture's mean agrees with the reference's (the light is counted once).
     let mean = |p: &[[f64; 3]]| p.iter().map(|c| c[0] + c[1] + c[2]).sum::<f64>();
@@ -498,8 +502,6 @@ fn glows_beyond_their_radius_are_sampled_explicitly() {
 fn a_thinned_hessian_mesh_errs_like_the_full_one_at_high_ad() {
     let s = load("spheres.rad", "spheres.vf");
     let reference = reference_st(&s, 64, 2048, 2, 1.0);
-    let (w, _) = dims(&s, 64);
-    let reduced = |a: &[[f64; 3]], b: &[[f64; 3]]| rms(&reduce(a, w, 2), &reduce(b, w, 2));
     let base = Opts {
         res: 64,
         aa: 0.15,
@@ -509,8 +511,8 @@ fn a_thinned_hessian_mesh_errs_like_the_full_one_at_high_ad() {
         overture: 1,
         ..Opts::default()
     };
-    let (thin, n1) = mean_err_with(&s, &reference, base, 2, &reduced);
-    let (full, n2) = mean_err_with(
+    let (thin, n1) = mean_reduced_err(&s, &reference, base, 2, 2);
+    let (full, n2) = mean_reduced_err(
         &s,
         &reference,
         Opts {
@@ -518,7 +520,7 @@ fn a_thinned_hessian_mesh_errs_like_the_full_one_at_high_ad() {
             ..base
         },
         2,
-        &reduced,
+        2,
     );
     eprintln!("thinned mesh: rms {thin:.4} ({n1} values); full: rms {full:.4} ({n2} values)");
     // Measured: 0.95 × the full mesh's error; point samples gave 1.17 ×.

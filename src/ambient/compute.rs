@@ -744,7 +744,8 @@ impl Ambient {
                 (u0, [r, r])
             }
         };
-        let hess_rad = hess.map(|(_, r0, r1)| [r0.min(r1), r0.max(r1)]);
+        // The Hessian's own radii (r0 ≤ r1, as `hessian_radii` returns them), kept for the reach.
+        let hess_rad = hess.is_some().then_some(rad);
         let mut u = u;
         let mut v = n.cross(u);
         let mut gp = [gpos.dot(u) * scale, gpos.dot(v) * scale];
