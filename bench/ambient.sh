@@ -40,6 +40,8 @@
 #                          pictures, and so the errors, are the same every time)
 #   AS_MAX_FRACTION=0.5    combinations with -as > AS_MAX_FRACTION x -ad are skipped (by
 #                          default super-sampling more than half the divisions)
+#   RENDERERS="rpict tpict"  which renderers the sweep runs (e.g. RENDERERS=tpict to measure
+#                          a change of tpict against an earlier sweep's rpict rows)
 #
 # Usage: bench/ambient.sh   then   python3 bench/plot_ambient.py   (see docs/benchmarks.md)
 set -euo pipefail
@@ -55,6 +57,7 @@ AS_LIST=${AS_LIST:-"0 128"}
 REF_AD=${REF_AD:-2048}
 REPEAT=${REPEAT:-1}
 AS_MAX_FRACTION=${AS_MAX_FRACTION:-0.5}
+RENDERERS=${RENDERERS:-"rpict tpict"}
 REF_DIR=${REF_DIR:-}
 REF_EXTRA=${REF_EXTRA:-}
 EXTRA=${EXTRA:-}
@@ -158,7 +161,7 @@ for s in $SCENES; do
                     awk -v a="$as" -v d="$ad" -v f="$AS_MAX_FRACTION" 'BEGIN { exit !(a <= f * d) }' ||
                         continue
                     amb=(-aa "$aa" -ad "$ad" -as "$as")
-                    for r in rpict tpict; do
+                    for r in $RENDERERS; do
                         c=""
                         for ((rep = 0; rep < REPEAT; rep++)); do
                             if [[ $r == rpict ]]; then

@@ -169,12 +169,22 @@ fn interpolation_converges_to_uncached() {
 }
 
 fn spheres_run(dir: &Path, extra: &[&str], stats: &Path) -> serde_json::Value {
+    spheres_run_env(dir, extra, stats, &[])
+}
+
+fn spheres_run_env(
+    dir: &Path,
+    extra: &[&str],
+    stats: &Path,
+    envs: &[(&str, &str)],
+) -> serde_json::Value {
     let scenes = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/scenes");
     let out = dir.join("out.hdr");
     let _ = std::fs::remove_file(&out);
     run_ok(
         std::process::Command::new(tpict_bin())
             .current_dir(&scenes)
+            .envs(envs.iter().copied())
             .args([
                 "-vf",
                 "spheres.vf",
@@ -208,14 +218,26 @@ fn new_values(st: &serde_json::Value) -> u64 {
 }
 
 /// `-af`: values saved in Radiance's format are reused by the next render, and Radiance's
-/// `lookamb` reads them.
+/// `lookamb` reads them. Radiance's records have no share reach (docs/ambient.md), so both
+/// renders use Radiance's rule: the second then needs almost no new values.
 #[test]
 fn ambient_file_is_reused_and_read_by_lookamb() {
     let t = tempfile::tempdir().unwrap();
     let amb = t.path().join("s.amb");
     let amb_s = amb.to_str().unwrap();
-    let first = spheres_run(t.path(), &["-af", amb_s], &t.path().join("1.json"));
-    let second = spheres_run(t.path(), &["-af", amb_s], &t.path().join("2.json"));
+    let radiance_rule = [("TESSERA_SHARE_MAX", "1")];
+    let first = spheres_run_env(
+        t.path(),
+        &["-af", amb_s],
+        &t.path().join("1.json"),
+        &radiance_rule,
+    );
+    let second = spheres_run_env(
+        t.path(),
+        &["-af", amb_s],
+        &t.path().join("2.json"),
+        &radiance_rule,
+    );
     let n1 = new_values(&first);
     let n2 = new_values(&second);
     eprintln!("first run {n1} new values, second run {n2}");
@@ -478,6 +500,8 @@ fn one_bright_sample_does_not_make_a_value() {
             .arg(&out)
             .arg("spheres.rad");
         c.env_remove("TESSERA_AMB_CLAMP");
+        // The limit is measured under Radiance's interpolation rule (no share reach).
+        c.env("TESSERA_SHARE_MAX", "1");
         if let Some(v) = clamp {
             c.env("TESSERA_AMB_CLAMP", v);
         }

@@ -84,6 +84,7 @@ fn random_record(rng: &mut Rng, origin: u64, seq: u64) -> AmbRecord {
             (rng.f() * scale) as f32,
         ],
         reach: rng.range(1.0, 2.0) as f32,
+        share: rng.range(1.0, 2.0) as f32,
     }
 }
 

@@ -65,6 +65,10 @@ pub struct CachedValue {
     /// the Hessian's radii leave beyond the radii used (which `-ar`'s largest radius and the
     /// 1:2 aspect limit may have shrunk); 1 for values from Radiance files.
     pub reach: f64,
+    /// Share reach (≥ 1, at most [`super::compute::SHARE_LIMIT`]): how much farther than its
+    /// reach the value may serve a lookup where the indirect light is a small part of what
+    /// the surface sends (see `compute::share_factor`); 1 in Radiance's own rule.
+    pub share: f64,
 }
 
 type Key = (u32, i64, i64, i64);
@@ -212,7 +216,7 @@ impl AmbientCache {
     /// touches (at most 2×2×2, as the cells are at least twice the reach), so a lookup reads
     /// one cell per level.
     pub fn insert(&self, v: CachedValue) {
-        let r = v.rad[1].max(v.rad[0]) * v.reach.max(1.0);
+        let r = v.rad[1].max(v.rad[0]) * v.reach.max(1.0) * v.share.max(1.0);
         let l = self.level_for(r);
         let rr = self.aa * r;
         let s = self.cell_size(l);
@@ -313,6 +317,7 @@ impl CachedValue {
             corral: self.corral,
             val: [f(self.val.x), f(self.val.y), f(self.val.z)],
             reach: f(self.reach),
+            share: f(self.share),
         }
     }
 
@@ -334,6 +339,11 @@ impl CachedValue {
             val: Color::new(r.val[0] as f64, r.val[1] as f64, r.val[2] as f64),
             reach: if r.reach.is_finite() {
                 (r.reach as f64).clamp(1.0, super::compute::REACH_MAX)
+            } else {
+                1.0
+            },
+            share: if r.share.is_finite() {
+                (r.share as f64).clamp(1.0, super::compute::SHARE_LIMIT)
             } else {
                 1.0
             },
@@ -359,6 +369,7 @@ mod tests {
             corral: 0,
             val: Color::splat(1.0),
             reach,
+            share: 1.0,
         }
     }
 

@@ -206,6 +206,24 @@ pub fn corral_target(p: DVec3, n: DVec3, pv: DVec3, nv: DVec3, offset: f64) -> D
     }
 }
 
+/// A value that may apply at a lookup with the share reach (see
+/// [`Ambient::interpolate_share`]).
+struct Candidate {
+    /// Normalised distance² (in the value's radii).
+    dt2: f64,
+    /// Angle term² between the normals.
+    dr2: f64,
+    /// The value extrapolated to the lookup.
+    val: Color,
+    reach: f64,
+    share: f64,
+}
+
+thread_local! {
+    /// Per-thread buffer of [`Candidate`]s (reused between lookups).
+    static CANDIDATES: std::cell::RefCell<Vec<Candidate>> = const { std::cell::RefCell::new(Vec::new()) };
+}
+
 /// Identities of calculations ([`Ambient::owner`]).
 static NEXT_OWNER: AtomicU64 = AtomicU64::new(1);
 
@@ -248,6 +266,11 @@ pub struct Ambient {
     pub reuse_shadows: bool,
     /// This calculation's identity for per-thread caches.
     pub owner: u64,
+    /// Largest share reach ([`share_factor`]; 1: Radiance's rule, every value serves out to
+    /// `-aa` whatever the rest of the surface's light).
+    pub share_max: f64,
+    /// Deepest ambient level whose lookups use the share reach.
+    pub share_level: u32,
     av: Color,
     /// `-aw`: weight of `-av` in the moving log-average (0: `-av` stays fixed).
     aw: f64,
@@ -295,6 +318,8 @@ impl Ambient {
             use_corral: std::env::var("TESSERA_NO_CORRAL").as_deref() != Ok("1"),
             reuse_shadows: std::env::var("TESSERA_REUSE_SHADOWS").as_deref() != Ok("0"),
             owner: NEXT_OWNER.fetch_add(1, Ordering::Relaxed),
+            share_max: env_or("TESSERA_SHARE_MAX", SHARE_MAX).clamp(1.0, SHARE_LIMIT),
+            share_level: env_or("TESSERA_SHARE_LEVEL", 99),
             minarad,
             maxarad,
             max_dist: 10.0 * size + 1000.0,
@@ -312,6 +337,7 @@ impl Ambient {
 
     /// Indirect light reflected with coefficient `refl` at a hit whose (ray-facing,
     /// unperturbed) normal is `n`.
+    #[allow(clippy::too_many_arguments)]
     pub fn reflected(
         &self,
         tr: &Tracer,
@@ -319,12 +345,22 @@ impl Ambient {
         hit: &Hit,
         refl: Color,
         n: DVec3,
+        other: f64,
         rng: &mut Sampler,
     ) -> Color {
         if bright(refl) <= 0.0 {
             return Color::ZERO;
         }
-        match self.value(tr, ray, hit, n, rng) {
+        let other = if ray.amb_level > self.share_level {
+            0.0
+        } else {
+            other
+        };
+        let share = Share {
+            refl: bright(refl),
+            other,
+        };
+        match self.value(tr, ray, hit, n, share, rng) {
             Outcome::Value(v) => refl * v,
             Outcome::Fallback => refl * self.fallback(),
         }
@@ -352,26 +388,34 @@ impl Ambient {
         }
     }
 
-    fn value(&self, tr: &Tracer, ray: &Ray, hit: &Hit, n: DVec3, rng: &mut Sampler) -> Outcome {
+    fn value(
+        &self,
+        tr: &Tracer,
+        ray: &Ray,
+        hit: &Hit,
+        n: DVec3,
+        share: Share,
+        rng: &mut Sampler,
+    ) -> Outcome {
         if ray.amb_level >= self.ab || self.excluded(tr, hit) {
             return Outcome::Fallback;
         }
         if self.aa <= FTINY {
             // No cache: Monte Carlo at every bounce.
-            return match self.sample(tr, ray, hit, n, rng) {
+            return match self.sample(tr, ray, hit, n, Share::NONE, rng) {
                 Some(v) => Outcome::Value(v.val),
                 None => Outcome::Fallback,
             };
         }
         self.stats.lookups.fetch_add(1, Ordering::Relaxed);
         let am = hit.antimatter;
-        let mut found =
-            self.interpolate(hit.point, n, ray.amb_level, ray.weight, &mut |o, d, t| {
-                tr.occluded(o, d, t, am, rng)
-            });
+        let (p, lvl, w) = (hit.point, ray.amb_level, ray.weight);
+        let mut found = self.interpolate_share(p, n, lvl, w, share, &mut |o, d, t| {
+            tr.occluded(o, d, t, am, rng)
+        });
         // Before computing a value, take what other processes have shared meanwhile.
         if found.is_none() && self.cache.refresh() > 0 {
-            found = self.interpolate(hit.point, n, ray.amb_level, ray.weight, &mut |o, d, t| {
+            found = self.interpolate_share(p, n, lvl, w, share, &mut |o, d, t| {
                 tr.occluded(o, d, t, am, rng)
             });
         }
@@ -379,7 +423,7 @@ impl Ambient {
             self.stats.hits.fetch_add(1, Ordering::Relaxed);
             return Outcome::Value(v);
         }
-        match self.sample(tr, ray, hit, n, rng) {
+        match self.sample(tr, ray, hit, n, share, rng) {
             Some(v) => {
                 self.cache.insert(v);
                 Outcome::Value(v.val)
@@ -403,6 +447,22 @@ impl Ambient {
         rweight: f64,
         occluded: &mut dyn FnMut(DVec3, DVec3, f64) -> bool,
     ) -> Option<Color> {
+        self.interpolate_share(p, n, level, rweight, Share::NONE, occluded)
+    }
+
+    /// [`Ambient::interpolate`] at a surface that reflects the indirect light by
+    /// `share.refl` and sends `share.other` (brightness) besides: each value may serve out
+    /// to its share reach ([`CachedValue::share`]) as far as the indirect light's part of
+    /// the surface's light allows here ([`share_factor`]).
+    pub fn interpolate_share(
+        &self,
+        p: DVec3,
+        n: DVec3,
+        level: u32,
+        rweight: f64,
+        share: Share,
+        occluded: &mut dyn FnMut(DVec3, DVec3, f64) -> bool,
+    ) -> Option<Color> {
         let aa = self.aa;
         let mut maxangle = 10f64.to_radians() + aa;
         if rweight < 0.6 {
@@ -415,38 +475,35 @@ impl Ambient {
         // when values of a larger reach contribute, so values stay as dense as rpict's.
         let mut near = false;
         let aa0 = aa;
-        // The cache hands on only values whose reach sphere (|P − P_v| < aa·reach·max(rad),
-        // implied by the elliptical test below) holds P.
-        self.cache.for_each_near(p, |v| {
-            if v.lvl > level || (v.lvl == level && v.weight < 0.9 * rweight) {
-                return;
-            }
-            let dd = p - v.pos;
-            // This value's acceptance limit: -aa times its reach.
-            let aa = aa0 * v.reach;
+        // The share reach applies when the surface sends other light besides.
+        let share_on = self.share_max > 1.0 && share.other > 0.0;
+        // Radiance's tests of value `v` with acceptance limit `lim` (its normalised
+        // distance): Some((dt², δr², extrapolated value)) when it passes.
+        let mut test = |v: &CachedValue, lim: f64| -> Option<(f64, f64, Color)> {
             let d = v.n.dot(n);
             if d <= 0.0 {
-                return;
+                return None;
             }
             // Rounding can make d exceed 1 for equal normals: keep the angle term real.
             let dr2 = (2.0 - 2.0 * d).max(0.0);
             if dr2 >= maxangle * maxangle {
-                return;
+                return None;
             }
+            let dd = p - v.pos;
             let dn = dd.dot(v.n);
             if dn < behind {
-                return;
+                return None;
             }
             let mut dt2 = (dn / v.rad[0]).powi(2);
-            if dt2 >= aa * aa {
-                return;
+            if dt2 >= lim * lim {
+                return None;
             }
             let vv = v.n.cross(v.u);
             let du = dd.dot(v.u);
             let dv = dd.dot(vv);
             dt2 += (du / v.rad[0]).powi(2) + (dv / v.rad[1]).powi(2);
-            if dt2 >= aa * aa {
-                return;
+            if dt2 >= lim * lim {
+                return None;
             }
             let rot = v.n.cross(n);
             let f = if !self.use_gradients {
@@ -458,17 +515,73 @@ impl Ambient {
                     + v.gdir[1] * rot.dot(vv)
             };
             if f <= 0.05 {
-                return;
+                return None;
             }
             let f = f.min(20.0);
             if self.use_corral && v.corral != 0 && self.leaks(v, p, n, du, dv, occluded) {
+                return None;
+            }
+            Some((dt2, dr2, v.val * f))
+        };
+        let usable =
+            |v: &CachedValue| v.lvl < level || (v.lvl == level && v.weight >= 0.9 * rweight);
+        if !share_on {
+            // The cache hands on only values whose reach sphere (|P − P_v| <
+            // aa·reach·share·max(rad), implied by the elliptical test) holds P.
+            self.cache.for_each_near(p, |v| {
+                if !usable(v) {
+                    return;
+                }
+                // This value's acceptance limit: -aa times its reach.
+                let lim = aa0 * v.reach;
+                if let Some((dt2, dr2, val)) = test(v, lim) {
+                    near |= dt2 < aa0 * aa0;
+                    let w = (1.0 - dr2.sqrt() / maxangle) * (1.0 - dt2.sqrt() / lim);
+                    sum += val * w;
+                    wsum += w;
+                }
+            });
+            return (near && wsum > FTINY).then(|| sum / wsum);
+        }
+        // With the share reach: first every value that may apply at its widest, then one
+        // share factor for all of them from the nearest one's light (a factor per value would
+        // favour the values that are darker than their neighbours).
+        let mut cands = CANDIDATES.with(|c| std::mem::take(&mut *c.borrow_mut()));
+        cands.clear();
+        self.cache.for_each_near(p, |v| {
+            if !usable(v) {
                 return;
             }
-            near |= dt2 < aa0 * aa0;
-            let w = (1.0 - dr2.sqrt() / maxangle) * (1.0 - dt2.sqrt() / aa);
-            sum += v.val * (f * w);
-            wsum += w;
+            let sh = v.share.max(1.0);
+            if let Some((dt2, dr2, val)) = test(v, aa0 * v.reach * sh) {
+                cands.push(Candidate {
+                    dt2,
+                    dr2,
+                    val,
+                    reach: v.reach,
+                    share: sh,
+                });
+            }
         });
+        let nearest = cands
+            .iter()
+            .min_by(|a, b| a.dt2.total_cmp(&b.dt2))
+            .map(|c| bright(c.val));
+        if let Some(b) = nearest {
+            let s_here = self.share_factor(share, b);
+            for c in &cands {
+                let s = c.share.min(s_here);
+                let lim = aa0 * c.reach * s;
+                if c.dt2 >= lim * lim {
+                    continue;
+                }
+                near |= c.dt2 < aa0 * aa0 * s * s;
+                let w = (1.0 - c.dr2.sqrt() / maxangle) * (1.0 - c.dt2.sqrt() / lim);
+                sum += c.val * w;
+                wsum += w;
+            }
+        }
+        CANDIDATES.with(|c| *c.borrow_mut() = cands);
         (near && wsum > FTINY).then(|| sum / wsum)
     }
 
@@ -596,6 +709,7 @@ impl Ambient {
         ray: &Ray,
         hit: &Hit,
         n: DVec3,
+        share: Share,
         rng: &mut Sampler,
     ) -> Option<CachedValue> {
         let start = Instant::now();
@@ -797,12 +911,26 @@ impl Ambient {
             _ => 1.0,
         };
         let reach = if reach.is_finite() { reach } else { 1.0 };
+        let mut share = if cached {
+            self.share_factor(share, bright(val))
+        } else {
+            1.0
+        };
+        // A glow's radius of influence is a seam in the indirect light (the glow is direct
+        // light inside, indirect outside): no share reach across it.
+        if share > 1.0 {
+            let base = self.aa * reach * rad[1];
+            for (si, maxrad) in tr.lights.sampled_glows() {
+                let gap = ((hit.point - tr.lights.sources[si].center).length() - maxrad).abs();
+                share = share.min((gap / base).max(1.0));
+            }
+        }
         let corral = if self.use_corral && cached && m >= CORRAL_MIN_DIVISIONS {
             let hits: Vec<Option<DVec3>> = cells
                 .iter()
                 .map(|c| (c.count > 0).then_some(c.hit))
                 .collect();
-            corral_flags(&hits, m, nphi, n, u0, u, rad, self.aa * reach)
+            corral_flags(&hits, m, nphi, n, u0, u, rad, self.aa * reach * share)
         } else {
             0
         };
@@ -831,9 +959,54 @@ impl Ambient {
             corral,
             val,
             reach,
+            share,
         })
     }
+
+    /// How much farther than `-aa` a value of brightness `val` may serve a surface that
+    /// reflects it by `share.refl` and sends `share.other` besides:
+    /// `√((I + other) / I)` with `I = refl·val`, between 1 and `share_max`. An
+    /// interpolation error of the indirect light is that many times smaller in the
+    /// surface's light, and it grows about as the square of the distance.
+    pub fn share_factor(&self, share: Share, val: f64) -> f64 {
+        if self.share_max <= 1.0 || share.other.is_nan() || share.other <= 0.0 {
+            return 1.0;
+        }
+        let i = share.refl * val;
+        if i.is_nan() || i <= 0.0 {
+            return self.share_max;
+        }
+        let f = ((i + share.other) / i).sqrt();
+        if f.is_finite() {
+            f.clamp(1.0, self.share_max)
+        } else {
+            self.share_max
+        }
+    }
 }
+
+/// What else a surface sends beside its reflected indirect light ([`Ambient::share_factor`]).
+#[derive(Clone, Copy, Debug)]
+pub struct Share {
+    /// Brightness of the surface's reflectance for the indirect light.
+    pub refl: f64,
+    /// Brightness of the rest of its light (direct, specular, emitted).
+    pub other: f64,
+}
+
+impl Share {
+    /// Nothing else known: Radiance's rule.
+    pub const NONE: Share = Share {
+        refl: 1.0,
+        other: 0.0,
+    };
+}
+
+/// Default largest share reach ([`Ambient::share_max`]).
+pub const SHARE_MAX: f64 = 3.0;
+
+/// Largest share reach accepted at all (from `TESSERA_SHARE_MAX` or a log record).
+pub const SHARE_LIMIT: f64 = 4.0;
 
 /// Default cell limit of the mesh a new value's Hessian is taken from: `-ad 1024` (18 × 57
 /// cells) and `-ad 512` (13 × 41) are thinned to 9 × 28 evenly spaced rings and columns (see
@@ -1275,7 +1448,37 @@ mod tests {
             corral,
             val: Color::splat(val),
             reach,
+            share: 1.0,
         }
+    }
+
+    #[test]
+    fn share_factor_follows_the_indirect_lights_part() {
+        let params = RenderParams {
+            ab: 1,
+            aa: 0.2,
+            ..RenderParams::default()
+        };
+        let mut amb = Ambient::new(&params, 10.0, 1).unwrap();
+        amb.share_max = 3.0;
+        let s = |refl: f64, other: f64, val: f64| amb.share_factor(Share { refl, other }, val);
+        // Nothing else known, or nothing else sent: Radiance's rule.
+        assert_eq!(s(0.5, 0.0, 1.0), 1.0);
+        assert_eq!(amb.share_factor(Share::NONE, 1.0), 1.0);
+        // Indirect 0.5 of a total of 2: √4 = 2.
+        assert!((s(0.5, 1.5, 1.0) - 2.0).abs() < 1e-12);
+        // Indirect a ninth or less: the cap; black values: the cap.
+        assert_eq!(s(0.5, 100.0, 1.0), 3.0);
+        assert_eq!(s(0.5, 1.0, 0.0), 3.0);
+        // Mostly indirect: barely more than 1; never below.
+        assert!((s(0.5, 0.05, 1.0) - 1.1f64.sqrt()).abs() < 1e-12);
+        assert!(s(0.5, f64::NAN, 1.0) == 1.0);
+        amb.share_max = 1.0;
+        let far = Share {
+            refl: 0.5,
+            other: 100.0,
+        };
+        assert_eq!(amb.share_factor(far, 1.0), 1.0);
     }
 
     #[test]

@@ -6,10 +6,12 @@
 //! ```text
 //! header:  "TSRAMBLOG\n" | version u32 | fingerprint [u8;32] | options_len u32 | options (UTF-8)
 //!          | CRC32 of all the header bytes before it (u32)
-//! frames:  payload_len u32 | CRC32(payload) u32 | payload (137 bytes; 133 in version 1)
+//! frames:  payload_len u32 | CRC32(payload) u32 | payload (141 bytes; 137 in version 2, 133
+//!          in version 1)
 //! payload: id.origin u64 | id.seq u64 | pos 3×f64 | ndir 3×f64 | udir 3×f64 | lvl u8
 //!          | weight f32 | rad 2×f32 | gpos 2×f32 | gdir 2×f32 | corral u32 | val 3×f32
-//!          | reach f32 (version 2; absent in version 1 and read as 1)
+//!          | reach f32 (from version 2; absent in version 1 and read as 1)
+//!          | share f32 (from version 3; absent before and read as 1)
 //! ```
 //!
 //! A writer ([`LogWriter`]) queues records and appends each batch with one `write()`, so a
@@ -30,10 +32,12 @@ use super::{AmbRecord, ValueId};
 
 /// Magic bytes at the start of every log.
 pub const LOG_MAGIC: &[u8; 10] = b"TSRAMBLOG\n";
-/// Version of the log format written by this code (version 1 logs are read too).
-pub const LOG_VERSION: u32 = 2;
-/// Size of a record payload as written (version 2).
-pub const PAYLOAD_SIZE: usize = 137;
+/// Version of the log format written by this code (versions 1 and 2 are read too).
+pub const LOG_VERSION: u32 = 3;
+/// Size of a record payload as written (version 3).
+pub const PAYLOAD_SIZE: usize = 141;
+/// Size of a version-2 record payload (without `share`).
+pub const PAYLOAD_SIZE_V2: usize = 137;
 /// Size of a version-1 record payload (without `reach`): the shortest payload accepted.
 pub const PAYLOAD_SIZE_V1: usize = 133;
 /// Size of a frame's prefix (length and CRC).
@@ -284,12 +288,14 @@ pub fn encode_payload(r: &AmbRecord) -> [u8; PAYLOAD_SIZE] {
         put(&c.to_le_bytes());
     }
     put(&r.reach.to_le_bytes());
+    put(&r.share.to_le_bytes());
     debug_assert_eq!(o, PAYLOAD_SIZE);
     b
 }
 
 /// Decode a payload: at least [`PAYLOAD_SIZE_V1`] bytes (a version-1 payload, whose `reach`
-/// is 1); bytes after the version-2 fields are ignored.
+/// is 1; a version-2 payload has no `share`, read as 1); bytes after the version-3 fields
+/// are ignored.
 pub fn decode_payload(b: &[u8]) -> Option<AmbRecord> {
     if b.len() < PAYLOAD_SIZE_V1 {
         return None;
@@ -317,7 +323,12 @@ pub fn decode_payload(b: &[u8]) -> Option<AmbRecord> {
     }
     let corral = u32::from_le_bytes(take(4).try_into().unwrap_or([0; 4]));
     let val = [f32_(take(4)), f32_(take(4)), f32_(take(4))];
-    let reach = if b.len() >= PAYLOAD_SIZE {
+    let reach = if b.len() >= PAYLOAD_SIZE_V2 {
+        f32_(take(4))
+    } else {
+        1.0
+    };
+    let share = if b.len() >= PAYLOAD_SIZE {
         f32_(take(4))
     } else {
         1.0
@@ -335,6 +346,7 @@ pub fn decode_payload(b: &[u8]) -> Option<AmbRecord> {
         corral,
         val,
         reach,
+        share,
     })
 }
 
@@ -735,6 +747,7 @@ mod tests {
             corral: 0xdeadbeef,
             val: [1.0, 2.0, 3.0],
             reach: 1.5,
+            share: 1.25,
         };
         let b = encode_payload(&r);
         assert_eq!(&b[0..8], &7u64.to_le_bytes());
@@ -744,11 +757,22 @@ mod tests {
         assert_eq!(&b[117..121], &0xdeadbeefu32.to_le_bytes());
         assert_eq!(&b[129..133], &3.0f32.to_le_bytes());
         assert_eq!(&b[133..137], &1.5f32.to_le_bytes());
+        assert_eq!(&b[137..141], &1.25f32.to_le_bytes());
         assert_eq!(decode_payload(&b), Some(r));
-        // A version-1 payload (no reach) reads with reach 1.
+        // A version-2 payload (no share) reads with share 1, a version-1 one (no reach
+        // either) with reach 1 too.
+        let v2 = decode_payload(&b[..PAYLOAD_SIZE_V2]).unwrap();
+        assert_eq!(AmbRecord { share: 1.25, ..v2 }, r);
         let v1 = decode_payload(&b[..PAYLOAD_SIZE_V1]).unwrap();
-        assert_eq!(v1.reach, 1.0);
-        assert_eq!(AmbRecord { reach: 1.5, ..v1 }, r);
+        assert_eq!((v1.reach, v1.share), (1.0, 1.0));
+        assert_eq!(
+            AmbRecord {
+                reach: 1.5,
+                share: 1.25,
+                ..v1
+            },
+            r
+        );
         let h = LogHeader::new([0xab; 32], "-ab 1");
         let hb = h.to_bytes();
         assert_eq!(hb.len(), 50 + 5 + 4);

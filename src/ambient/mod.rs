@@ -57,6 +57,8 @@ pub struct AmbRecord {
     pub val: [f32; 3],
     /// Interpolation reach in units of `-aa` (≥ 1; Tessera's log only, 1 for Radiance files).
     pub reach: f32,
+    /// Share reach (≥ 1; Tessera's log only, 1 for Radiance files and log versions 1–2).
+    pub share: f32,
 }
 
 impl AmbRecord {

@@ -291,6 +291,7 @@ pub fn decode_record(b: &[u8; RECORD_SIZE]) -> AmbRecord {
         corral: u32at(59),
         val: rgbe_to_float([b[63], b[64], b[65], b[66]]),
         reach: 1.0,
+        share: 1.0,
     }
 }
 

@@ -188,19 +188,6 @@ impl NormalMat {
                 result += self.sample_lobe(tr, ray, hit, n, tscolor, true, frame, rng);
             }
         }
-        // Ambient (indirect diffuse), and what is too weak to sample.
-        let mut acolor = dcolor;
-        if rblt {
-            acolor += scolor;
-        }
-        result += tr.ambient(ray, hit, acolor, n, rng);
-        let mut tacolor = tdcolor;
-        if tblt {
-            tacolor += tscolor;
-        }
-        if hastrans && bright(tacolor) > 0.0 {
-            result += tr.ambient(ray, hit, tacolor, -n, rng);
-        }
         // Direct light.
         let flat = hit.flat;
         let dj = tr.params.dj;
@@ -258,6 +245,20 @@ impl NormalMat {
             c
         };
         result += tr.direct(ray, hit, n, &coef, rng);
+        // Ambient (indirect diffuse), and what is too weak to sample.
+        let mut acolor = dcolor;
+        if rblt {
+            acolor += scolor;
+        }
+        let other = bright(result);
+        result += tr.ambient(ray, hit, acolor, n, other, rng);
+        let mut tacolor = tdcolor;
+        if tblt {
+            tacolor += tscolor;
+        }
+        if hastrans && bright(tacolor) > 0.0 {
+            result += tr.ambient(ray, hit, tacolor, -n, other, rng);
+        }
         result
     }
 

@@ -6,7 +6,7 @@
 use super::ray::Ray;
 use super::sampler::Sampler;
 use super::trace::Tracer;
-use crate::color::{sanitize, Color};
+use crate::color::{bright, sanitize, Color};
 use crate::material::Material;
 use crate::view::ViewFrame;
 use glam::DVec3;
@@ -106,7 +106,8 @@ fn irradiance(tr: &Tracer, ray: &Ray, rng: &mut Sampler) -> Color {
             Color::ZERO
         }
     };
-    let l = tr.direct(ray, &hit, n, &coef, rng) + tr.ambient(ray, &hit, Color::ONE, n, rng);
+    let d = tr.direct(ray, &hit, n, &coef, rng);
+    let l = d + tr.ambient(ray, &hit, Color::ONE, n, bright(d), rng);
     l * std::f64::consts::PI
 }
 

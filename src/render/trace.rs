@@ -445,7 +445,14 @@ impl<'a> Tracer<'a> {
         rng: &mut Sampler,
     ) -> Color {
         if self.fill_only && ray.amb_level == 0 {
-            return Color::ZERO;
+            // The overture discards the colour; a rough estimate of the direct light is
+            // enough for the share reach (fewer source partitions, weak sources untested).
+            return match self.ambient {
+                Some(a) if a.share_max > 1.0 => {
+                    direct(self, ray.weight * 0.05, hit, coef, rng, None)
+                }
+                _ => Color::ZERO,
+            };
         }
         let vis = match self.ambient {
             Some(a) if a.reuse_shadows && ray.spread > 0.0 => {
@@ -471,10 +478,11 @@ impl<'a> Tracer<'a> {
         hit: &Hit,
         refl: Color,
         normal: DVec3,
+        other: f64,
         rng: &mut Sampler,
     ) -> Color {
         match self.ambient {
-            Some(a) => a.reflected(self, ray, hit, refl, normal, rng),
+            Some(a) => a.reflected(self, ray, hit, refl, normal, other, rng),
             None => {
                 let av = self.params.av;
                 refl * DVec3::new(av[0], av[1], av[2])
