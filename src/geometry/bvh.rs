@@ -178,6 +178,19 @@ fn f32_down(x: f64) -> f32 {
     }
 }
 
+/// The f32 ray handed to obvhs.
+#[inline]
+fn ray32(o: DVec3, dir: DVec3, tmax32: f32) -> Ray {
+    Ray::new(
+        Vec3A::new(o.x as f32, o.y as f32, o.z as f32),
+        // `+ 0.0` turns -0.0 (also from f32 underflow) into +0.0: obvhs picks the slab side
+        // from `d < 0` but the reciprocal from the sign bit.
+        Vec3A::new(dir.x as f32 + 0.0, dir.y as f32 + 0.0, dir.z as f32 + 0.0),
+        0.0,
+        tmax32,
+    )
+}
+
 /// Bounding volume hierarchy over the scene's finite surfaces (obvhs CwBvh, f32 boxes rounded
 /// OUTWARD and padded so that f32 rounding of the ray origin can never make a box test miss a
 /// true f64 hit).
@@ -363,6 +376,19 @@ impl Bvh {
         {
             return None;
         }
+        let inside = org.cmpge(self.lo).all() && org.cmple(self.hi).all();
+        if inside {
+            // Every box lies inside the scene box, so clipping the ray to it would prune
+            // nothing: only obvhs's minimum distance needs the origin moved back.
+            let shift = -MARGIN;
+            let o = org + dir * shift;
+            let tmax32 = if tmax.is_finite() {
+                f32_up((tmax - shift) * (1.0 + 1e-6) + 2.0 * self.pad)
+            } else {
+                f32::INFINITY
+            };
+            return Some((ray32(o, dir, tmax32), shift));
+        }
         let mut t_in: f64 = 0.0;
         let mut t_out = tmax;
         for i in 0..3 {
@@ -385,15 +411,7 @@ impl Bvh {
         let shift = t_in - MARGIN;
         let o = org + dir * shift;
         let tmax32 = f32_up((t_out - shift) * (1.0 + 1e-6) + 2.0 * self.pad);
-        let ray = Ray::new(
-            Vec3A::new(o.x as f32, o.y as f32, o.z as f32),
-            // `+ 0.0` turns -0.0 (also from f32 underflow) into +0.0: obvhs picks the slab
-            // side from `d < 0` but the reciprocal from the sign bit.
-            Vec3A::new(dir.x as f32 + 0.0, dir.y as f32 + 0.0, dir.z as f32 + 0.0),
-            0.0,
-            tmax32,
-        );
-        Some((ray, shift))
+        Some((ray32(o, dir, tmax32), shift))
     }
 
     /// Closest hit: calls `intersect(i)` -> Option<f64 t> for candidate surfaces i in f64 and
