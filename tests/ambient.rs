@@ -500,8 +500,10 @@ fn one_bright_sample_does_not_make_a_value() {
             .arg(&out)
             .arg("spheres.rad");
         c.env_remove("TESSERA_AMB_CLAMP");
-        // The limit is measured under Radiance's interpolation rule (no share reach).
+        // The limit is measured under Radiance's interpolation rule (no share reach) and
+        // with no super-sampling at `-as 0`.
         c.env("TESSERA_SHARE_MAX", "1");
+        c.env("TESSERA_AS0_SPLIT", "0");
         if let Some(v) = clamp {
             c.env("TESSERA_AMB_CLAMP", v);
         }

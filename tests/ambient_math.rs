@@ -59,6 +59,8 @@ struct Opts {
     overture: usize,
     /// Largest share reach (1: Radiance's rule).
     share_max: f64,
+    /// Share of the divisions super-sampled at `-as 0`.
+    as0_split: f64,
     /// `-st` (rough specular reflections below it go into the ambient term).
     st: f64,
     frame: u32,
@@ -80,6 +82,7 @@ impl Default for Opts {
             hessian_cells: tessera::ambient::compute::HESSIAN_CELLS,
             overture: 0,
             share_max: tessera::ambient::compute::SHARE_MAX,
+            as0_split: tessera::ambient::compute::AS0_SPLIT,
             st: RenderParams::default().st,
             frame: 0,
         }
@@ -104,6 +107,7 @@ fn render(s: &Setup, o: Opts) -> (Vec<[f64; 3]>, u64) {
     amb.sample_glows = o.glows;
     amb.hessian_cells = o.hessian_cells;
     amb.share_max = o.share_max;
+    amb.set_as0_split(&params, o.as0_split);
     let vf = s.view.frame().unwrap();
     let (mut x, mut y, mut pa) = (o.res, o.res, 1.0);
     normaspect(vf.aspect(), &mut pa, &mut x, &mut y);
@@ -571,6 +575,65 @@ fn the_share_reach_makes_fewer_values_where_direct_light_dominates() {
         assert!(n2 < 0.7 * n1, "{rad}: {n2} values vs {n1}");
         assert!(share < 1.4 * radiance, "{rad}: {share} vs {radiance}");
     }
+}
+
+/// `-as 0`: a cached value spends a quarter of its `-ad` rays on super-sampling, where its
+/// first rays differed most: the same rays per value, less noise where a bright patch (the
+/// sunlit floor in glassy) crosses the hemisphere.
+#[test]
+fn as0_super_samples_a_quarter_of_the_divisions() {
+    let s = load("glassy.rad", "glassy.vf");
+    let reference = reference_st(&s, 48, 2048, 2, 1.0);
+    let base = Opts {
+        res: 48,
+        aa: 0.3,
+        ad: 256,
+        as_: 0,
+        st: 1.0,
+        overture: 1,
+        as0_split: 0.0,
+        ..Opts::default()
+    };
+    let (plain, n1) = mean_reduced_err(&s, &reference, base, 3, 2);
+    let (split, n2) = mean_reduced_err(
+        &s,
+        &reference,
+        Opts {
+            as0_split: 0.25,
+            ..base
+        },
+        3,
+        2,
+    );
+    eprintln!(
+        "-as 0 as Radiance: rms {plain:.4} ({n1} values); split: rms {split:.4} ({n2} values)"
+    );
+    assert!(split < 0.9 * plain, "{split} vs {plain}");
+    // The divisions are exact: 192 + 64 rays, against 256.
+    let params = RenderParams {
+        ab: 1,
+        aa: 0.2,
+        ad: 256,
+        as_: 0,
+        ..RenderParams::default()
+    };
+    assert_eq!(
+        tessera::ambient::compute::split_divisions(&params, 0.25),
+        (192.0, 64.0)
+    );
+    let uncached = RenderParams {
+        aa: 0.0,
+        ..params.clone()
+    };
+    assert_eq!(
+        tessera::ambient::compute::split_divisions(&uncached, 0.25),
+        (256.0, 0.0)
+    );
+    let explicit = RenderParams { as_: 128, ..params };
+    assert_eq!(
+        tessera::ambient::compute::split_divisions(&explicit, 0.25),
+        (256.0, 128.0)
+    );
 }
 
 /// Measurements for the report (run with `--ignored --nocapture`): error against an `-aa 0`

@@ -301,13 +301,14 @@ impl Ambient {
             (size * 1e-6, 0.2 * size)
         };
         let aa = params.aa.max(0.0);
+        let (ad, as_) = split_divisions(params, env_or("TESSERA_AS0_SPLIT", AS0_SPLIT));
         Some(Ambient {
             cache: AmbientCache::new(minarad, aa.max(0.01), origin_id),
             stats: AmbientStats::default(),
             ab: params.ab as u32,
             aa,
-            ad: params.ad as f64,
-            as_: params.as_.max(0) as f64,
+            ad,
+            as_,
             use_hessian: true,
             use_reach: true,
             gradient_limits_radii: std::env::var("TESSERA_GRADIENT_RADII").as_deref() == Ok("1"),
@@ -963,6 +964,12 @@ impl Ambient {
         })
     }
 
+    /// Use `-ad`/`-as` of `params` with the `-as 0` split `split` instead of the default
+    /// ([`split_divisions`]).
+    pub fn set_as0_split(&mut self, params: &RenderParams, split: f64) {
+        (self.ad, self.as_) = split_divisions(params, split);
+    }
+
     /// How much farther than `-aa` a value of brightness `val` may serve a surface that
     /// reflects it by `share.refl` and sends `share.other` besides:
     /// `√((I + other) / I)` with `I = refl·val`, between 1 and `share_max`. An
@@ -1000,6 +1007,24 @@ impl Share {
         refl: 1.0,
         other: 0.0,
     };
+}
+
+/// The share of `-ad`'s divisions that a cached value spends on super-sampling when `-as`
+/// is 0 ([`split_divisions`]).
+pub const AS0_SPLIT: f64 = 0.25;
+
+/// The hemisphere divisions and super-sampling rays (`-ad`, `-as`) a cached value uses:
+/// as given, except that with `-as 0` a share `split` (0 to 0.9) of the `-ad` rays is
+/// spent on super-sampling: `-ad (1 − split)·N -as split·N`, the same rays per value. The
+/// uncached calculation (`-aa 0`) keeps `-ad` and `-as` as given.
+pub fn split_divisions(params: &RenderParams, split: f64) -> (f64, f64) {
+    let ad = params.ad.max(0) as f64;
+    if params.aa > FTINY && params.as_ <= 0 && split > 0.0 {
+        let split = split.min(0.9);
+        (ad * (1.0 - split), (ad * split).floor())
+    } else {
+        (ad, params.as_.max(0) as f64)
+    }
 }
 
 /// Default largest share reach ([`Ambient::share_max`]).
