@@ -1477,14 +1477,19 @@ mod tests {
         }
     }
 
-    #[test]
-    fn share_factor_follows_the_indirect_lights_part() {
+    /// A calculation at `-ab 1 -aa .2` in a scene of size 10.
+    fn test_ambient() -> Ambient {
         let params = RenderParams {
             ab: 1,
             aa: 0.2,
             ..RenderParams::default()
         };
-        let mut amb = Ambient::new(&params, 10.0, 1).unwrap();
+        Ambient::new(&params, 10.0, 1).unwrap()
+    }
+
+    #[test]
+    fn share_factor_follows_the_indirect_lights_part() {
+        let mut amb = test_ambient();
         amb.share_max = 3.0;
         let s = |refl: f64, other: f64, val: f64| amb.share_factor(Share { refl, other }, val);
         // Nothing else known, or nothing else sent: Radiance's rule.
@@ -1538,12 +1543,7 @@ mod tests {
 
     #[test]
     fn lookup_tests_flagged_values_only_in_their_sectors() {
-        let params = RenderParams {
-            ab: 1,
-            aa: 0.2,
-            ..RenderParams::default()
-        };
-        let mut amb = Ambient::new(&params, 10.0, 1).unwrap();
+        let mut amb = test_ambient();
         amb.use_corral = true;
         // A value at the origin facing +z, radius 1, a wall flagged toward +x (sectors 30..1).
         let corral = (1u32 << 30) | (1 << 31) | 1 | 2;
