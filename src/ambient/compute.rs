@@ -269,8 +269,6 @@ pub struct Ambient {
     /// Largest share reach ([`share_factor`]; 1: Radiance's rule, every value serves out to
     /// `-aa` whatever the rest of the surface's light).
     pub share_max: f64,
-    /// Deepest ambient level whose lookups use the share reach.
-    pub share_level: u32,
     av: Color,
     /// `-aw`: weight of `-av` in the moving log-average (0: `-av` stays fixed).
     aw: f64,
@@ -320,7 +318,6 @@ impl Ambient {
             reuse_shadows: std::env::var("TESSERA_REUSE_SHADOWS").as_deref() != Ok("0"),
             owner: NEXT_OWNER.fetch_add(1, Ordering::Relaxed),
             share_max: env_or("TESSERA_SHARE_MAX", SHARE_MAX).clamp(1.0, SHARE_LIMIT),
-            share_level: env_or("TESSERA_SHARE_LEVEL", 99),
             minarad,
             maxarad,
             max_dist: 10.0 * size + 1000.0,
@@ -349,18 +346,11 @@ impl Ambient {
         other: f64,
         rng: &mut Sampler,
     ) -> Color {
-        if bright(refl) <= 0.0 {
+        let rb = bright(refl);
+        if rb <= 0.0 {
             return Color::ZERO;
         }
-        let other = if ray.amb_level > self.share_level {
-            0.0
-        } else {
-            other
-        };
-        let share = Share {
-            refl: bright(refl),
-            other,
-        };
+        let share = Share { refl: rb, other };
         match self.value(tr, ray, hit, n, share, rng) {
             Outcome::Value(v) => refl * v,
             Outcome::Fallback => refl * self.fallback(),
@@ -526,6 +516,14 @@ impl Ambient {
         };
         let usable =
             |v: &CachedValue| v.lvl < level || (v.lvl == level && v.weight >= 0.9 * rweight);
+        // Add a value that passed with acceptance limit `lim` (hat weight falling to zero
+        // there); it is near (no new value due) within `near_lim`.
+        let mut add = |dt2: f64, dr2: f64, val: Color, lim: f64, near_lim: f64| {
+            near |= dt2 < near_lim * near_lim;
+            let w = (1.0 - dr2.sqrt() / maxangle) * (1.0 - dt2.sqrt() / lim);
+            sum += val * w;
+            wsum += w;
+        };
         if !share_on {
             // The cache hands on only values whose reach sphere (|P − P_v| <
             // aa·reach·share·max(rad), implied by the elliptical test) holds P.
@@ -536,10 +534,7 @@ impl Ambient {
                 // This value's acceptance limit: -aa times its reach.
                 let lim = aa0 * v.reach;
                 if let Some((dt2, dr2, val)) = test(v, lim) {
-                    near |= dt2 < aa0 * aa0;
-                    let w = (1.0 - dr2.sqrt() / maxangle) * (1.0 - dt2.sqrt() / lim);
-                    sum += val * w;
-                    wsum += w;
+                    add(dt2, dr2, val, lim, aa0);
                 }
             });
             return (near && wsum > FTINY).then(|| sum / wsum);
@@ -573,13 +568,9 @@ impl Ambient {
             for c in &cands {
                 let s = c.share.min(s_here);
                 let lim = aa0 * c.reach * s;
-                if c.dt2 >= lim * lim {
-                    continue;
+                if c.dt2 < lim * lim {
+                    add(c.dt2, c.dr2, c.val, lim, aa0 * s);
                 }
-                near |= c.dt2 < aa0 * aa0 * s * s;
-                let w = (1.0 - c.dr2.sqrt() / maxangle) * (1.0 - c.dt2.sqrt() / lim);
-                sum += c.val * w;
-                wsum += w;
             }
         }
         CANDIDATES.with(|c| *c.borrow_mut() = cands);
@@ -973,8 +964,9 @@ impl Ambient {
     /// How much farther than `-aa` a value of brightness `val` may serve a surface that
     /// reflects it by `share.refl` and sends `share.other` besides:
     /// `√((I + other) / I)` with `I = refl·val`, between 1 and `share_max`. An
-    /// interpolation error of the indirect light is that many times smaller in the
-    /// surface's light, and it grows about as the square of the distance.
+    /// interpolation error of the indirect light is `(I + other)/I` times smaller in the
+    /// surface's light; for an error growing as the distance, this spacing minimises the
+    /// summed squared error for a given number of values (docs/ambient.md).
     pub fn share_factor(&self, share: Share, val: f64) -> f64 {
         if self.share_max <= 1.0 || share.other.is_nan() || share.other <= 0.0 {
             return 1.0;

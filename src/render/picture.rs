@@ -214,7 +214,8 @@ fn overture(
     if rows.is_empty() {
         return;
     }
-    // Eye paths skip direct light: only the ambient values this pass makes are kept.
+    // Eye paths skip direct light (or, for the share reach, estimate it roughly): only the
+    // ambient values this pass makes are kept.
     let tr = &Tracer {
         fill_only: true,
         ..*tr

@@ -26,8 +26,9 @@ pub struct Tracer<'a> {
     /// The irradiance cache (None: constant `-av` ambient only).
     pub ambient: Option<&'a Ambient>,
     /// Fill the cache only (the ambient overture): shading points of eye paths (ambient
-    /// level 0) skip direct light, whose colour the overture discards. Points inside a new
-    /// value's sampling (level > 0) are lit as always: the value needs their light.
+    /// level 0) skip direct light, whose colour the overture discards, or with the share
+    /// reach take only a rough estimate of it ([`OVERTURE_DIRECT_WEIGHT`]). Points inside a
+    /// new value's sampling (level > 0) are lit as always: the value needs their light.
     pub fill_only: bool,
 }
 
@@ -43,6 +44,11 @@ fn shadow_reach(dist: f64) -> f64 {
         f64::INFINITY
     }
 }
+
+/// The ray weight factor of the overture's direct-light estimate (see
+/// [`Tracer::fill_only`]): a light ray weight means fewer source partitions and weak
+/// sources left untested.
+pub const OVERTURE_DIRECT_WEIGHT: f64 = 0.05;
 
 /// Largest colour component (Radiance's `intens`).
 #[inline]
@@ -448,9 +454,14 @@ impl<'a> Tracer<'a> {
             // The overture discards the colour; a rough estimate of the direct light is
             // enough for the share reach (fewer source partitions, weak sources untested).
             return match self.ambient {
-                Some(a) if a.share_max > 1.0 => {
-                    direct(self, ray.weight * 0.05, hit, coef, rng, None)
-                }
+                Some(a) if a.share_max > 1.0 => direct(
+                    self,
+                    ray.weight * OVERTURE_DIRECT_WEIGHT,
+                    hit,
+                    coef,
+                    rng,
+                    None,
+                ),
                 _ => Color::ZERO,
             };
         }
