@@ -89,7 +89,8 @@ impl Default for Opts {
     }
 }
 
-/// Render through the library (one thread, `-ps 1 -pj 0`); pixels and new-value count.
+/// Render through the library (one thread, `-ps 1 -pj 0`, deterministic); pixels and
+/// new-value count.
 fn render(s: &Setup, o: Opts) -> (Vec<[f64; 3]>, u64) {
     let params = RenderParams {
         ab: o.ab,
@@ -123,7 +124,16 @@ fn render(s: &Setup, o: Opts) -> (Vec<[f64; 3]>, u64) {
         irradiance: false,
         overture: o.overture,
     };
-    let px = render_region(&tracer, &fs, 0, 0, x, y, &RenderProgress::default());
+    // Cached values on one thread: the cache sees its values in one order, so every figure
+    // (and with it every comparison below) is the same on every run; several threads let the
+    // order, and the new-value counts, vary from run to run. Uncached references (`-aa 0`)
+    // are seeded per pixel and the same on any number of threads.
+    let threads = if o.aa > 0.0 { 1 } else { 0 };
+    let pool = rayon::ThreadPoolBuilder::new()
+        .num_threads(threads)
+        .build()
+        .unwrap();
+    let px = pool.install(|| render_region(&tracer, &fs, 0, 0, x, y, &RenderProgress::default()));
     let nv = amb
         .stats
         .new_values
