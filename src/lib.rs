@@ -16,6 +16,7 @@
 
 pub mod ambient;
 pub mod color;
+pub mod fault;
 pub mod geometry;
 pub mod image;
 pub mod job;

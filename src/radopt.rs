@@ -6,6 +6,7 @@
 
 use std::path::Path;
 
+use crate::ambient::settings::AmbientSettings;
 use crate::view::{fmt_g6, read_view_file, View};
 
 /// Errors from option parsing, view validation and view files.
@@ -309,6 +310,9 @@ pub struct RenderParams {
     pub mg: f64,
     /// `-ms` mist sampling distance.
     pub ms: f64,
+    /// Tessera's own settings of the ambient calculation (`--amb-share-max`, ...).
+    #[serde(default)]
+    pub amb: AmbientSettings,
 }
 
 impl Default for RenderParams {
@@ -343,6 +347,7 @@ impl Default for RenderParams {
             ma: [0.0; 3],
             mg: 0.0,
             ms: 0.0,
+            amb: AmbientSettings::default(),
         }
     }
 }
@@ -374,6 +379,16 @@ impl RenderParams {
         };
         let o = w.as_str();
         let inf = f64::INFINITY;
+        if let Some(n) = self
+            .amb
+            .apply_option(words)
+            .map_err(|e| OptError::BadValue {
+                option: o.to_string(),
+                reason: e.strip_prefix(&format!("{o}: ")).unwrap_or(&e).to_string(),
+            })?
+        {
+            return Ok(Some(n));
+        }
         if let Some(b) = bool_option(o, "i", self.i) {
             self.i = b;
             return Ok(Some(1));
@@ -569,6 +584,13 @@ impl RenderParams {
         push("-ms", &f(self.ms));
         push("-lr", &i(self.lr));
         push("-lw", &f(self.lw));
+        // Tessera's ambient settings where they differ from the defaults.
+        let defaults = AmbientSettings::default().to_words();
+        for (pair, default) in self.amb.to_words().chunks(2).zip(defaults.chunks(2)) {
+            if pair != default {
+                w.extend(pair.iter().cloned());
+            }
+        }
         w
     }
 }
@@ -637,11 +659,8 @@ impl RpictOptions {
     /// overture is on, else 0 (no overture).
     pub fn overture_step(&self) -> usize {
         let p = &self.params;
-        if self.overture && p.ab > 0 && p.aa > 0.0 && p.ad > 0 {
-            std::env::var("TESSERA_OVERTURE_STEP")
-                .ok()
-                .and_then(|v| v.parse().ok())
-                .unwrap_or(self.ps.max(1))
+        if self.overture && crate::ambient::settings::caches(p.ab, p.ad, p.aa) {
+            self.ps.max(1)
         } else {
             0
         }
@@ -1152,6 +1171,7 @@ mod tests {
         // No cache: nothing to fill.
         assert_eq!(parse("-ab 0 s.rad").overture_step(), 0);
         assert_eq!(parse("-ab 1 -aa 0 s.rad").overture_step(), 0);
+        assert_eq!(parse("-ab 1 -aa 1e-7 s.rad").overture_step(), 0);
         assert_eq!(parse("-ab 1 -ad 0 s.rad").overture_step(), 0);
         let off = parse("-ab 1 --no-overture s.rad");
         assert_eq!(off.overture_step(), 0);

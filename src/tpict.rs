@@ -156,7 +156,7 @@ fn render_command(args: &[String], opts: &RpictOptions, log: &Log) -> Result<()>
     let ambient = Ambient::new(&opts.params, scene.size, process_origin_id());
     let my_origin = ambient.as_ref().map(|a| a.cache.next_id().origin);
     let amb_file = match (&ambient, &opts.params.af) {
-        (Some(_), Some(_)) if opts.params.aa <= 0.0 => {
+        (Some(a), Some(_)) if !a.cached() => {
             log.warn("-aa 0 disables the cache: the ambient file is not used");
             None
         }
@@ -167,6 +167,10 @@ fn render_command(args: &[String], opts: &RpictOptions, log: &Log) -> Result<()>
         _ => None,
     };
     let log_sink = match (&ambient, &opts.amb_log) {
+        (Some(a), Some(_)) if !a.cached() => {
+            log.warn("-aa 0 disables the cache: the ambient log is not used");
+            None
+        }
         (Some(a), Some(path)) => Some(open_ambient_log(
             a,
             Path::new(path),
@@ -209,7 +213,7 @@ fn render_command(args: &[String], opts: &RpictOptions, log: &Log) -> Result<()>
         st.wall_seconds = started.elapsed().as_secs_f64();
         st.cpu_seconds = process_cpu_seconds();
         if let Some(a) = &ambient {
-            st.ambient = Some(AmbientReport::from_stats(&a.stats, a.cache.len()));
+            st.ambient = Some(AmbientReport::from_stats(a));
         }
         st.rays_per_second = if st.wall_seconds > 0.0 {
             st.total_rays as f64 / st.wall_seconds
@@ -400,6 +404,9 @@ pub fn process_origin_id() -> u64 {
 /// Ambient counters in `--stats` output.
 #[derive(Debug, Default, serde::Serialize)]
 pub struct AmbientReport {
+    /// Tessera's settings of the calculation, as options
+    /// ([`crate::ambient::settings::AmbientSettings::to_text`]).
+    pub settings: String,
     /// Cache lookups.
     pub lookups: u64,
     /// Lookups answered by interpolation.
@@ -423,7 +430,8 @@ pub struct AmbientReport {
 }
 
 impl AmbientReport {
-    fn from_stats(s: &crate::ambient::compute::AmbientStats, cached: u64) -> AmbientReport {
+    fn from_stats(a: &Ambient) -> AmbientReport {
+        let (s, cached) = (&a.stats, a.cache.len());
         let mut levels: Vec<u64> = s
             .new_values
             .iter()
@@ -433,6 +441,7 @@ impl AmbientReport {
             levels.pop();
         }
         AmbientReport {
+            settings: a.settings().to_text(),
             lookups: s.lookups.load(Ordering::Relaxed),
             hits: s.hits.load(Ordering::Relaxed),
             new_values_by_level: levels,
@@ -754,10 +763,27 @@ pub fn render_view(
         },
         exposure: 1.0,
         format: "32-bit_rle_rgbe".to_string(),
+        extra: ambient_header(ctx.ambient),
         ..Header::default()
     };
     Ok(img)
 }
+
+/// The picture header's record of Tessera's ambient settings (`TESSERA_AMBIENT=` with every
+/// setting as an option), when the ambient calculation runs.
+pub fn ambient_header(ambient: Option<&Ambient>) -> Vec<(String, String)> {
+    ambient
+        .map(|a| {
+            vec![(
+                AMBIENT_HEADER_VAR.to_string(),
+                format!(" {}", a.settings().to_text()),
+            )]
+        })
+        .unwrap_or_default()
+}
+
+/// The header variable of [`ambient_header`].
+pub const AMBIENT_HEADER_VAR: &str = "TESSERA_AMBIENT";
 
 fn report_line(p: &RenderProgress, pct: f64, start: Instant, amb: Option<&Ambient>) -> String {
     let hours = start.elapsed().as_secs_f64() / 3600.0;

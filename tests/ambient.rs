@@ -169,22 +169,12 @@ fn interpolation_converges_to_uncached() {
 }
 
 fn spheres_run(dir: &Path, extra: &[&str], stats: &Path) -> serde_json::Value {
-    spheres_run_env(dir, extra, stats, &[])
-}
-
-fn spheres_run_env(
-    dir: &Path,
-    extra: &[&str],
-    stats: &Path,
-    envs: &[(&str, &str)],
-) -> serde_json::Value {
     let scenes = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/scenes");
     let out = dir.join("out.hdr");
     let _ = std::fs::remove_file(&out);
     run_ok(
         std::process::Command::new(tpict_bin())
             .current_dir(&scenes)
-            .envs(envs.iter().copied())
             .args([
                 "-vf",
                 "spheres.vf",
@@ -226,19 +216,9 @@ fn ambient_file_is_reused_and_read_by_lookamb() {
     let t = tempfile::tempdir().unwrap();
     let amb = t.path().join("s.amb");
     let amb_s = amb.to_str().unwrap();
-    let radiance_rule = [("TESSERA_SHARE_MAX", "1")];
-    let first = spheres_run_env(
-        t.path(),
-        &["-af", amb_s],
-        &t.path().join("1.json"),
-        &radiance_rule,
-    );
-    let second = spheres_run_env(
-        t.path(),
-        &["-af", amb_s],
-        &t.path().join("2.json"),
-        &radiance_rule,
-    );
+    let radiance_rule = ["--amb-share-max", "1", "-af", amb_s];
+    let first = spheres_run(t.path(), &radiance_rule, &t.path().join("1.json"));
+    let second = spheres_run(t.path(), &radiance_rule, &t.path().join("2.json"));
     let n1 = new_values(&first);
     let n2 = new_values(&second);
     eprintln!("first run {n1} new values, second run {n2}");
@@ -513,19 +493,14 @@ fn one_bright_sample_does_not_make_a_value() {
                 "0",
             ])
             .args(["-n", "1", "-st", "1", "-ab", "1", "-w-"])
-            .args(args)
-            .arg("-o")
-            .arg(&out)
-            .arg("spheres.rad");
-        c.env_remove("TESSERA_AMB_CLAMP");
+            .args(args);
         // The limit is measured under Radiance's interpolation rule (no share reach) and
         // with no super-sampling at `-as 0`.
-        c.env("TESSERA_SHARE_MAX", "1");
-        c.env("TESSERA_AS0_SPLIT", "0");
+        c.args(["--amb-share-max", "1", "--amb-as0-split", "0"]);
         if let Some(v) = clamp {
-            c.env("TESSERA_AMB_CLAMP", v);
+            c.args(["--amb-outlier-limit", v]);
         }
-        run_ok(&mut c);
+        run_ok(c.arg("-o").arg(&out).arg("spheres.rad"));
         let img = read_picture(&out).unwrap();
         assert_finite(&img);
         img.pixels_f64()
@@ -556,15 +531,12 @@ fn shadow_reuse_saves_rays_and_keeps_the_picture() {
             .args(["-vf", "curved.vf", "-x", "64", "-y", "64", "-ps", "1"])
             .args(["-pj", "0", "-n", "1", "-st", "1", "-ab", "1", "-w-"])
             .args(args)
+            .args(["--amb-shadow-reuse", if reuse { "on" } else { "off" }])
             .arg("--stats")
             .arg(&stats)
             .arg("-o")
             .arg(&out)
             .arg("curved.rad");
-        c.env_remove("TESSERA_REUSE_SHADOWS");
-        if !reuse {
-            c.env("TESSERA_REUSE_SHADOWS", "0");
-        }
         run_ok(&mut c);
         let img = read_picture(&out).unwrap();
         assert_finite(&img);

@@ -4,7 +4,7 @@
 //! of the scene's size, and reaches `aa·r` ≈ 0.5 m) values made on the bright floor next to
 //! the wall reach across it; the
 //! irradiance on the dark floor next to the wall, cache against pure Monte Carlo (`-aa 0`),
-//! shows the leak and its cure. `TESSERA_NO_CORRAL=1` switches the protection off.
+//! shows the leak and its cure. `--amb-corral off` switches the protection off.
 
 mod common;
 
@@ -77,7 +77,7 @@ fn bands(dir: &Path, view: &[String], extra: &[&str], corral: bool, name: &str) 
     bands_share(dir, view, extra, corral, "1", name)
 }
 
-/// [`bands`] with the share reach limited to `share_max` (`TESSERA_SHARE_MAX`).
+/// [`bands`] with the share reach limited to `share_max` (`--amb-share-max`).
 fn bands_share(
     dir: &Path,
     view: &[String],
@@ -90,12 +90,8 @@ fn bands_share(
     let _ = std::fs::remove_file(&out);
     let mut c = Command::new(tpict_bin());
     c.current_dir(dir).args(view).args(AMB).args(extra);
-    c.env("TESSERA_SHARE_MAX", share_max);
-    if corral {
-        c.env_remove("TESSERA_NO_CORRAL");
-    } else {
-        c.env("TESSERA_NO_CORRAL", "1");
-    }
+    c.args(["--amb-share-max", share_max]);
+    c.args(["--amb-corral", if corral { "on" } else { "off" }]);
     run_ok(c.args(["-o", name, "room.rad"]));
     let img = read_picture(&out).unwrap();
     assert_finite(&img);

@@ -8,6 +8,7 @@ use std::sync::atomic::Ordering;
 use tessera::ambient::compute::{
     cell_variances, hessian, hessian_radii, super_sample_shares, Ambient,
 };
+use tessera::ambient::settings::AmbientSettings;
 use tessera::light::LightSet;
 use tessera::radopt::RenderParams;
 use tessera::render::{render_region, FrameSetup, RenderProgress, Tracer};
@@ -79,10 +80,10 @@ impl Default for Opts {
             reach: true,
             grad_radii: false,
             glows: true,
-            hessian_cells: tessera::ambient::compute::HESSIAN_CELLS,
+            hessian_cells: tessera::ambient::settings::HESSIAN_CELLS,
             overture: 0,
-            share_max: tessera::ambient::compute::SHARE_MAX,
-            as0_split: tessera::ambient::compute::AS0_SPLIT,
+            share_max: tessera::ambient::settings::SHARE_MAX,
+            as0_split: tessera::ambient::settings::AS0_SPLIT,
             st: RenderParams::default().st,
             frame: 0,
         }
@@ -98,17 +99,20 @@ fn render(s: &Setup, o: Opts) -> (Vec<[f64; 3]>, u64) {
         ad: o.ad,
         as_: o.as_,
         st: o.st,
+        amb: AmbientSettings {
+            gradients: o.gradients,
+            hessian: o.hessian,
+            reach: o.reach,
+            gradient_radii: o.grad_radii,
+            glow_sampling: o.glows,
+            hessian_cells: o.hessian_cells,
+            share_max: o.share_max,
+            as0_split: o.as0_split,
+            ..AmbientSettings::default()
+        },
         ..RenderParams::default()
     };
-    let mut amb = Ambient::new(&params, s.scene.size, 1).unwrap();
-    amb.use_gradients = o.gradients;
-    amb.use_hessian = o.hessian;
-    amb.use_reach = o.reach;
-    amb.gradient_limits_radii = o.grad_radii;
-    amb.sample_glows = o.glows;
-    amb.hessian_cells = o.hessian_cells;
-    amb.share_max = o.share_max;
-    amb.set_as0_split(&params, o.as0_split);
+    let amb = Ambient::new(&params, s.scene.size, 1).unwrap();
     let vf = s.view.frame().unwrap();
     let (mut x, mut y, mut pa) = (o.res, o.res, 1.0);
     normaspect(vf.aspect(), &mut pa, &mut x, &mut y);
@@ -628,7 +632,7 @@ fn as0_super_samples_a_quarter_of_the_divisions() {
         ..RenderParams::default()
     };
     assert_eq!(
-        tessera::ambient::compute::split_divisions(&params, 0.25),
+        tessera::ambient::compute::split_divisions(&params),
         (192.0, 64.0)
     );
     let uncached = RenderParams {
@@ -636,12 +640,12 @@ fn as0_super_samples_a_quarter_of_the_divisions() {
         ..params.clone()
     };
     assert_eq!(
-        tessera::ambient::compute::split_divisions(&uncached, 0.25),
+        tessera::ambient::compute::split_divisions(&uncached),
         (256.0, 0.0)
     );
     let explicit = RenderParams { as_: 128, ..params };
     assert_eq!(
-        tessera::ambient::compute::split_divisions(&explicit, 0.25),
+        tessera::ambient::compute::split_divisions(&explicit),
         (256.0, 128.0)
     );
 }

@@ -880,3 +880,45 @@ fn tstat_baseline_reports_speedup_per_worker() {
         "{text}"
     );
 }
+
+/// Tessera's ambient settings are part of a job's fingerprint: a job planned with other
+/// settings (here the light-leak test off) refuses the logs of a job planned with the
+/// defaults, with a warning, while a job with the same settings takes their values.
+#[test]
+fn logs_of_other_ambient_settings_are_refused() {
+    let d = tempfile::tempdir().unwrap();
+    let amb = ["-ab", "1", "-aa", ".2", "-ad", "64", "-as", "0", "-ps", "1"];
+    let args = view_args(48, 36, &amb);
+    let mut other_args = view_args(48, 36, &amb);
+    other_args.splice(0..0, ["--amb-corral".to_string(), "off".to_string()]);
+    let first = d.path().join("first");
+    plan(&first, &["--workers", "1"], &args);
+    run_workers(&first, 1, &[]);
+    let logs: Vec<PathBuf> = std::fs::read_dir(first.join("amb"))
+        .unwrap()
+        .map(|e| e.unwrap().path())
+        .filter(|p| p.extension().is_some_and(|x| x == "log"))
+        .collect();
+    assert!(!logs.is_empty());
+    // Each job: seed its amb/ with the first job's logs (under another worker's name), run a
+    // worker and read what it took and said.
+    let seeded = |name: &str, args: &[String]| {
+        let job = d.path().join(name);
+        plan(&job, &["--workers", "1"], args);
+        for (i, l) in logs.iter().enumerate() {
+            std::fs::copy(l, job.join("amb").join(format!("earlier{i}.log"))).unwrap();
+        }
+        let out = worker(&job, "w0", &[]).output().unwrap();
+        assert!(out.status.success());
+        let st = stat(&job);
+        let shared_in = st["aggregate"]["shared_in"].as_u64().unwrap();
+        (shared_in, String::from_utf8_lossy(&out.stderr).into_owned())
+    };
+    let (same_in, same_err) = seeded("same", &args);
+    let (other_in, other_err) = seeded("other", &other_args);
+    eprintln!("same settings: {same_in} values shared in; other settings: {other_in}");
+    assert!(same_in > 0, "{same_err}");
+    assert!(!same_err.contains("ignoring ambient log"), "{same_err}");
+    assert_eq!(other_in, 0, "{other_err}");
+    assert!(other_err.contains("ignoring ambient log"), "{other_err}");
+}

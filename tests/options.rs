@@ -5,6 +5,7 @@ use std::process::Command as Proc;
 
 use glam::DVec3;
 use proptest::prelude::*;
+use tessera::ambient::settings::AmbientSettings;
 use tessera::radopt::{
     defaults_text, expand_args, parse_rpict_args, split_words, to_args, Command, OptError,
     RenderParams, RpictOptions,
@@ -404,10 +405,22 @@ prop_compose! {
         af in proptest::option::of(name()), i in any::<bool>(), u in any::<bool>(),
         bv in any::<bool>(), me in prop::array::uniform3(0.0f64..1.0),
         ma in prop::array::uniform3(0.0f64..1.0), mg in -1.0f64..1.0, ms in 0.0f64..1.0,
+        amb in any_settings(),
     ) -> RenderParams {
         let (ae, ai) = if include { (vec![], names) } else { (names, vec![]) };
         RenderParams { dt, dc, dj, ds, dr, dp, dv, ss, st, lr, lw, av, aw, ab, aa, ar, ad, as_,
-                       ae, ai, af, i, u, bv, me, ma, mg, ms }
+                       ae, ai, af, i, u, bv, me, ma, mg, ms, amb }
+    }
+}
+
+prop_compose! {
+    fn any_settings()(
+        share_max in 1.0f64..4.0, as0_split in 0.0f64..0.9, flags in prop::array::uniform7(any::<bool>()),
+        hessian_cells in 16usize..5000, outlier_limit in 0.0f64..100.0,
+    ) -> AmbientSettings {
+        let [hessian, reach, gradients, gradient_radii, glow_sampling, corral, shadow_reuse] = flags;
+        AmbientSettings { share_max, as0_split, hessian, reach, gradients, gradient_radii,
+                          glow_sampling, corral, shadow_reuse, hessian_cells, outlier_limit }
     }
 }
 

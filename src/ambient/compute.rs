@@ -11,6 +11,8 @@
 
 use super::cache::{AmbientCache, CachedValue};
 pub use super::hessian::{hessian, hessian_radii};
+use super::settings::{caches, computes, AmbientSettings, AS0_SPLIT_LIMIT, CACHE_MIN_AA};
+pub use super::settings::{AS0_SPLIT, HESSIAN_CELLS, OUTLIER_LIMIT, SHARE_LIMIT, SHARE_MAX};
 use crate::color::{bright, sanitize, Color};
 use crate::material::normal::any_perpendicular;
 use crate::material::MatId;
@@ -233,12 +235,10 @@ pub struct Ambient {
     pub cache: AmbientCache,
     /// Counters.
     pub stats: AmbientStats,
-    /// Extrapolate cached values with their gradients (default true; tests switch it off).
-    pub use_gradients: bool,
-    /// Light-leak ("corral") protection: flag new values and test flagged values at lookups.
-    /// Default true; the environment variable `TESSERA_NO_CORRAL=1` (a test and diagnostic
-    /// switch, read when the calculation is set up) turns it off.
-    pub use_corral: bool,
+    /// Tessera's settings of the calculation (fixed when it is set up).
+    settings: AmbientSettings,
+    /// This calculation's identity for per-thread caches.
+    pub owner: u64,
     ab: u32,
     aa: f64,
     ad: f64,
@@ -246,29 +246,6 @@ pub struct Ambient {
     maxarad: f64,
     max_dist: f64,
     as_: f64,
-    /// Anisotropic radii from the Hessian (default true; else the harmonic mean distance).
-    pub use_hessian: bool,
-    /// Give new values the interpolation reach their Hessian radii leave room for (default
-    /// true; else every value's reach is 1, as in Radiance). See [`CachedValue::reach`].
-    pub use_reach: bool,
-    /// Whether cached values sample the scene's glows beyond their radius explicitly
-    /// ([`Ambient::glow_light`]; default true, `TESSERA_GLOW_SAMPLING=0` turns it off).
-    pub sample_glows: bool,
-    /// Whether a value's gradient shrinks its radii as in Radiance (`rad_i ≤ 1/|gpos_i|`);
-    /// off by default (docs/ambient.md), `TESSERA_GRADIENT_RADII=1` turns it on.
-    pub gradient_limits_radii: bool,
-    /// Cells of the mesh the Hessian is taken from at most (thinned evenly beyond).
-    pub hessian_cells: usize,
-    /// Outlier limit of a cached value's cells (0: none): see [`clamp_outliers`].
-    pub clamp: f64,
-    /// Reuse shadow rays of sample hits within their footprints ([`crate::light::viscache`]);
-    /// default true, `TESSERA_REUSE_SHADOWS=0` turns it off.
-    pub reuse_shadows: bool,
-    /// This calculation's identity for per-thread caches.
-    pub owner: u64,
-    /// Largest share reach ([`share_factor`]; 1: Radiance's rule, every value serves out to
-    /// `-aa` whatever the rest of the surface's light).
-    pub share_max: f64,
     av: Color,
     /// `-aw`: weight of `-av` in the moving log-average (0: `-av` stays fixed).
     aw: f64,
@@ -288,7 +265,7 @@ impl Ambient {
     /// Set up from the rendering parameters and the scene's cube size; `origin_id` names this
     /// process in value ids. Returns None when `-ab 0` or `-ad 0` (constant ambient only).
     pub fn new(params: &RenderParams, scene_size: f64, origin_id: u64) -> Option<Ambient> {
-        if params.ab <= 0 || params.ad <= 0 {
+        if !computes(params.ab, params.ad) {
             return None;
         }
         let size = scene_size.max(FTINY);
@@ -299,7 +276,8 @@ impl Ambient {
             (size * 1e-6, 0.2 * size)
         };
         let aa = params.aa.max(0.0);
-        let (ad, as_) = split_divisions(params, env_or("TESSERA_AS0_SPLIT", AS0_SPLIT));
+        let settings = params.amb.clone();
+        let (ad, as_) = split_divisions(params);
         Some(Ambient {
             cache: AmbientCache::new(minarad, aa.max(0.01), origin_id),
             stats: AmbientStats::default(),
@@ -307,17 +285,8 @@ impl Ambient {
             aa,
             ad,
             as_,
-            use_hessian: true,
-            use_reach: true,
-            gradient_limits_radii: std::env::var("TESSERA_GRADIENT_RADII").as_deref() == Ok("1"),
-            sample_glows: std::env::var("TESSERA_GLOW_SAMPLING").as_deref() != Ok("0"),
-            hessian_cells: env_or("TESSERA_HESSIAN_CELLS", HESSIAN_CELLS),
-            clamp: env_or("TESSERA_AMB_CLAMP", OUTLIER_LIMIT),
-            use_gradients: true,
-            use_corral: std::env::var("TESSERA_NO_CORRAL").as_deref() != Ok("1"),
-            reuse_shadows: std::env::var("TESSERA_REUSE_SHADOWS").as_deref() != Ok("0"),
             owner: NEXT_OWNER.fetch_add(1, Ordering::Relaxed),
-            share_max: env_or("TESSERA_SHARE_MAX", SHARE_MAX).clamp(1.0, SHARE_LIMIT),
+            settings,
             minarad,
             maxarad,
             max_dist: 10.0 * size + 1000.0,
@@ -331,6 +300,16 @@ impl Ambient {
                 Some(params.ai.iter().cloned().collect())
             },
         })
+    }
+
+    /// Tessera's settings this calculation runs with.
+    pub fn settings(&self) -> &AmbientSettings {
+        &self.settings
+    }
+
+    /// Whether values are cached ([`caches`]); else every request is a fresh estimate.
+    pub fn cached(&self) -> bool {
+        self.aa > CACHE_MIN_AA
     }
 
     /// Indirect light reflected with coefficient `refl` at a hit whose (ray-facing,
@@ -391,7 +370,7 @@ impl Ambient {
         if ray.amb_level >= self.ab || self.excluded(tr, hit) {
             return Outcome::Fallback;
         }
-        if self.aa <= FTINY {
+        if !self.cached() {
             // No cache: Monte Carlo at every bounce.
             return match self.sample(tr, ray, hit, n, Share::NONE, rng) {
                 Some(v) => Outcome::Value(v.val),
@@ -467,7 +446,7 @@ impl Ambient {
         let mut near = false;
         let aa0 = aa;
         // The share reach applies when the surface sends other light besides.
-        let share_on = self.share_max > 1.0 && share.other > 0.0;
+        let share_on = self.settings.share_max > 1.0 && share.other > 0.0;
         // Radiance's tests of value `v` with acceptance limit `lim` (its normalised
         // distance): Some((dt², δr², extrapolated value)) when it passes.
         let mut test = |v: &CachedValue, lim: f64| -> Option<(f64, f64, Color)> {
@@ -497,7 +476,7 @@ impl Ambient {
                 return None;
             }
             let rot = v.n.cross(n);
-            let f = if !self.use_gradients {
+            let f = if !self.settings.gradients {
                 1.0
             } else {
                 1.0 + v.gpos[0] * du
@@ -509,7 +488,7 @@ impl Ambient {
                 return None;
             }
             let f = f.min(20.0);
-            if self.use_corral && v.corral != 0 && self.leaks(v, p, n, du, dv, occluded) {
+            if self.settings.corral && v.corral != 0 && self.leaks(v, p, n, du, dv, occluded) {
                 return None;
             }
             Some((dt2, dr2, v.val * f))
@@ -706,7 +685,7 @@ impl Ambient {
     ) -> Option<CachedValue> {
         let start = Instant::now();
         let lvl = ray.amb_level;
-        let cached = self.aa > FTINY;
+        let cached = self.cached();
         let (wt, m, nphi) = self.divisions(lvl, ray.weight, cached, tr.params.lw);
         // Without a cache each sample ray stands for its share of this one estimate, so it
         // carries the ray's weight over the cell count (deeper bounces then take one sample:
@@ -721,7 +700,8 @@ impl Ambient {
         let ncells = m * nphi;
         // Glows beyond their radius are sampled explicitly, their emission hidden from the
         // value's own sample rays (cached values only).
-        let glows = cached && self.sample_glows && tr.lights.sampled_glows().next().is_some();
+        let glows =
+            cached && self.settings.glow_sampling && tr.lights.sampled_glows().next().is_some();
         let mut cells = vec![Cell::default(); ncells];
         let mut traced = 0u64;
         // A sample ray stands for its cell: about 2π/cells steradians, a footprint of radius
@@ -808,8 +788,12 @@ impl Ambient {
         }
         let mut lval: Vec<Color> = cells.iter().map(|c| c.mean()).collect();
         let mut lb: Vec<f64> = lval.iter().map(|c| bright(*c)).collect();
-        if cached && self.clamp > 0.0 {
-            clamp_outliers(&mut lval, &mut lb, outlier_limit(self.clamp, traced));
+        if cached && self.settings.outlier_limit > 0.0 {
+            clamp_outliers(
+                &mut lval,
+                &mut lb,
+                outlier_limit(self.settings.outlier_limit, traced),
+            );
         }
         let dist: Vec<f64> = cells.iter().map(|c| c.dist(self.max_dist)).collect();
         let count = ncells as f64;
@@ -836,9 +820,9 @@ impl Ambient {
         let scale = if b > FTINY { 1.0 / b } else { 0.0 };
         // Radii: from the Hessian when the mesh of hit points is complete, else the harmonic
         // mean distance (isotropic).
-        let hess = if cached && complete && self.use_hessian && m > 1 && nphi > 2 {
+        let hess = if cached && complete && self.settings.hessian && m > 1 && nphi > 2 {
             let pts: Vec<DVec3> = cells.iter().map(|c| c.hit).collect();
-            hessian(&pts, &lb, m, nphi, n, u0, v0, self.hessian_cells)
+            hessian(&pts, &lb, m, nphi, n, u0, v0, self.settings.hessian_cells)
                 .and_then(|h| hessian_radii(&h))
         } else {
             None
@@ -861,7 +845,7 @@ impl Ambient {
         // already sets them from the light's variation, and a noisy gradient (a bright patch
         // caught by a few cells) would shrink them for noise. The gradient is still capped
         // to the radii below. Radii from the mean distance (no Hessian) keep the limit.
-        if self.gradient_limits_radii || hess_rad.is_none() {
+        if self.settings.gradient_radii || hess_rad.is_none() {
             for i in 0..2 {
                 if gp[i].abs() * rad[i] > 1.0 {
                     rad[i] = 1.0 / gp[i].abs();
@@ -894,7 +878,7 @@ impl Ambient {
         // the 1:2 aspect limit shrank them, interpolating farther stays within the Hessian's
         // error target, and averages more values' noise.
         let reach = match hess_rad {
-            Some(h) if self.use_reach => {
+            Some(h) if self.settings.reach => {
                 let s = wt.sqrt();
                 (h[0] / s / rad[0])
                     .min(h[1] / s / rad[1])
@@ -917,7 +901,7 @@ impl Ambient {
                 share = share.min((gap / base).max(1.0));
             }
         }
-        let corral = if self.use_corral && cached && m >= CORRAL_MIN_DIVISIONS {
+        let corral = if self.settings.corral && cached && m >= CORRAL_MIN_DIVISIONS {
             let hits: Vec<Option<DVec3>> = cells
                 .iter()
                 .map(|c| (c.count > 0).then_some(c.hit))
@@ -955,12 +939,6 @@ impl Ambient {
         })
     }
 
-    /// Use `-ad`/`-as` of `params` with the `-as 0` split `split` instead of the default
-    /// ([`split_divisions`]).
-    pub fn set_as0_split(&mut self, params: &RenderParams, split: f64) {
-        (self.ad, self.as_) = split_divisions(params, split);
-    }
-
     /// How much farther than `-aa` a value of brightness `val` may serve a surface that
     /// reflects it by `share.refl` and sends `share.other` besides:
     /// `√((I + other) / I)` with `I = refl·val`, between 1 and `share_max`. An
@@ -968,18 +946,18 @@ impl Ambient {
     /// surface's light; for an error growing as the distance, this spacing minimises the
     /// summed squared error for a given number of values (docs/ambient.md).
     pub fn share_factor(&self, share: Share, val: f64) -> f64 {
-        if self.share_max <= 1.0 || share.other.is_nan() || share.other <= 0.0 {
+        if self.settings.share_max <= 1.0 || share.other.is_nan() || share.other <= 0.0 {
             return 1.0;
         }
         let i = share.refl * val;
         if i.is_nan() || i <= 0.0 {
-            return self.share_max;
+            return self.settings.share_max;
         }
         let f = ((i + share.other) / i).sqrt();
         if f.is_finite() {
-            f.clamp(1.0, self.share_max)
+            f.clamp(1.0, self.settings.share_max)
         } else {
-            self.share_max
+            self.settings.share_max
         }
     }
 }
@@ -1001,35 +979,19 @@ impl Share {
     };
 }
 
-/// The share of `-ad`'s divisions that a cached value spends on super-sampling when `-as`
-/// is 0 ([`split_divisions`]).
-pub const AS0_SPLIT: f64 = 0.25;
-
 /// The hemisphere divisions and super-sampling rays (`-ad`, `-as`) a cached value uses:
-/// as given, except that with `-as 0` a share `split` (0 to 0.9) of the `-ad` rays is
-/// spent on super-sampling: `-ad (1 − split)·N -as split·N`, the same rays per value. The
-/// uncached calculation (`-aa 0`) keeps `-ad` and `-as` as given.
-pub fn split_divisions(params: &RenderParams, split: f64) -> (f64, f64) {
+/// as given, except that with `-as 0` a share [`AmbientSettings::as0_split`] of the `-ad`
+/// rays is spent on super-sampling: `-ad (1 − split)·N -as split·N`, the same rays per value.
+/// The uncached calculation (`-aa 0`) keeps `-ad` and `-as` as given.
+pub fn split_divisions(params: &RenderParams) -> (f64, f64) {
     let ad = params.ad.max(0) as f64;
-    if params.aa > FTINY && params.as_ <= 0 && split > 0.0 {
-        let split = split.min(0.9);
+    let split = params.amb.as0_split.clamp(0.0, AS0_SPLIT_LIMIT);
+    if caches(params.ab, params.ad, params.aa) && params.as_ <= 0 && split > 0.0 {
         (ad * (1.0 - split), (ad * split).floor())
     } else {
         (ad, params.as_.max(0) as f64)
     }
 }
-
-/// Default largest share reach ([`Ambient::share_max`]).
-pub const SHARE_MAX: f64 = 3.0;
-
-/// Largest share reach accepted at all (from `TESSERA_SHARE_MAX` or a log record).
-pub const SHARE_LIMIT: f64 = 4.0;
-
-/// Default cell limit of the mesh a new value's Hessian is taken from: `-ad 1024` (18 × 57
-/// cells) and `-ad 512` (13 × 41) are thinned to 9 × 28 evenly spaced rings and columns (see
-/// [`super::hessian::subsample_grid`]); radii change by under 1% in a room, the Hessian's
-/// cost falls from about a quarter of a render to a few percent (docs/ambient.md).
-pub const HESSIAN_CELLS: usize = 256;
 
 /// Source samples per glow in [`Ambient::glow_light`] for a value of `cells` hemisphere
 /// cells: one per 32 cells, at least 8 and at most 64 (shadow rays are cheap next to the
@@ -1041,23 +1003,12 @@ pub fn glow_samples(cells: usize) -> usize {
 /// Largest interpolation reach of a value ([`CachedValue::reach`]), in units of `-aa`.
 pub const REACH_MAX: f64 = 2.0;
 
-/// Default outlier limit of a cached value's cells (see [`clamp_outliers`]).
-pub const OUTLIER_LIMIT: f64 = 2.0;
-
 /// The outlier limit for a value of `samples` sample rays: `f` up to 128 samples, then
 /// growing as the square root of the count. A value of many samples catches a small bright
 /// source (a caustic, a highlight) often enough that cutting it removes real light: on the
 /// spheres scene the fixed limit left the floor's indirect light 20–40% low (docs/ambient.md).
 pub fn outlier_limit(f: f64, samples: u64) -> f64 {
     f * (samples as f64 / 128.0).max(1.0).sqrt()
-}
-
-/// A setting from the environment (an experiment switch), else its default.
-fn env_or<T: std::str::FromStr>(name: &str, default: T) -> T {
-    std::env::var(name)
-        .ok()
-        .and_then(|s| s.parse().ok())
-        .unwrap_or(default)
 }
 
 /// Limits every cell's brightness to `f` × the sum of all the other cells' brightness
@@ -1471,9 +1422,15 @@ mod tests {
 
     /// A calculation at `-ab 1 -aa .2` in a scene of size 10.
     fn test_ambient() -> Ambient {
+        test_ambient_with(AmbientSettings::default())
+    }
+
+    /// [`test_ambient`] with other settings.
+    fn test_ambient_with(amb: AmbientSettings) -> Ambient {
         let params = RenderParams {
             ab: 1,
             aa: 0.2,
+            amb,
             ..RenderParams::default()
         };
         Ambient::new(&params, 10.0, 1).unwrap()
@@ -1481,8 +1438,10 @@ mod tests {
 
     #[test]
     fn share_factor_follows_the_indirect_lights_part() {
-        let mut amb = test_ambient();
-        amb.share_max = 3.0;
+        let amb = test_ambient_with(AmbientSettings {
+            share_max: 3.0,
+            ..AmbientSettings::default()
+        });
         let s = |refl: f64, other: f64, val: f64| amb.share_factor(Share { refl, other }, val);
         // Nothing else known, or nothing else sent: Radiance's rule.
         assert_eq!(s(0.5, 0.0, 1.0), 1.0);
@@ -1495,7 +1454,10 @@ mod tests {
         // Mostly indirect: barely more than 1; never below.
         assert!((s(0.5, 0.05, 1.0) - 1.1f64.sqrt()).abs() < 1e-12);
         assert!(s(0.5, f64::NAN, 1.0) == 1.0);
-        amb.share_max = 1.0;
+        let amb = test_ambient_with(AmbientSettings {
+            share_max: 1.0,
+            ..AmbientSettings::default()
+        });
         let far = Share {
             refl: 0.5,
             other: 100.0,
@@ -1535,8 +1497,8 @@ mod tests {
 
     #[test]
     fn lookup_tests_flagged_values_only_in_their_sectors() {
-        let mut amb = test_ambient();
-        amb.use_corral = true;
+        let amb = test_ambient();
+        assert!(amb.settings().corral);
         // A value at the origin facing +z, radius 1, a wall flagged toward +x (sectors 30..1).
         let corral = (1u32 << 30) | (1 << 31) | 1 | 2;
         amb.cache.insert(unit_value(DVec3::ZERO, 1.0, corral, 1.0));
@@ -1559,7 +1521,11 @@ mod tests {
         let mut clear = |_: DVec3, _: DVec3, _: f64| false;
         assert!(amb.interpolate(east, Z, 0, 1.0, &mut clear).is_some());
         // Switched off: never asked, never rejected.
-        amb.use_corral = false;
+        let amb = test_ambient_with(AmbientSettings {
+            corral: false,
+            ..AmbientSettings::default()
+        });
+        amb.cache.insert(unit_value(DVec3::ZERO, 1.0, corral, 1.0));
         let mut never = |_: DVec3, _: DVec3, _: f64| -> bool { panic!("asked") };
         assert!(amb.interpolate(east, Z, 0, 1.0, &mut never).is_some());
     }

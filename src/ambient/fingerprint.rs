@@ -55,7 +55,7 @@ impl Hasher {
 /// Fingerprint of a scene's primitives and the ambient-relevant options.
 pub fn fingerprint(prims: &[Primitive], params: &RenderParams) -> [u8; 32] {
     let mut h = Hasher::new();
-    h.str("tessera-ambient-v1");
+    h.str("tessera-ambient-v2");
     h.bytes(&(prims.len() as u64).to_le_bytes());
     for p in prims {
         h.str(&p.modifier);
@@ -91,6 +91,8 @@ pub fn fingerprint(prims: &[Primitive], params: &RenderParams) -> [u8; 32] {
     for m in &params.ai {
         h.str(m);
     }
+    h.str("tessera-settings");
+    h.str(&params.amb.to_text());
     h.finish()
 }
 
@@ -114,6 +116,8 @@ pub fn options_text(params: &RenderParams) -> String {
     for m in &params.ai {
         s.push_str(&format!(" -ai {m}"));
     }
+    s.push(' ');
+    s.push_str(&params.amb.to_text());
     s
 }
 
@@ -135,7 +139,7 @@ mod tests {
     }
 
     #[test]
-    fn changes_with_geometry_materials_and_ambient_options() {
+    fn changes_with_geometry_materials_ambient_options_and_settings() {
         let p = RenderParams::default();
         let base = fingerprint(&[prim(0.5)], &p);
         assert_eq!(base, fingerprint(&[prim(0.5)], &p));
@@ -150,6 +154,9 @@ mod tests {
             |p: &mut RenderParams| p.av = [0.1, 0.1, 0.1],
             |p: &mut RenderParams| p.aw = 2,
             |p: &mut RenderParams| p.ae = vec!["glass".into()],
+            |p: &mut RenderParams| p.amb.share_max = 1.0,
+            |p: &mut RenderParams| p.amb.corral = false,
+            |p: &mut RenderParams| p.amb.hessian_cells = 64,
         ] {
             let mut q = RenderParams::default();
             change(&mut q);

@@ -526,7 +526,7 @@ impl LogWriter {
             pending: 0,
             end,
             fsync: false,
-            fault_enospc: std::env::var_os("TESSERA_FAULT_LOG_ENOSPC").is_some(),
+            fault_enospc: crate::fault::injected("LOG_ENOSPC"),
         }
     }
 

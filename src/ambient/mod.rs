@@ -2,6 +2,7 @@
 //!
 //! - [`compute`]: new values (hemisphere sampling, gradients, radii) and interpolation.
 //! - [`hessian`]: the irradiance Hessian that gives a new value its anisotropic radii.
+//! - [`settings`]: Tessera's own settings of the calculation (options beside rpict's).
 //! - [`cache`]: the in-memory cache shared by render threads.
 //! - [`AmbRecord`]: one cached irradiance value, as Radiance's AMBVAL plus a stable id.
 //! - [`radfile`]: Radiance's own ambient file format (`-af`, read by `lookamb`).
@@ -13,6 +14,7 @@ pub mod fingerprint;
 pub mod hessian;
 pub mod log;
 pub mod radfile;
+pub mod settings;
 
 pub use compute::Ambient;
 

@@ -76,6 +76,13 @@ pub fn assemble_frame(
         commands: vec![m.command.clone(), command.to_string()],
         ..Header::default()
     };
+    let p = &m.options.params;
+    if crate::ambient::settings::computes(p.ab, p.ad) {
+        img.header.extra.push((
+            crate::tpict::AMBIENT_HEADER_VAR.into(),
+            format!(" {}", p.amb.to_text()),
+        ));
+    }
     if !missing.is_empty() {
         img.header.extra.push((
             "TESSERA_MISSING_TILES".into(),

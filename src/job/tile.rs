@@ -123,7 +123,7 @@ pub fn decode(bytes: &[u8]) -> Result<(TileMeta, Vec<[f32; 3]>)> {
 /// Write a tile result atomically (temporary in `tiles/`, fsync, rename).
 pub fn write(path: &Path, meta: &TileMeta, pixels: &[[f32; 3]]) -> Result<()> {
     let bytes = encode(meta, pixels)?;
-    if std::env::var_os("TESSERA_FAULT_TILE_ENOSPC").is_some() {
+    if crate::fault::injected("TILE_ENOSPC") {
         // Test hook: behave as a full disk would.
         return Err(anyhow!(
             "cannot write tile result {}: No space left on device (os error 28, injected)",

@@ -151,7 +151,7 @@ pub fn run_worker(job: &JobDir, wo: &WorkerOptions) -> Result<WorkerSummary> {
     let ambient = Ambient::new(&m.options.params, scene.size, origin_id).map(Arc::new);
     let counters = Arc::new(Counters::default());
     let share = match &ambient {
-        Some(a) if m.options.params.aa > 0.0 => Some(Share::open(
+        Some(a) if a.cached() => Some(Share::open(
             job,
             &owner,
             fp,

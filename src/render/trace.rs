@@ -454,7 +454,7 @@ impl<'a> Tracer<'a> {
             // The overture discards the colour; a rough estimate of the direct light is
             // enough for the share reach (fewer source partitions, weak sources untested).
             return match self.ambient {
-                Some(a) if a.share_max > 1.0 => direct(
+                Some(a) if a.settings().share_max > 1.0 => direct(
                     self,
                     ray.weight * OVERTURE_DIRECT_WEIGHT,
                     hit,
@@ -466,7 +466,7 @@ impl<'a> Tracer<'a> {
             };
         }
         let vis = match self.ambient {
-            Some(a) if a.reuse_shadows && ray.spread > 0.0 => {
+            Some(a) if a.settings().shadow_reuse && ray.spread > 0.0 => {
                 let footprint = (ray.reach + hit.t) * ray.spread;
                 VisQuery::new(a.owner, hit.obj, hit.back, footprint, hit.point)
             }
