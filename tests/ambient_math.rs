@@ -5,9 +5,9 @@ use glam::DVec3;
 use std::f64::consts::PI;
 use std::path::{Path, PathBuf};
 use std::sync::atomic::Ordering;
-use tessera::ambient::compute::{
-    cell_variances, hessian, hessian_radii, super_sample_shares, Ambient,
-};
+use tessera::ambient::compute::Ambient;
+use tessera::ambient::hemisphere::{cell_variances, super_sample_shares};
+use tessera::ambient::hessian::{hessian, hessian_radii};
 use tessera::ambient::settings::AmbientSettings;
 use tessera::light::LightSet;
 use tessera::radopt::RenderParams;

@@ -31,6 +31,9 @@ pub trait ValueSink: Send + Sync {
     }
 }
 
+/// Largest interpolation reach of a value ([`CachedValue::reach`]), in units of `-aa`.
+pub const REACH_MAX: f64 = 2.0;
+
 const SHARDS: usize = 64;
 const MAX_LEVELS: u32 = 40;
 
@@ -60,12 +63,12 @@ pub struct CachedValue {
     pub corral: u32,
     /// Value (mean incoming radiance over the cosine-weighted hemisphere).
     pub val: Color,
-    /// Interpolation reach (≥ 1, at most [`super::compute::REACH_MAX`]): the value serves
+    /// Interpolation reach (≥ 1, at most [`REACH_MAX`]): the value serves
     /// lookups out to `reach · aa` in its normalised distance, not only `aa`. It is the room
     /// the Hessian's radii leave beyond the radii used (which `-ar`'s largest radius and the
     /// 1:2 aspect limit may have shrunk); 1 for values from Radiance files.
     pub reach: f64,
-    /// Share reach (≥ 1, at most [`super::compute::SHARE_LIMIT`]): how much farther than its
+    /// Share reach (≥ 1, at most [`super::settings::SHARE_LIMIT`]): how much farther than its
     /// reach the value may serve a lookup where the indirect light is a small part of what
     /// the surface sends (see `compute::share_factor`); 1 in Radiance's own rule.
     pub share: f64,
@@ -338,12 +341,12 @@ impl CachedValue {
             corral: r.corral,
             val: Color::new(r.val[0] as f64, r.val[1] as f64, r.val[2] as f64),
             reach: if r.reach.is_finite() {
-                (r.reach as f64).clamp(1.0, super::compute::REACH_MAX)
+                (r.reach as f64).clamp(1.0, REACH_MAX)
             } else {
                 1.0
             },
             share: if r.share.is_finite() {
-                (r.share as f64).clamp(1.0, super::compute::SHARE_LIMIT)
+                (r.share as f64).clamp(1.0, super::settings::SHARE_LIMIT)
             } else {
                 1.0
             },

@@ -1,6 +1,12 @@
 //! Indirect irradiance ("ambient") values and their stores.
 //!
-//! - [`compute`]: new values (hemisphere sampling, gradients, radii) and interpolation.
+//! - [`compute`]: the calculation's facade ([`Ambient`]): set-up, a request for indirect
+//!   light (interpolate, else compute and cache a new value), `-av`/`-aw`, the share reach.
+//! - [`lookup`]: interpolation of cached values (Radiance's acceptance tests and weights).
+//! - [`sample`]: a new value (hemisphere sampling, super-sampling, radii, reach).
+//! - [`radii`]: a new value's frame, radii, gradients and reach.
+//! - [`hemisphere`]: statistics of a value's cells (outlier limit, variances, gradients).
+//! - [`corral`]: the light-leak flags and test.
 //! - [`hessian`]: the irradiance Hessian that gives a new value its anisotropic radii.
 //! - [`settings`]: Tessera's own settings of the calculation (options beside rpict's).
 //! - [`cache`]: the in-memory cache shared by render threads.
@@ -10,10 +16,15 @@
 
 pub mod cache;
 pub mod compute;
+pub mod corral;
 pub mod fingerprint;
+pub mod hemisphere;
 pub mod hessian;
 pub mod log;
+pub mod lookup;
 pub mod radfile;
+pub mod radii;
+pub mod sample;
 pub mod settings;
 
 pub use compute::Ambient;
