@@ -18,6 +18,7 @@ pub mod ambient;
 pub mod color;
 pub mod fault;
 pub mod geometry;
+pub mod hash;
 pub mod image;
 pub mod job;
 pub mod light;

@@ -47,7 +47,7 @@ fn one_branch_per_split_keeps_the_expectation() {
         let mut rng = Sampler::for_pixel(0, k as u32, 0, 0);
         let whole = tracer.trace(&ray, &mut rng);
         let whole_rays = rng.rays;
-        ray.sample_path = true;
+        ray.sample.on = true;
         let n = 20_000;
         let mut sum = tessera::color::Color::ZERO;
         let mut rays = 0;

@@ -13,6 +13,7 @@
 
 use super::ValueId;
 use crate::color::Color;
+use crate::hash::fx_mix;
 use glam::DVec3;
 use std::collections::HashMap;
 use std::hash::{BuildHasherDefault, Hasher};
@@ -75,12 +76,6 @@ pub struct CachedValue {
 }
 
 type Key = (u32, i64, i64, i64);
-
-/// One step of the multiply–rotate mix (as FxHash) used for grid and cube keys.
-#[inline]
-pub(crate) fn fx_mix(h: u64, x: u64) -> u64 {
-    (h.rotate_left(5) ^ x).wrapping_mul(0x517C_C1B7_2722_0A95)
-}
 
 /// A fast hasher for grid keys (a multiply–rotate mix of the four integers, as FxHash): the
 /// standard SipHash took a sixth of an `-ab 2` render's time in lookups. The keys are cell

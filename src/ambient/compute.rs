@@ -9,10 +9,11 @@
 use super::cache::AmbientCache;
 use super::settings::{caches, computes, AmbientSettings, AS0_SPLIT_LIMIT, CACHE_MIN_AA};
 use crate::color::{bright, Color};
+use crate::light::viscache::VisQuery;
 use crate::radopt::RenderParams;
 use crate::render::ray::{Hit, Ray};
 use crate::render::sampler::Sampler;
-use crate::render::trace::Tracer;
+use crate::render::trace::{DirectPlan, IndirectLight, IndirectRequest, Tracer};
 use crate::FTINY;
 use glam::DVec3;
 use std::collections::HashSet;
@@ -68,7 +69,7 @@ pub struct Ambient {
     /// Tessera's settings of the calculation (fixed when it is set up).
     settings: AmbientSettings,
     /// This calculation's identity for per-thread caches.
-    pub owner: u64,
+    owner: u64,
     ab: u32,
     pub(super) aa: f64,
     pub(super) ad: f64,
@@ -140,30 +141,6 @@ impl Ambient {
     /// Whether values are cached ([`caches`]); else every request is a fresh estimate.
     pub fn cached(&self) -> bool {
         self.aa > CACHE_MIN_AA
-    }
-
-    /// Indirect light reflected with coefficient `refl` at a hit whose (ray-facing,
-    /// unperturbed) normal is `n`.
-    #[allow(clippy::too_many_arguments)]
-    pub fn reflected(
-        &self,
-        tr: &Tracer,
-        ray: &Ray,
-        hit: &Hit,
-        refl: Color,
-        n: DVec3,
-        other: f64,
-        rng: &mut Sampler,
-    ) -> Color {
-        let rb = bright(refl);
-        if rb <= 0.0 {
-            return Color::ZERO;
-        }
-        let share = Share { refl: rb, other };
-        match self.value(tr, ray, hit, n, share, rng) {
-            Outcome::Value(v) => refl * v,
-            Outcome::Fallback => refl * self.fallback(),
-        }
     }
 
     /// The ambient value used when no value is computed: `-av`, or with `-aw N` > 0 a moving
@@ -268,6 +245,64 @@ pub fn split_divisions(params: &RenderParams) -> (f64, f64) {
         (ad, params.as_.max(0) as f64)
     }
 }
+
+impl IndirectLight for Ambient {
+    fn reflected(
+        &self,
+        tr: &Tracer,
+        ray: &Ray,
+        hit: &Hit,
+        req: IndirectRequest,
+        rng: &mut Sampler,
+    ) -> Color {
+        let refl = req.refl;
+        let rb = bright(refl);
+        if rb <= 0.0 {
+            return Color::ZERO;
+        }
+        let share = Share {
+            refl: rb,
+            other: req.other,
+        };
+        match self.value(tr, ray, hit, req.normal, share, rng) {
+            Outcome::Value(v) => refl * v,
+            Outcome::Fallback => refl * self.fallback(),
+        }
+    }
+
+    /// Eye paths of the overture (`fill_only`, ambient level 0) need no direct light, whose
+    /// colour is discarded, except a rough estimate of it for the share reach
+    /// ([`OVERTURE_DIRECT_WEIGHT`]). On a cached value's sample path, shadow rays are reused
+    /// within the sample's footprint ([`crate::light::viscache`]).
+    fn direct_plan(&self, ray: &Ray, hit: &Hit, fill_only: bool) -> DirectPlan {
+        if fill_only && ray.amb_level == 0 {
+            return if self.settings.share_max > 1.0 {
+                DirectPlan::Estimate {
+                    weight: ray.weight * OVERTURE_DIRECT_WEIGHT,
+                }
+            } else {
+                DirectPlan::Skip
+            };
+        }
+        let s = &ray.sample;
+        let reuse = if self.settings.shadow_reuse && s.spread > 0.0 {
+            let footprint = (s.reach + hit.t) * s.spread;
+            VisQuery::new(self.owner, hit.obj, hit.back, footprint, hit.point)
+        } else {
+            None
+        };
+        DirectPlan::Full(reuse)
+    }
+
+    fn count_reused_shadows(&self, n: u64) {
+        self.stats.shadows_reused.fetch_add(n, Ordering::Relaxed);
+    }
+}
+
+/// The ray weight factor of the overture's direct-light estimate
+/// ([`IndirectLight::direct_plan`]): a light ray weight means fewer source partitions and
+/// weak sources left untested.
+pub const OVERTURE_DIRECT_WEIGHT: f64 = 0.05;
 
 /// What else a surface sends beside its reflected indirect light ([`Ambient::share_factor`]).
 #[derive(Clone, Copy, Debug)]

@@ -8,9 +8,9 @@ use super::compute::{Ambient, Share, AVGREFL};
 use super::corral::{corral_flags, CORRAL_MIN_DIVISIONS};
 use super::hemisphere::{clamp_outliers, outlier_limit, super_sample_shares, Cell};
 use crate::color::{bright, sanitize, Color};
-use crate::material::normal::any_perpendicular;
+use crate::geometry::any_perpendicular;
 use crate::material::MatId;
-use crate::render::ray::{Hit, Ray, RayKind, MAX_ANTIMATTER};
+use crate::render::ray::{Hit, Ray, RayKind, SamplePath, MAX_ANTIMATTER};
 use crate::render::sampler::Sampler;
 use crate::render::trace::Tracer;
 use crate::FTINY;
@@ -69,10 +69,12 @@ impl Hemisphere<'_, '_> {
             Color::splat(self.coef),
         )?;
         r.amb_level = self.ray.amb_level + 1;
-        r.spread = self.spread;
-        r.reach = 0.0;
-        r.sample_path = self.cached;
-        r.glow_sampled = self.glows;
+        r.sample = SamplePath {
+            on: self.cached,
+            spread: self.spread,
+            reach: 0.0,
+            glow_sampled: self.glows,
+        };
         self.traced += 1;
         let (c, t) = tr.trace_dist(&r, rng);
         Some((c, t.clamp(FTINY, self.max_dist), dir))

@@ -125,6 +125,12 @@ pub(crate) fn pick_root(
         .find(|&t| t > FTINY && t < tmax && ok(t))
 }
 
+/// A unit vector perpendicular to the unit vector `n` (the tangent frame's first axis,
+/// reversed).
+pub fn any_perpendicular(n: DVec3) -> DVec3 {
+    -perp_frame(n).0
+}
+
 /// Unit vectors `(e1, e2)` perpendicular to the unit vector `n` and to each other.
 pub(crate) fn perp_frame(n: DVec3) -> (DVec3, DVec3) {
     let a = if n.x.abs() < 0.6 {

@@ -10,7 +10,6 @@ use crate::render::ray::Hit;
 use crate::render::sampler::Sampler;
 use crate::render::trace::Tracer;
 use glam::DVec3;
-use std::sync::atomic::Ordering;
 
 /// Shadow rays always traced before the adaptive test may stop (Radiance's MINSHADCNT).
 const MIN_SHADOW_TESTS: usize = 2;
@@ -136,7 +135,7 @@ fn direct_with(
     }
     if reused > 0 {
         if let Some(a) = tr.ambient {
-            a.stats.shadows_reused.fetch_add(reused, Ordering::Relaxed);
+            a.count_reused_shadows(reused);
         }
     }
     if untested_from < n {

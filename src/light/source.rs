@@ -1,10 +1,10 @@
 //! Light-source records and their sampling.
 
 use crate::color::Color;
+use crate::geometry::any_perpendicular;
 use crate::geometry::cone::ConeKind;
 use crate::geometry::Surface;
 use crate::material::emitter::{Emitter, EmitterKind};
-use crate::material::normal::any_perpendicular;
 use crate::material::{reflect, Material};
 use crate::render::sampler::Sampler;
 use crate::scene::Scene;

@@ -29,8 +29,8 @@ use std::cell::RefCell;
 
 use glam::DVec3;
 
-use crate::ambient::cache::fx_mix;
 use crate::color::{bright, Color};
+use crate::hash::fx_mix;
 
 /// Shadow rays a cube must have traced, all agreeing, before it answers without one.
 pub const TRUST: u16 = 8;

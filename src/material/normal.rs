@@ -296,7 +296,7 @@ impl NormalMat {
             1
         };
         let (u, w) = frame.unwrap_or_else(|| {
-            let u = any_perpendicular(n);
+            let u = crate::geometry::any_perpendicular(n);
             (u, n.cross(u))
         });
         let (ax, ay) = self.rough;
@@ -349,9 +349,4 @@ impl NormalMat {
         let _ = count;
         scolor * sum * scale
     }
-}
-
-/// A unit vector perpendicular to the unit vector `n` (the geometry's tangent frame, reversed).
-pub fn any_perpendicular(n: DVec3) -> DVec3 {
-    -crate::geometry::perp_frame(n).0
 }

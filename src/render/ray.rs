@@ -22,6 +22,51 @@ pub enum RayKind {
     Shadow,
 }
 
+/// What a ray knows of the cached ambient value whose sampling it belongs to: set on a
+/// value's sample rays by the ambient calculation, passed on to the rays they spawn, read by
+/// the tracer (specular splits, glows) and direct light (shadow reuse). Outside a value's
+/// sampling it is [`SamplePath::NONE`].
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct SamplePath {
+    /// True for a cached ambient value's sample ray and everything it spawns: its result is
+    /// averaged with the value's other samples, so specular splits follow one branch
+    /// ([`crate::render::trace::Tracer::split`]).
+    pub on: bool,
+    /// The radius of the sample's footprint per unit distance travelled (the hemisphere cell
+    /// it stands for), kept by the rays the sample ray spawns; 0: no footprint.
+    pub spread: f64,
+    /// The distance from the sample ray's origin to this ray's origin.
+    pub reach: f64,
+    /// True for a cached value's sample ray when the value samples the scene's glows
+    /// explicitly (`Ambient::glow_light`): such a ray does not see their emission. Not passed
+    /// on to the rays it spawns.
+    pub glow_sampled: bool,
+}
+
+impl SamplePath {
+    /// Not on a cached value's sample path.
+    pub const NONE: SamplePath = SamplePath {
+        on: false,
+        spread: 0.0,
+        reach: 0.0,
+        glow_sampled: false,
+    };
+
+    /// The path state a ray spawned at distance `t` from this ray's origin inherits.
+    pub fn spawned(&self, t: f64) -> SamplePath {
+        SamplePath {
+            on: self.on,
+            spread: self.spread,
+            reach: if self.spread > 0.0 {
+                self.reach + t
+            } else {
+                0.0
+            },
+            glow_sampled: false,
+        }
+    }
+}
+
 /// Up to this many antimatter volumes may contain a ray at once.
 pub const MAX_ANTIMATTER: usize = 4;
 
@@ -47,20 +92,8 @@ pub struct Ray {
     pub amb_level: u32,
     /// Factor a survivor of Russian roulette must multiply its result by.
     pub gain: f64,
-    /// On a cached ambient value's sample path: the radius of the sample's footprint per
-    /// unit distance travelled (the hemisphere cell it stands for), kept by the rays the
-    /// sample ray spawns; 0 elsewhere.
-    pub spread: f64,
-    /// On a sample path: the distance from the sample ray's origin to this ray's origin.
-    pub reach: f64,
-    /// True for a cached ambient value's sample ray and everything it spawns: its result is
-    /// averaged with the value's other samples, so specular splits follow one branch
-    /// ([`crate::render::trace::Tracer::split`]).
-    pub sample_path: bool,
-    /// True for a cached value's sample ray when the value samples the scene's glows
-    /// explicitly (`Ambient::glow_light`): such a ray does not see their emission. Not passed
-    /// on to the rays it spawns.
-    pub glow_sampled: bool,
+    /// The cached ambient value whose sampling this ray belongs to, if any.
+    pub sample: SamplePath,
     /// Antimatter materials whose volumes contain the ray origin.
     pub antimatter: [Option<MatId>; MAX_ANTIMATTER],
 }
@@ -78,10 +111,7 @@ impl Ray {
             depth: 0,
             amb_level: 0,
             gain: 1.0,
-            spread: 0.0,
-            reach: 0.0,
-            sample_path: false,
-            glow_sampled: false,
+            sample: SamplePath::NONE,
             antimatter: [None; MAX_ANTIMATTER],
         }
     }

@@ -3,11 +3,9 @@
 
 use super::ray::{Hit, Ray, RayKind, MAX_ANTIMATTER};
 use super::sampler::Sampler;
-use crate::ambient::Ambient;
 use crate::color::{bright, sanitize, Color};
 use crate::light::direct::direct;
 use crate::light::source::LightSet;
-use crate::light::viscache::VisQuery;
 use crate::material::emitter::EmitterKind;
 use crate::material::{MatId, Material};
 use crate::radopt::RenderParams;
@@ -23,12 +21,12 @@ pub struct Tracer<'a> {
     pub params: &'a RenderParams,
     /// Light sources (real and virtual).
     pub lights: &'a LightSet,
-    /// The irradiance cache (None: constant `-av` ambient only).
-    pub ambient: Option<&'a Ambient>,
-    /// Fill the cache only (the ambient overture): shading points of eye paths (ambient
-    /// level 0) skip direct light, whose colour the overture discards, or with the share
-    /// reach take only a rough estimate of it ([`OVERTURE_DIRECT_WEIGHT`]). Points inside a
-    /// new value's sampling (level > 0) are lit as always: the value needs their light.
+    /// The indirect-light calculation (None: constant `-av` ambient only).
+    pub ambient: Option<&'a dyn IndirectLight>,
+    /// Fill the cache only (the ambient overture): the picture's colour is discarded, so
+    /// the indirect-light calculation decides how much direct light eye paths need
+    /// ([`IndirectLight::direct_plan`]). Points inside a new value's sampling (level > 0)
+    /// are lit as always: the value needs their light.
     pub fill_only: bool,
 }
 
@@ -45,10 +43,52 @@ fn shadow_reach(dist: f64) -> f64 {
     }
 }
 
-/// The ray weight factor of the overture's direct-light estimate (see
-/// [`Tracer::fill_only`]): a light ray weight means fewer source partitions and weak
-/// sources left untested.
-pub const OVERTURE_DIRECT_WEIGHT: f64 = 0.05;
+/// How direct light is gathered at a hit ([`IndirectLight::direct_plan`]).
+pub enum DirectPlan {
+    /// None at all.
+    Skip,
+    /// A rough estimate: direct light at this ray weight.
+    Estimate {
+        /// The ray weight to gather at (fewer source partitions, weak sources untested).
+        weight: f64,
+    },
+    /// All of it, reusing shadow rays within a sample's footprint when a query is given.
+    Full(Option<crate::light::viscache::VisQuery>),
+}
+
+/// The indirect-light calculation a tracer asks for light it does not trace itself (the
+/// ambient calculation, `crate::ambient::Ambient`, implements it). Its policies — how a
+/// value's sample paths gather direct light, what the overture needs — live behind it.
+pub trait IndirectLight: Sync {
+    /// Indirect light reflected with coefficient `refl` at `hit` whose ray-facing,
+    /// unperturbed normal is `normal`, at a surface that sends light of brightness `other`
+    /// besides (direct, specular, emitted).
+    fn reflected(
+        &self,
+        tr: &Tracer,
+        ray: &Ray,
+        hit: &Hit,
+        req: IndirectRequest,
+        rng: &mut Sampler,
+    ) -> Color;
+
+    /// How direct light is gathered at `hit` of `ray` (`fill_only`: for the overture).
+    fn direct_plan(&self, ray: &Ray, hit: &Hit, fill_only: bool) -> DirectPlan;
+
+    /// Count `n` shadow rays answered from a footprint's cache instead of traced.
+    fn count_reused_shadows(&self, n: u64);
+}
+
+/// What a material asks of the indirect light ([`IndirectLight::reflected`]).
+#[derive(Clone, Copy, Debug)]
+pub struct IndirectRequest {
+    /// Reflection coefficient of the indirect light.
+    pub refl: Color,
+    /// Ray-facing, unperturbed normal.
+    pub normal: DVec3,
+    /// Brightness of the surface's other light.
+    pub other: f64,
+}
 
 /// Largest colour component (Radiance's `intens`).
 #[inline]
@@ -225,7 +265,7 @@ impl<'a> Tracer<'a> {
         rng: &mut Sampler,
     ) -> Color {
         let mut result = Color::ZERO;
-        if ray.sample_path && ray.kind != RayKind::Ambient {
+        if ray.sample.on && ray.kind != RayKind::Ambient {
             let total: f64 = branches.iter().map(|b| bright(b.2).max(0.0)).sum();
             if !(total > 0.0 && total.is_finite()) {
                 return result;
@@ -350,7 +390,7 @@ impl<'a> Tracer<'a> {
                         return Color::ZERO;
                     }
                     // A glow source the value samples explicitly is not seen by its rays.
-                    if ray.glow_sampled && self.lights.is_sampled_glow(hit.obj) {
+                    if ray.sample.glow_sampled && self.lights.is_sampled_glow(hit.obj) {
                         return Color::ZERO;
                     }
                     let spot = e.spot_factor(hit.point, ray.org);
@@ -429,14 +469,7 @@ impl<'a> Tracer<'a> {
             depth,
             amb_level: parent.amb_level,
             gain,
-            spread: parent.spread,
-            reach: if parent.spread > 0.0 {
-                parent.reach + hit.t
-            } else {
-                0.0
-            },
-            sample_path: parent.sample_path,
-            glow_sampled: false,
+            sample: parent.sample.spawned(hit.t),
             antimatter: hit.antimatter,
         })
     }
@@ -450,34 +483,23 @@ impl<'a> Tracer<'a> {
         coef: &dyn Fn(DVec3, f64) -> Color,
         rng: &mut Sampler,
     ) -> Color {
-        if self.fill_only && ray.amb_level == 0 {
-            // The overture discards the colour; a rough estimate of the direct light is
-            // enough for the share reach (fewer source partitions, weak sources untested).
-            return match self.ambient {
-                Some(a) if a.settings().share_max > 1.0 => direct(
-                    self,
-                    ray.weight * OVERTURE_DIRECT_WEIGHT,
-                    hit,
-                    coef,
-                    rng,
-                    None,
-                ),
-                _ => Color::ZERO,
-            };
-        }
-        let vis = match self.ambient {
-            Some(a) if a.settings().shadow_reuse && ray.spread > 0.0 => {
-                let footprint = (ray.reach + hit.t) * ray.spread;
-                VisQuery::new(a.owner, hit.obj, hit.back, footprint, hit.point)
-            }
-            _ => None,
+        let plan = match self.ambient {
+            Some(a) => a.direct_plan(ray, hit, self.fill_only),
+            // The colour of a fill-only pass is discarded; without an indirect-light
+            // calculation nothing else needs the light.
+            None if self.fill_only && ray.amb_level == 0 => DirectPlan::Skip,
+            None => DirectPlan::Full(None),
         };
-        direct(self, ray.weight, hit, coef, rng, vis.as_ref())
+        match plan {
+            DirectPlan::Skip => Color::ZERO,
+            DirectPlan::Estimate { weight } => direct(self, weight, hit, coef, rng, None),
+            DirectPlan::Full(vis) => direct(self, ray.weight, hit, coef, rng, vis.as_ref()),
+        }
     }
 
-    /// Use an irradiance cache for indirect light.
-    pub fn with_ambient(mut self, ambient: Option<&'a Ambient>) -> Tracer<'a> {
-        self.ambient = ambient;
+    /// Use an indirect-light calculation (the irradiance cache).
+    pub fn with_ambient<A: IndirectLight>(mut self, ambient: Option<&'a A>) -> Tracer<'a> {
+        self.ambient = ambient.map(|a| a as &dyn IndirectLight);
         self
     }
 
@@ -493,7 +515,14 @@ impl<'a> Tracer<'a> {
         rng: &mut Sampler,
     ) -> Color {
         match self.ambient {
-            Some(a) => a.reflected(self, ray, hit, refl, normal, other, rng),
+            Some(a) => {
+                let req = IndirectRequest {
+                    refl,
+                    normal,
+                    other,
+                };
+                a.reflected(self, ray, hit, req, rng)
+            }
             None => {
                 let av = self.params.av;
                 refl * DVec3::new(av[0], av[1], av[2])
