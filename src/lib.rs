@@ -23,6 +23,7 @@ pub mod image;
 pub mod job;
 pub mod light;
 pub mod material;
+pub mod modifier;
 pub mod radopt;
 pub mod render;
 pub mod scene;

@@ -3,8 +3,9 @@
 
 use super::{expect_args, reflect};
 use crate::color::Color;
-use crate::render::ray::{Hit, Ray, RayKind};
+use crate::render::ray::{Ray, RayKind};
 use crate::render::sampler::Sampler;
+use crate::render::shading::ShadingPoint;
 use crate::render::trace::Tracer;
 use crate::FTINY;
 use glam::DVec3;
@@ -44,6 +45,11 @@ impl Glass {
 
     /// Reflected (uncoloured, per channel) and transmitted colours at incidence cosine `cos1`.
     pub fn coefficients(&self, cos1: f64) -> (Color, Color) {
+        self.coefficients_of(self.tn, cos1)
+    }
+
+    /// [`Glass::coefficients`] for the transmissivity `tn` (the glass's, times a pattern).
+    fn coefficients_of(&self, tn: Color, cos1: f64) -> (Color, Color) {
         let cos1 = cos1.clamp(1e-6, 1.0);
         let n = self.n;
         let cos2 = (1.0 - (1.0 - cos1 * cos1) / (n * n))
@@ -56,7 +62,7 @@ impl Glass {
         let mut refl = Color::ZERO;
         let mut trans = Color::ZERO;
         for c in 0..3 {
-            let tau = self.tn[c].max(0.0).powf(1.0 / cos2);
+            let tau = tn[c].max(0.0).powf(1.0 / cos2);
             let (r1, t1) = slab(re, tau);
             let (r2, t2) = slab(rm, tau);
             refl[c] = 0.5 * (r1 + r2);
@@ -66,13 +72,13 @@ impl Glass {
     }
 
     /// Shade a hit on glass: a mirror ray and a straight-through ray.
-    pub fn shade(&self, tr: &Tracer, ray: &Ray, hit: &Hit, rng: &mut Sampler) -> Color {
-        let n = if hit.back { -hit.normal } else { hit.normal };
+    pub fn shade(&self, tr: &Tracer, ray: &Ray, sp: &ShadingPoint, rng: &mut Sampler) -> Color {
+        let n = sp.facing_normal();
         let cos1 = -ray.dir.dot(n);
-        let (refl, trans) = self.coefficients(cos1);
+        let (refl, trans) = self.coefficients_of(self.tn * sp.pcol, cos1);
         tr.split(
             ray,
-            hit,
+            &sp.hit,
             &[
                 (ray.dir, RayKind::Transmitted, trans),
                 (reflect(ray.dir, n), RayKind::Reflected, refl),
@@ -82,9 +88,9 @@ impl Glass {
     }
 
     /// What a shadow ray sees through the glass.
-    pub fn shadow_transmission(&self, hit: &Hit, dir: DVec3) -> Color {
-        let n = if hit.back { -hit.normal } else { hit.normal };
-        self.coefficients(-dir.dot(n)).1
+    pub fn shadow_transmission(&self, sp: &ShadingPoint) -> Color {
+        let n = sp.facing_normal();
+        self.coefficients_of(self.tn * sp.pcol, -sp.dir.dot(n)).1
     }
 }
 
@@ -151,13 +157,16 @@ impl Dielectric {
     }
 
     /// Shade: attenuate along the arriving ray's medium, then reflect and refract.
-    pub fn shade(&self, tr: &Tracer, ray: &Ray, hit: &Hit, rng: &mut Sampler) -> Color {
-        // The arriving ray travelled `hit.t` through the medium on its own side.
+    pub fn shade(&self, tr: &Tracer, ray: &Ray, sp: &ShadingPoint, rng: &mut Sampler) -> Color {
+        let hit = &sp.hit;
+        // The arriving ray travelled `hit.t` through the medium on its own side; a pattern
+        // multiplies the media's transmission.
         let (n, n1, n2, col1) = if hit.back {
-            (-hit.normal, self.inside_n, self.outside_n, self.inside_col)
+            (-sp.normal, self.inside_n, self.outside_n, self.inside_col)
         } else {
-            (hit.normal, self.outside_n, self.inside_n, self.outside_col)
+            (sp.normal, self.outside_n, self.inside_n, self.outside_col)
         };
+        let col1 = col1 * sp.pcol;
         let atten = Color::new(
             absorb(col1.x, hit.t),
             absorb(col1.y, hit.t),

@@ -2,8 +2,9 @@
 
 use super::{expect_args, reflect, MatId, MaterialLookup};
 use crate::color::Color;
-use crate::render::ray::{Hit, Ray, RayKind};
+use crate::render::ray::{Ray, RayKind};
 use crate::render::sampler::Sampler;
+use crate::render::shading::ShadingPoint;
 use crate::render::trace::Tracer;
 use glam::DVec3;
 
@@ -43,7 +44,8 @@ impl Mirror {
     /// Shade a hit on the mirror itself (no alternate): one reflected ray. A mirror reflects
     /// from its front only: seen from behind it is black, or invisible with `-bv-` (both
     /// measured with rpict).
-    pub fn shade(&self, tr: &Tracer, ray: &Ray, hit: &Hit, rng: &mut Sampler) -> Color {
+    pub fn shade(&self, tr: &Tracer, ray: &Ray, sp: &ShadingPoint, rng: &mut Sampler) -> Color {
+        let hit = &sp.hit;
         if hit.back {
             return if tr.params.bv {
                 Color::ZERO
@@ -51,9 +53,10 @@ impl Mirror {
                 tr.pass_through(ray, hit, rng)
             };
         }
-        let dir = reflect(ray.dir, hit.normal);
-        match tr.spawn(ray, hit, dir, RayKind::Reflected, self.color) {
-            Some(r) => self.color * tr.trace(&r, rng),
+        let dir = reflect(ray.dir, sp.normal);
+        let color = self.color * sp.pcol;
+        match tr.spawn(ray, hit, dir, RayKind::Reflected, color) {
+            Some(r) => color * tr.trace(&r, rng),
             None => Color::ZERO,
         }
     }

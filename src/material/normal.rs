@@ -6,6 +6,7 @@ use super::{expect_args, reflect, WHITE};
 use crate::color::{bright, Color};
 use crate::render::ray::{Hit, Ray, RayKind};
 use crate::render::sampler::Sampler;
+use crate::render::shading::ShadingPoint;
 use crate::render::trace::Tracer;
 use crate::FTINY;
 use glam::DVec3;
@@ -110,10 +111,12 @@ impl NormalMat {
     }
 
     /// Shade a hit: direct light, specular rays, transmission and ambient.
-    pub fn shade(&self, tr: &Tracer, ray: &Ray, hit: &Hit, rng: &mut Sampler) -> Color {
+    pub fn shade(&self, tr: &Tracer, ray: &Ray, sp: &ShadingPoint, rng: &mut Sampler) -> Color {
+        let hit = &sp.hit;
         let hastrans = self.kind == NormalKind::Trans && self.trans > FTINY;
-        // Orientation: face the incoming ray.
-        let mut n = hit.normal;
+        // Orientation: face the incoming ray (the side is the geometric normal's; the
+        // shading normal is the perturbed one).
+        let mut n = sp.normal;
         if hit.back {
             if !tr.params.bv && !hastrans {
                 return tr.pass_through(ray, hit, rng);
@@ -126,7 +129,7 @@ impl NormalMat {
         }
         let v = -ray.dir;
         let pdot = n.dot(v).max(0.001);
-        let color = self.color;
+        let color = self.color * sp.pcol;
         let mut spec = self.spec;
         let alpha2 = self.rough.0 * self.rough.1;
         let pure = alpha2 <= FTINY;
@@ -263,17 +266,17 @@ impl NormalMat {
     }
 
     /// Transmission seen by a shadow ray through this material (straight through only).
-    pub fn shadow_transmission(&self, hit: &Hit, dir: DVec3) -> Color {
+    pub fn shadow_transmission(&self, sp: &ShadingPoint) -> Color {
         if self.kind != NormalKind::Trans || self.trans <= FTINY {
             return Color::ZERO;
         }
-        let n = if hit.back { -hit.normal } else { hit.normal };
+        let (n, dir) = (sp.facing_normal(), sp.dir);
         let pdot = (-dir.dot(n)).max(0.001);
         let mut spec = self.spec;
         if self.rough.0 * self.rough.1 <= FTINY && spec >= 0.018 {
             spec += fresnel_approx(pdot) * (1.0 - spec);
         }
-        self.color * (self.trans * (1.0 - spec) * self.tspec)
+        self.color * sp.pcol * (self.trans * (1.0 - spec) * self.tspec)
     }
 
     /// Importance-sample the Gaussian lobe (reflected or transmitted) with `-ss` samples.

@@ -1,8 +1,10 @@
 //! The renderer: rays, per-pixel deterministic sampling, the tracer and the pixel loop.
 
+pub mod chain;
 pub mod picture;
 pub mod ray;
 pub mod sampler;
+pub mod shading;
 pub mod trace;
 
 pub use picture::{render_region, FrameSetup, RenderProgress};

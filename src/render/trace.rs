@@ -3,6 +3,7 @@
 
 use super::ray::{Hit, Ray, RayKind, MAX_ANTIMATTER};
 use super::sampler::Sampler;
+use super::shading::ShadingPoint;
 use crate::color::{bright, sanitize, Color};
 use crate::light::direct::direct;
 use crate::light::source::LightSet;
@@ -301,7 +302,7 @@ impl<'a> Tracer<'a> {
     pub fn trace_dist(&self, ray: &Ray, rng: &mut Sampler) -> (Color, f64) {
         rng.rays += 1;
         let (c, dist) = match self.intersect(ray) {
-            Some(hit) => (self.shade(ray, &hit, hit.material, rng), hit.t),
+            Some(hit) => (self.shade_hit(ray, &hit, rng), hit.t),
             None => (self.escaped(ray), f64::INFINITY),
         };
         (sanitize(c * ray.gain), dist)
@@ -356,32 +357,31 @@ impl<'a> Tracer<'a> {
         e.radiance
     }
 
-    /// Shade a hit with material `m`.
-    pub fn shade(&self, ray: &Ray, hit: &Hit, m: Option<MatId>, rng: &mut Sampler) -> Color {
-        let Some(id) = m else {
-            return self.pass_through(ray, hit, rng);
-        };
+    /// Shade a shading point with material `id` (its modifiers applied: see
+    /// [`Tracer::shade_material`]).
+    pub fn shade(&self, ray: &Ray, sp: &ShadingPoint, id: MatId, rng: &mut Sampler) -> Color {
+        let hit = &sp.hit;
         match self.scene.material(id) {
-            Material::Normal(n) => n.shade(self, ray, hit, rng),
-            Material::Glass(g) => g.shade(self, ray, hit, rng),
-            Material::Dielectric(d) => d.shade(self, ray, hit, rng),
+            Material::Normal(n) => n.shade(self, ray, sp, rng),
+            Material::Glass(g) => g.shade(self, ray, sp, rng),
+            Material::Dielectric(d) => d.shade(self, ray, sp, rng),
             Material::Mirror(mi) => {
                 // Rays descended from an ambient sample see the mirror itself, whatever its
                 // alternate material (measured with rpict: the indirect light off a mirror with
                 // an alternate is that of the bare mirror); all other rays see the alternate.
                 if ray.amb_level > 0 {
-                    mi.shade(self, ray, hit, rng)
+                    mi.shade(self, ray, sp, rng)
                 } else if mi.alternate_void {
                     self.pass_through(ray, hit, rng)
                 } else if let Some(alt) = mi.alternate {
-                    self.shade(ray, hit, Some(alt), rng)
+                    self.shade_material(ray, sp, alt, rng)
                 } else {
-                    mi.shade(self, ray, hit, rng)
+                    mi.shade(self, ray, sp, rng)
                 }
             }
             Material::Emitter(e) => match e.kind {
                 EmitterKind::Illum { alternate } => match alternate {
-                    Some(alt) => self.shade(ray, hit, Some(alt), rng),
+                    Some(alt) => self.shade_material(ray, sp, alt, rng),
                     None => self.pass_through(ray, hit, rng),
                 },
                 _ => {
@@ -394,7 +394,7 @@ impl<'a> Tracer<'a> {
                         return Color::ZERO;
                     }
                     let spot = e.spot_factor(hit.point, ray.org);
-                    self.emitter_value(ray, e, hit.t) * spot
+                    self.emitter_value(ray, e, hit.t) * spot * sp.pcol
                 }
             },
             Material::Antimatter(_) => self.pass_through(ray, hit, rng),
@@ -628,7 +628,7 @@ impl<'a> Tracer<'a> {
             if is_target(&hit) {
                 return (t, Some(hit));
             }
-            let tr = self.shadow_transmission(&hit, dir);
+            let tr = self.shadow_through(&hit, dir);
             if tr.max_element() <= 0.0 {
                 return (Color::ZERO, None);
             }
@@ -640,24 +640,16 @@ impl<'a> Tracer<'a> {
         (Color::ZERO, None)
     }
 
-    /// What a shadow ray keeps when it crosses a (non-target) hit.
-    fn shadow_transmission(&self, hit: &Hit, dir: DVec3) -> Color {
-        let Some(m) = hit.material else {
-            return Color::ONE;
-        };
+    /// What a shadow ray keeps when it crosses a (non-target) shading point of material `m`
+    /// (its modifiers applied).
+    pub(super) fn shadow_transmission(&self, sp: &ShadingPoint, m: MatId) -> Color {
         match self.scene.material(m) {
-            Material::Normal(n) => n.shadow_transmission(hit, dir),
-            Material::Glass(g) => g.shadow_transmission(hit, dir),
+            Material::Normal(n) => n.shadow_transmission(sp),
+            Material::Glass(g) => g.shadow_transmission(sp),
             Material::Antimatter(_) => Color::ONE,
             Material::Mirror(mi) if mi.alternate_void => Color::ONE,
             Material::Mirror(mi) => match mi.alternate {
-                Some(alt) => self.shadow_transmission(
-                    &Hit {
-                        material: Some(alt),
-                        ..*hit
-                    },
-                    dir,
-                ),
+                Some(alt) => self.shadow_material(sp, alt),
                 None => Color::ZERO,
             },
             _ => Color::ZERO,

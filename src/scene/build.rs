@@ -7,6 +7,7 @@ use crate::geometry::bvh::Bvh;
 use crate::geometry::source::DistantSource;
 use crate::geometry::Surface;
 use crate::material::{MatId, Material, MaterialLookup, MATERIAL_TYPES};
+use crate::modifier::{ModRef, ModifierDef, ModifierKind, ModifierLookup, ModifierTypes};
 use crate::scene::reader::KNOWN_TYPES;
 use glam::DVec3;
 use std::collections::HashMap;
@@ -21,8 +22,11 @@ pub const SURFACE_TYPES: &[&str] = &[
 pub struct Object {
     /// Geometry (relative to [`Scene::origin`]).
     pub surface: Surface,
-    /// Material, or None for a `void` modifier (such surfaces are invisible).
+    /// The material its modifier chain ends in, or None for a chain that ends in `void`
+    /// (such surfaces are invisible) or a mixture.
     pub material: Option<MatId>,
+    /// Its modifier: the start of its chain.
+    pub chain: ModRef,
     /// Identifier.
     pub name: String,
     /// Modifier name as written.
@@ -36,8 +40,10 @@ pub struct Object {
 pub struct DistantObject {
     /// Direction and size.
     pub source: DistantSource,
-    /// Material.
+    /// The material its modifier chain ends in.
     pub material: Option<MatId>,
+    /// Its modifier: the start of its chain.
+    pub chain: ModRef,
     /// Identifier.
     pub name: String,
     /// Modifier name as written.
@@ -49,6 +55,8 @@ pub struct DistantObject {
 pub struct MaterialDef {
     /// The material.
     pub material: Material,
+    /// Its own modifier chain (patterns and textures applied before it shades).
+    pub chain: ModRef,
     /// Identifier.
     pub name: String,
     /// Order of definition (later definitions win coincident-surface ties).
@@ -82,6 +90,8 @@ pub struct Scene {
     pub size: f64,
     /// Materials, indexed by [`MatId`].
     pub materials: Vec<MaterialDef>,
+    /// Patterns, textures and mixtures, indexed by [`crate::modifier::ModId`].
+    pub modifiers: Vec<ModifierDef>,
     /// Finite surfaces, indexed as in the BVH.
     pub objects: Vec<Object>,
     /// Distant sources.
@@ -93,15 +103,18 @@ pub struct Scene {
 }
 
 struct Modifiers {
-    current: HashMap<String, Option<MatId>>,
+    /// The current definition of each modifier name.
+    current: HashMap<String, ModRef>,
     /// Names defined with an unsupported type, for a precise error.
     unsupported: HashMap<String, (String, Location)>,
+    /// The patterns, textures and mixtures defined so far.
+    defs: Vec<ModifierDef>,
 }
 
-impl MaterialLookup for Modifiers {
-    fn material(&self, name: &str) -> Result<Option<MatId>, String> {
+impl ModifierLookup for Modifiers {
+    fn modref(&self, name: &str) -> Result<ModRef, String> {
         if name == "void" {
-            return Ok(None);
+            return Ok(ModRef::Void);
         }
         if let Some((t, loc)) = self.unsupported.get(name) {
             return Err(format!(
@@ -109,15 +122,137 @@ impl MaterialLookup for Modifiers {
             ));
         }
         match self.current.get(name) {
-            Some(m) => Ok(*m),
+            Some(r) => Ok(*r),
             None => Err(format!("unknown modifier '{name}'")),
         }
     }
 }
 
+impl Modifiers {
+    /// Define `name` as `r` (a later definition replaces an earlier one for what follows).
+    fn define(&mut self, name: &str, r: ModRef) {
+        self.unsupported.remove(name);
+        self.current.insert(name.to_string(), r);
+    }
+
+    /// The material a chain starting at `r` ends in: patterns and textures lead on to their
+    /// modifier; `void` and mixtures end in none.
+    fn terminal(&self, mut r: ModRef) -> Option<MatId> {
+        // Names resolve to earlier definitions, so a chain never loops; bound it anyway.
+        for _ in 0..=self.defs.len() {
+            match r {
+                ModRef::Void => return None,
+                ModRef::Material(m) => return Some(m),
+                ModRef::Modifier(id) => match *self.defs[id].kind {
+                    ModifierKind::Mixture { .. } => return None,
+                    _ => r = self.defs[id].next,
+                },
+            }
+        }
+        None
+    }
+
+    /// Check a material's own modifier chain: patterns and textures only (a material or a
+    /// mixture there is an error, as in Radiance).
+    fn material_chain(&self, name: &str) -> Result<ModRef, String> {
+        let first = self.modref(name)?;
+        let mut r = first;
+        for _ in 0..=self.defs.len() {
+            match r {
+                ModRef::Void => return Ok(first),
+                ModRef::Material(_) => {
+                    return Err(format!(
+                        "modifier chain '{name}' reaches a material: a material may be \
+                         modified by patterns and textures only (conflicting material)"
+                    ))
+                }
+                ModRef::Modifier(id) => match *self.defs[id].kind {
+                    ModifierKind::Mixture { .. } => {
+                        return Err(format!(
+                            "modifier chain '{name}' holds the mixture '{}': a material may \
+                             be modified by patterns and textures only",
+                            self.defs[id].name
+                        ))
+                    }
+                    _ => r = self.defs[id].next,
+                },
+            }
+        }
+        Ok(first)
+    }
+}
+
+impl MaterialLookup for Modifiers {
+    fn material(&self, name: &str) -> Result<Option<MatId>, String> {
+        if name == "void" {
+            return Ok(None);
+        }
+        match self.modref(name)? {
+            ModRef::Void => Ok(None),
+            ModRef::Material(m) => Ok(Some(m)),
+            ModRef::Modifier(id) => Err(format!(
+                "'{name}' is a pattern, texture or mixture ({}), not a material",
+                self.defs[id].name
+            )),
+        }
+    }
+}
+
+/// What `mod alias name [target]` defines (Radiance's rules): without a target, `mod`
+/// itself; with one, the target with the alias's modifier in place of its own (`inherit`:
+/// the target's own), so `void alias` drops a material's patterns.
+fn alias(
+    p: &Primitive,
+    mods: &mut Modifiers,
+    materials: &mut Vec<MaterialDef>,
+) -> Result<ModRef, String> {
+    let Some(target) = p.sargs.first() else {
+        return mods.modref(&p.modifier);
+    };
+    let r = mods.modref(target)?;
+    if p.modifier == "inherit" {
+        return Ok(r);
+    }
+    match r {
+        ModRef::Void => Ok(ModRef::Void),
+        ModRef::Material(id) => {
+            let chain = mods.material_chain(&p.modifier)?;
+            if chain == materials[id].chain {
+                return Ok(r);
+            }
+            let mut def = materials[id].clone();
+            def.chain = chain;
+            def.name = p.name.clone();
+            def.loc = p.loc.clone();
+            def.order = materials.len();
+            materials.push(def);
+            Ok(ModRef::Material(materials.len() - 1))
+        }
+        ModRef::Modifier(id) => {
+            let next = mods.modref(&p.modifier)?;
+            let src = &mods.defs[id];
+            if matches!(*src.kind, ModifierKind::Mixture { .. }) && next != ModRef::Void {
+                return Err("a mixture's modifier must be void".into());
+            }
+            let def = ModifierDef {
+                kind: src.kind.clone(),
+                next,
+                name: p.name.clone(),
+            };
+            mods.defs.push(def);
+            Ok(ModRef::Modifier(mods.defs.len() - 1))
+        }
+    }
+}
+
 impl Scene {
-    /// Build a scene from primitives in definition order.
+    /// Build a scene from primitives in definition order, with Tessera's modifier types.
     pub fn build(prims: &[Primitive]) -> Result<Scene, SceneError> {
+        Scene::build_with(prims, &ModifierTypes::standard())
+    }
+
+    /// [`Scene::build`] with the modifier types `types`.
+    pub fn build_with(prims: &[Primitive], types: &ModifierTypes) -> Result<Scene, SceneError> {
         let err = |p: &Primitive, msg: String| SceneError::syntax(p.loc.clone(), msg);
         // Pass 1: bounds of finite geometry, to choose the origin. Surfaces are parsed once
         // with a zero origin for bounds, then re-parsed relative to the chosen origin.
@@ -148,6 +283,7 @@ impl Scene {
         let mut mods = Modifiers {
             current: HashMap::new(),
             unsupported: HashMap::new(),
+            defs: Vec::new(),
         };
         let mut materials: Vec<MaterialDef> = Vec::new();
         let mut objects = Vec::new();
@@ -156,35 +292,20 @@ impl Scene {
         for p in prims {
             let t = p.ptype.as_str();
             if t == "alias" {
-                let target = p
-                    .sargs
-                    .first()
-                    .ok_or_else(|| err(p, format!("alias {} names no original", p.name)))?;
-                let m = mods.material(target).map_err(|m| err(p, m))?;
-                if p.modifier != "void" && p.modifier != "inherit" {
-                    // A pattern or texture modifier on the alias is not supported yet.
-                    mods.material(&p.modifier).map_err(|m| err(p, m))?;
-                    return Err(err(
-                        p,
-                        format!(
-                            "alias {} with modifier '{}': modifying a material by another \
-                             material is not supported",
-                            p.name, p.modifier
-                        ),
-                    ));
-                }
-                mods.unsupported.remove(&p.name);
-                mods.current.insert(p.name.clone(), m);
+                let r = alias(p, &mut mods, &mut materials).map_err(|m| err(p, m))?;
+                mods.define(&p.name, r);
                 continue;
             }
             if SURFACE_TYPES.contains(&t) {
-                let material = mods.material(&p.modifier).map_err(|m| err(p, m))?;
+                let chain = mods.modref(&p.modifier).map_err(|m| err(p, m))?;
+                let material = mods.terminal(chain);
                 if t == "source" {
                     let source = DistantSource::from_primitive(p)
                         .map_err(|m| err(p, format!("source {}: {m}", p.name)))?;
                     distant.push(DistantObject {
                         source,
                         material,
+                        chain,
                         name: p.name.clone(),
                         modifier: p.modifier.clone(),
                     });
@@ -207,6 +328,7 @@ impl Scene {
                     objects.push(Object {
                         surface,
                         material,
+                        chain,
                         name: p.name.clone(),
                         modifier: p.modifier.clone(),
                         loc: p.loc.clone(),
@@ -215,30 +337,38 @@ impl Scene {
                 continue;
             }
             if MATERIAL_TYPES.contains(&t) {
-                if p.modifier != "void" {
-                    // Materials may only be modified by patterns/textures, which are not
-                    // supported yet: report which.
-                    mods.material(&p.modifier).map_err(|m| err(p, m))?;
-                    return Err(err(
-                        p,
-                        format!(
-                            "{t} {}: modifier '{}' must be a pattern or texture, which is not \
-                             supported yet",
-                            p.name, p.modifier
-                        ),
-                    ));
-                }
+                let chain = mods
+                    .material_chain(&p.modifier)
+                    .map_err(|m| err(p, format!("{t} {}: {m}", p.name)))?;
                 let material = Material::parse(t, &p.sargs, &p.rargs, &mods)
                     .map_err(|m| err(p, format!("{t} {}: {m}", p.name)))?;
                 let id = materials.len();
                 materials.push(MaterialDef {
                     material,
+                    chain,
                     name: p.name.clone(),
                     order: id,
                     loc: p.loc.clone(),
                 });
-                mods.unsupported.remove(&p.name);
-                mods.current.insert(p.name.clone(), Some(id));
+                mods.define(&p.name, ModRef::Material(id));
+                continue;
+            }
+            if let Some(parse) = types.get(t) {
+                let kind = parse(p, &mods).map_err(|m| err(p, format!("{t} {}: {m}", p.name)))?;
+                let next = mods.modref(&p.modifier).map_err(|m| err(p, m))?;
+                if matches!(kind, ModifierKind::Mixture { .. }) && next != ModRef::Void {
+                    return Err(err(
+                        p,
+                        format!("{t} {}: a mixture's modifier must be void", p.name),
+                    ));
+                }
+                let id = mods.defs.len();
+                mods.defs.push(ModifierDef {
+                    kind: std::sync::Arc::new(kind),
+                    next,
+                    name: p.name.clone(),
+                });
+                mods.define(&p.name, ModRef::Modifier(id));
                 continue;
             }
             // Every other type Radiance knows (patterns, textures, mixtures, BSDFs, instances,
@@ -260,6 +390,7 @@ impl Scene {
             origin,
             size,
             materials,
+            modifiers: mods.defs,
             objects,
             distant,
             bvh,

@@ -1,0 +1,119 @@
+//! Surface modifiers: patterns, textures and mixtures, and the chains that link surfaces
+//! through them to their materials.
+//!
+//! A modifier primitive of a registered type ([`ModifierTypes`]) becomes a
+//! [`ModifierDef`]: what it does ([`ModifierKind`]) and the link to its own modifier. The
+//! tracer walks a hit surface's chain in Radiance's order over a
+//! [`crate::render::shading::ShadingPoint`]: a pattern multiplies its colour, a texture adds
+//! to its perturbation, a mixture shades two chains and blends them, a material (after its
+//! own chain) shades it. Adding a pattern type is one new file here with a parser and a
+//! [`Pattern`] implementation, and one line in [`ModifierTypes::standard`].
+
+use crate::color::Color;
+use crate::material::MatId;
+use crate::render::shading::ShadingPoint;
+use crate::scene::primitive::Primitive;
+use glam::DVec3;
+use std::collections::HashMap;
+use std::fmt::Debug;
+
+/// Index of a modifier in [`crate::scene::Scene::modifiers`].
+pub type ModId = usize;
+
+/// What a modifier name refers to at the point of use (Radiance resolves names to the
+/// latest definition before the user).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum ModRef {
+    /// `void`: the end of a chain (no material: the surface is invisible).
+    Void,
+    /// A material.
+    Material(MatId),
+    /// A pattern, texture or mixture.
+    Modifier(ModId),
+}
+
+/// A pattern: a colour that multiplies the shading point's pattern colour.
+pub trait Pattern: Send + Sync + Debug {
+    /// The colour at `sp`, or None for a computation error at this point (the pattern is
+    /// then skipped for this ray, as Radiance does).
+    fn colour(&self, sp: &ShadingPoint) -> Option<Color>;
+}
+
+/// A texture: a vector added to the shading point's normal perturbation.
+pub trait Texture: Send + Sync + Debug {
+    /// The perturbation at `sp` (world frame), or None for a computation error.
+    fn perturbation(&self, sp: &ShadingPoint) -> Option<DVec3>;
+}
+
+/// A mixture's coefficient: how much of the foreground chain a point shows.
+pub trait MixCoefficient: Send + Sync + Debug {
+    /// The foreground's share at `sp` (clamped to [0, 1] by the tracer), or None for a
+    /// computation error (the background is shown).
+    fn coefficient(&self, sp: &ShadingPoint) -> Option<f64>;
+}
+
+/// What a modifier does.
+#[derive(Debug)]
+pub enum ModifierKind {
+    /// Multiplies the pattern colour.
+    Pattern(Box<dyn Pattern>),
+    /// Adds to the normal perturbation.
+    Texture(Box<dyn Texture>),
+    /// Shades `foreground` with weight c and `background` with 1 − c and adds them; a side
+    /// that reaches no material lets the ray through.
+    Mixture {
+        /// The foreground's share.
+        coef: Box<dyn MixCoefficient>,
+        /// The foreground chain.
+        foreground: ModRef,
+        /// The background chain.
+        background: ModRef,
+    },
+}
+
+/// A modifier of the scene.
+#[derive(Debug)]
+pub struct ModifierDef {
+    /// What it does (shared by its aliases).
+    pub kind: std::sync::Arc<ModifierKind>,
+    /// Its own modifier: the next link of the chain.
+    pub next: ModRef,
+    /// Identifier.
+    pub name: String,
+}
+
+/// What a modifier's parser may ask of the scene read so far.
+pub trait ModifierLookup {
+    /// The current definition of a modifier name (`void` → [`ModRef::Void`]), or an error.
+    fn modref(&self, name: &str) -> Result<ModRef, String>;
+}
+
+/// Parses a modifier primitive of one type into what it does.
+pub type ModifierParser = fn(&Primitive, &dyn ModifierLookup) -> Result<ModifierKind, String>;
+
+/// The modifier types a scene reader knows, by primitive type name.
+#[derive(Clone, Default)]
+pub struct ModifierTypes {
+    parsers: HashMap<String, ModifierParser>,
+}
+
+impl ModifierTypes {
+    /// The types Tessera implements. Radiance's patterns, textures and mixtures
+    /// (`brightfunc`, `colorfunc`, `texfunc`, `mixfunc`, the `*data`, `*pict` and `*text`
+    /// types) need the function language and are not implemented yet: a scene that uses one
+    /// is refused with its file, line and type.
+    pub fn standard() -> ModifierTypes {
+        ModifierTypes::default()
+    }
+
+    /// These types and `name`, parsed by `parser` (a type of the same name is replaced).
+    pub fn with(mut self, name: &str, parser: ModifierParser) -> ModifierTypes {
+        self.parsers.insert(name.to_string(), parser);
+        self
+    }
+
+    /// The parser of type `name`.
+    pub fn get(&self, name: &str) -> Option<ModifierParser> {
+        self.parsers.get(name).copied()
+    }
+}

@@ -1,0 +1,166 @@
+//! Modifier chains at a hit, in Radiance's order: the tracer walks from the hit surface's
+//! modifier over its patterns and textures (which change the [`ShadingPoint`]) to a
+//! material, which first applies its own chain and then shades; a mixture shades both of
+//! its chains and blends them. Shadow rays crossing a surface walk the same chain for the
+//! transmission they keep.
+
+use super::ray::{Hit, Ray};
+use super::sampler::Sampler;
+use super::shading::ShadingPoint;
+use super::trace::Tracer;
+use crate::color::{sanitize, Color};
+use crate::material::MatId;
+use crate::modifier::{MixCoefficient, ModRef, ModifierKind};
+use crate::FTINY;
+use glam::DVec3;
+
+/// Where a walk over patterns and textures stopped.
+enum End<'s> {
+    /// `void`: no material.
+    Void,
+    /// A material.
+    Material(MatId),
+    /// A mixture: its coefficient and its two chains.
+    Mixture(&'s dyn MixCoefficient, ModRef, ModRef),
+}
+
+/// A mixture's foreground share at `sp`, clamped to [0, 1]; 0 (the background) where it
+/// cannot be computed.
+fn mix_share(coef: &dyn MixCoefficient, sp: &ShadingPoint) -> f64 {
+    match coef.coefficient(sp) {
+        Some(c) if c.is_finite() => c.clamp(0.0, 1.0),
+        _ => 0.0,
+    }
+}
+
+impl Tracer<'_> {
+    /// Apply the patterns and textures of the chain from `r` to `sp`; where it ends.
+    fn walk(&self, sp: &mut ShadingPoint, mut r: ModRef) -> End<'_> {
+        // Names resolve to earlier definitions, so a chain never loops; bound it anyway.
+        for _ in 0..=self.scene.modifiers.len() {
+            match r {
+                ModRef::Void => return End::Void,
+                ModRef::Material(m) => return End::Material(m),
+                ModRef::Modifier(id) => {
+                    let def = &self.scene.modifiers[id];
+                    match &*def.kind {
+                        ModifierKind::Pattern(p) => {
+                            if let Some(c) = p.colour(sp) {
+                                sp.scale_colour(sanitize(c));
+                            }
+                        }
+                        ModifierKind::Texture(t) => {
+                            if let Some(d) = t.perturbation(sp).filter(|d| d.is_finite()) {
+                                sp.perturb(d);
+                            }
+                        }
+                        ModifierKind::Mixture {
+                            coef,
+                            foreground,
+                            background,
+                        } => return End::Mixture(coef.as_ref(), *foreground, *background),
+                    }
+                    r = def.next;
+                }
+            }
+        }
+        End::Void
+    }
+
+    /// Shade a hit: its surface's modifier chain, then its material. An antimatter exit
+    /// face (shaded with the antimatter's first listed material) skips the surface's chain.
+    pub fn shade_hit(&self, ray: &Ray, hit: &Hit, rng: &mut Sampler) -> Color {
+        let obj = &self.scene.objects[hit.obj];
+        let mut sp = ShadingPoint::new(ray, hit);
+        if hit.material != obj.material {
+            return match hit.material {
+                Some(m) => self.shade_material(ray, &sp, m, rng),
+                None => self.pass_through(ray, hit, rng),
+            };
+        }
+        self.shade_chain(ray, &mut sp, obj.chain, rng)
+    }
+
+    /// Shade `sp` by the chain from `r`.
+    pub fn shade_chain(
+        &self,
+        ray: &Ray,
+        sp: &mut ShadingPoint,
+        r: ModRef,
+        rng: &mut Sampler,
+    ) -> Color {
+        match self.walk(sp, r) {
+            End::Void => self.pass_through(ray, &sp.hit, rng),
+            End::Material(m) => self.shade_material(ray, sp, m, rng),
+            End::Mixture(coef, fg, bg) => {
+                let c = mix_share(coef, sp);
+                let mut result = Color::ZERO;
+                for (share, side) in [(c, fg), (1.0 - c, bg)] {
+                    if share > FTINY {
+                        let mut r = *ray;
+                        r.weight *= share;
+                        let mut s = *sp;
+                        result += self.shade_chain(&r, &mut s, side, rng) * share;
+                    }
+                }
+                result
+            }
+        }
+    }
+
+    /// Shade `sp` with material `m` after the material's own patterns and textures.
+    pub fn shade_material(
+        &self,
+        ray: &Ray,
+        sp: &ShadingPoint,
+        m: MatId,
+        rng: &mut Sampler,
+    ) -> Color {
+        let chain = self.scene.materials[m].chain;
+        if chain == ModRef::Void {
+            return self.shade(ray, sp, m, rng);
+        }
+        let mut own = *sp;
+        // A material's chain holds patterns and textures only (checked when the scene is
+        // built), so the walk ends in void.
+        self.walk(&mut own, chain);
+        self.shade(ray, &own, m, rng)
+    }
+
+    /// What a shadow ray keeps when it crosses `hit` (not its target), through the hit
+    /// surface's chain.
+    pub(super) fn shadow_through(&self, hit: &Hit, dir: DVec3) -> Color {
+        let obj = &self.scene.objects[hit.obj];
+        let ray = Ray::shadow(hit.point, dir);
+        let mut sp = ShadingPoint::new(&ray, hit);
+        if hit.material != obj.material {
+            return match hit.material {
+                Some(m) => self.shadow_material(&sp, m),
+                None => Color::ONE,
+            };
+        }
+        self.shadow_chain(&mut sp, obj.chain)
+    }
+
+    fn shadow_chain(&self, sp: &mut ShadingPoint, r: ModRef) -> Color {
+        match self.walk(sp, r) {
+            End::Void => Color::ONE,
+            End::Material(m) => self.shadow_material(sp, m),
+            End::Mixture(coef, fg, bg) => {
+                let c = mix_share(coef, sp);
+                let (mut a, mut b) = (*sp, *sp);
+                self.shadow_chain(&mut a, fg) * c + self.shadow_chain(&mut b, bg) * (1.0 - c)
+            }
+        }
+    }
+
+    pub(super) fn shadow_material(&self, sp: &ShadingPoint, m: MatId) -> Color {
+        let chain = self.scene.materials[m].chain;
+        if chain == ModRef::Void {
+            return self.shadow_transmission(sp, m);
+        }
+        let mut own = *sp;
+        self.walk(&mut own, chain);
+        self.shadow_transmission(&own, m)
+    }
+}
