@@ -131,6 +131,8 @@ pub struct AmbientCache {
     origin_id: u64,
     max_level_seen: AtomicU32,
     sink: OnceLock<Box<dyn ValueSink>>,
+    /// Values refused by [`AmbientCache::insert`].
+    refused: AtomicU64,
 }
 
 /// The shard of a grid cell: cells of a level are grouped in blocks of 8×8×8 per shard, so
@@ -159,6 +161,7 @@ impl AmbientCache {
             origin_id,
             max_level_seen: AtomicU32::new(0),
             sink: OnceLock::new(),
+            refused: AtomicU64::new(0),
         }
     }
 
@@ -175,6 +178,11 @@ impl AmbientCache {
     /// The id origin of values computed by this process.
     pub fn origin_id(&self) -> u64 {
         self.origin_id
+    }
+
+    /// Values refused by [`AmbientCache::insert`] (non-finite or absurd).
+    pub fn refused(&self) -> u64 {
+        self.refused.load(Ordering::Relaxed)
     }
 
     /// Number of values held.
@@ -213,11 +221,26 @@ impl AmbientCache {
     /// Insert a value: it is filed in every cell of its level that its reach sphere
     /// touches (at most 2×2×2, as the cells are at least twice the reach), so a lookup reads
     /// one cell per level.
+    ///
+    /// A value whose reach is not finite or exceeds the largest level's cells (a radius a
+    /// renderer never makes: a damaged or crafted store's) or whose position or light is
+    /// not finite is refused and counted ([`AmbientCache::refused`]): filing it would touch
+    /// unboundedly many cells.
     pub fn insert(&self, v: CachedValue) {
         let r = v.rad[1].max(v.rad[0]) * v.reach.max(1.0) * v.share.max(1.0);
         let l = self.level_for(r);
         let rr = self.aa * r;
         let s = self.cell_size(l);
+        let sane = rr.is_finite()
+            && rr > 0.0
+            && rr <= 0.5 * s
+            && v.pos.is_finite()
+            && v.val.is_finite()
+            && v.val.min_element() >= 0.0;
+        if !sane {
+            self.refused.fetch_add(1, Ordering::Relaxed);
+            return;
+        }
         // Padded so that rounding never leaves out a cell the sphere touches.
         let pad = rr * (1.0 + 1e-6) + 1e-9 * s;
         let lo = ((v.pos - DVec3::splat(pad)) / s).floor();
@@ -369,6 +392,35 @@ mod tests {
             reach,
             share: 1.0,
         }
+    }
+
+    /// Values no renderer makes (infinite or astronomically large radii, non-finite
+    /// positions or light) are refused and counted, at once: filing one would touch
+    /// unboundedly many cells.
+    #[test]
+    fn absurd_values_are_refused() {
+        let c = AmbientCache::new(0.01, 0.2, 1);
+        c.insert(value(DVec3::ZERO, 0.5, 1.0, 1));
+        for (i, v) in [
+            value(DVec3::ZERO, f64::INFINITY, 1.0, 2),
+            value(DVec3::ZERO, 1e300, 1.0, 3),
+            value(DVec3::ZERO, f64::NAN, 1.0, 4),
+            value(DVec3::new(f64::INFINITY, 0.0, 0.0), 0.5, 1.0, 5),
+            CachedValue {
+                val: Color::new(f64::NAN, 0.0, 0.0),
+                ..value(DVec3::ZERO, 0.5, 1.0, 6)
+            },
+        ]
+        .into_iter()
+        .enumerate()
+        {
+            c.insert(v);
+            assert_eq!(c.refused(), i as u64 + 1);
+        }
+        assert_eq!(c.len(), 1);
+        let mut found = 0;
+        c.for_each_near(DVec3::ZERO, |_| found += 1);
+        assert_eq!(found, 1);
     }
 
     /// Every lookup finds exactly the values whose reach sphere holds the point (brute force

@@ -372,15 +372,36 @@ pub enum LogTail {
     },
 }
 
-/// Scan frames in `data` (which starts at file offset `base`); returns the records, the
-/// number of bytes of whole valid frames, and how the scan ended.
-fn scan_frames(data: &[u8], base: u64) -> (Vec<AmbRecord>, usize, LogTail) {
+/// What a scan of frames found: the valid records, the bytes of whole frames, how the scan
+/// ended, and how many whole, CRC-valid frames held an invalid record
+/// ([`AmbRecord::is_valid`]: non-finite or absurd values, as a crafted or damaged log may
+/// hold), which are skipped.
+struct Scan {
+    records: Vec<AmbRecord>,
+    used: usize,
+    tail: LogTail,
+    invalid: u64,
+}
+
+/// Scan frames in `data` (which starts at file offset `base`).
+fn scan_frames(data: &[u8], base: u64) -> Scan {
+    let (out, pos, tail, invalid) = scan_frames_inner(data, base);
+    Scan {
+        records: out,
+        used: pos,
+        tail,
+        invalid,
+    }
+}
+
+fn scan_frames_inner(data: &[u8], base: u64) -> (Vec<AmbRecord>, usize, LogTail, u64) {
     let mut out = Vec::new();
+    let mut invalid = 0u64;
     let mut pos = 0usize;
     loop {
         let rest = &data[pos..];
         if rest.is_empty() {
-            return (out, pos, LogTail::Clean);
+            return (out, pos, LogTail::Clean, invalid);
         }
         let offset = base + pos as u64;
         let torn = LogTail::Torn {
@@ -389,28 +410,29 @@ fn scan_frames(data: &[u8], base: u64) -> (Vec<AmbRecord>, usize, LogTail) {
         };
         // A zero-filled tail (what a crash can leave after a file was extended) is torn too.
         if rest.len() < FRAME_PREFIX || rest.iter().all(|&b| b == 0) {
-            return (out, pos, torn);
+            return (out, pos, torn, invalid);
         }
         let len = u32::from_le_bytes([rest[0], rest[1], rest[2], rest[3]]) as usize;
         let crc = u32::from_le_bytes([rest[4], rest[5], rest[6], rest[7]]);
         if !(PAYLOAD_SIZE_V1..=MAX_PAYLOAD).contains(&len) {
             let reason = format!("bad frame length {len}");
-            return (out, pos, LogTail::Corrupt { offset, reason });
+            return (out, pos, LogTail::Corrupt { offset, reason }, invalid);
         }
         if rest.len() < FRAME_PREFIX + len {
-            return (out, pos, torn);
+            return (out, pos, torn, invalid);
         }
         let payload = &rest[FRAME_PREFIX..FRAME_PREFIX + len];
         let actual = crc32fast::hash(payload);
         if actual != crc {
             let reason = format!("CRC mismatch (stored {crc:08x}, computed {actual:08x})");
-            return (out, pos, LogTail::Corrupt { offset, reason });
+            return (out, pos, LogTail::Corrupt { offset, reason }, invalid);
         }
         match decode_payload(payload) {
-            Some(r) => out.push(r),
+            Some(r) if r.is_valid() => out.push(r),
+            Some(_) => invalid += 1,
             None => {
                 let reason = "payload too short".to_string();
-                return (out, pos, LogTail::Corrupt { offset, reason });
+                return (out, pos, LogTail::Corrupt { offset, reason }, invalid);
             }
         }
         pos += FRAME_PREFIX + len;
@@ -498,7 +520,7 @@ impl LogWriter {
         file.seek(SeekFrom::Start(start)).map_err(io_err)?;
         let mut data = Vec::new();
         file.read_to_end(&mut data).map_err(io_err)?;
-        let (_, used, tail) = scan_frames(&data, start);
+        let Scan { used, tail, .. } = scan_frames(&data, start);
         let end = start + used as u64;
         match tail {
             LogTail::Clean => {}
@@ -615,6 +637,7 @@ pub struct LogReader {
     data_offset: u64,
     offset: u64,
     tail: LogTail,
+    invalid: u64,
 }
 
 impl LogReader {
@@ -640,6 +663,7 @@ impl LogReader {
             data_offset: start,
             offset: start,
             tail: LogTail::Clean,
+            invalid: 0,
         })
     }
 
@@ -679,10 +703,17 @@ impl LogReader {
             .map_err(io_err)?;
         let mut data = Vec::new();
         (&self.file).read_to_end(&mut data).map_err(io_err)?;
-        let (records, used, tail) = scan_frames(&data, self.offset);
-        self.offset += used as u64;
-        self.tail = tail;
-        Ok(records)
+        let scan = scan_frames(&data, self.offset);
+        self.offset += scan.used as u64;
+        self.tail = scan.tail;
+        self.invalid += scan.invalid;
+        Ok(scan.records)
+    }
+
+    /// Whole, CRC-valid records skipped so far because their values are invalid
+    /// ([`AmbRecord::is_valid`]).
+    pub fn invalid(&self) -> u64 {
+        self.invalid
     }
 
     /// How the last read ended.
@@ -730,6 +761,73 @@ mod tests {
             parse_header(Path::new("x"), &v3, v3.len() as u64),
             Err(AmbLogError::Version { found, .. }) if found == LOG_VERSION + 1
         ));
+    }
+
+    /// A good record and copies with one poisoned field each (as a crafted or damaged log in
+    /// a shared job directory may hold): only the good ones are read, the others counted.
+    #[test]
+    fn invalid_records_are_skipped_and_counted() {
+        let good = AmbRecord {
+            id: ValueId { origin: 7, seq: 1 },
+            pos: DVec3::new(1.0, 2.0, 3.0),
+            ndir: DVec3::Z,
+            udir: DVec3::X,
+            lvl: 0,
+            weight: 1.0,
+            rad: [0.1, 0.2],
+            gpos: [0.0; 2],
+            gdir: [0.0; 2],
+            corral: 0,
+            val: [0.5, 0.5, 0.5],
+            reach: 1.0,
+            share: 1.0,
+        };
+        let bad = [
+            AmbRecord {
+                rad: [f32::INFINITY; 2],
+                ..good
+            },
+            AmbRecord {
+                val: [f32::NAN, 0.5, 0.5],
+                ..good
+            },
+            AmbRecord {
+                val: [3e38, 3e38, 3e38],
+                ..good
+            },
+            AmbRecord {
+                val: [-1.0, 0.5, 0.5],
+                ..good
+            },
+            AmbRecord {
+                ndir: DVec3::new(0.0, 0.0, 7.0),
+                ..good
+            },
+            AmbRecord {
+                pos: DVec3::new(f64::NAN, 0.0, 0.0),
+                ..good
+            },
+            AmbRecord {
+                share: f32::INFINITY,
+                ..good
+            },
+        ];
+        let mut records = vec![good];
+        records.extend(bad);
+        records.push(AmbRecord {
+            id: ValueId { origin: 7, seq: 2 },
+            ..good
+        });
+        let h = LogHeader::new([1; 32], "-ab 1");
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("poisoned.log");
+        std::fs::write(&path, encode_log(&h, &records)).unwrap();
+        let mut r = LogReader::open(&path, Some(&[1; 32]), false).unwrap();
+        let got = r.read_new().unwrap();
+        assert_eq!(got.len(), 2);
+        assert!(got.iter().all(|g| g.val == good.val && g.rad == good.rad));
+        assert_eq!(r.invalid(), bad.len() as u64);
+        assert_eq!(r.tail(), &LogTail::Clean);
     }
 
     #[test]

@@ -75,14 +75,18 @@ pub struct AmbRecord {
 }
 
 impl AmbRecord {
-    /// Radiance's `ambvalOK` checks: finite values of sane magnitude, non-zero directions,
-    /// 0 < weight <= 1, 0 < rad0 <= rad1 (+tolerance), non-negative value.
+    /// Radiance's `ambvalOK` checks and more, for every record read from any store (a job
+    /// directory is shared by many users' processes): finite values of sane magnitude
+    /// (below 1e10), unit directions, 0 < weight <= 1, 0 < rad0 <= rad1 (+tolerance),
+    /// non-negative values, finite reach and share of at least 1. The radii's bound by the
+    /// scene's size is the cache's check ([`cache::AmbientCache::insert`]).
     pub fn is_valid(&self) -> bool {
         let fin = |v: f64| v.is_finite() && v.abs() < 1e10;
         let fin32 = |v: f32| v.is_finite() && v.abs() < 1e10;
+        let unit = |d: DVec3| d.is_finite() && (d.length_squared() - 1.0).abs() < 1e-2;
         self.pos.to_array().iter().all(|&v| fin(v))
-            && self.ndir.length_squared() > 0.25
-            && self.udir.length_squared() > 0.25
+            && unit(self.ndir)
+            && unit(self.udir)
             && self.weight > 0.0
             && self.weight <= 1.0
             && self.rad[0] > 0.0
@@ -93,5 +97,7 @@ impl AmbRecord {
             && self.val.iter().all(|&v| fin32(v) && v >= 0.0)
             && self.reach.is_finite()
             && self.reach >= 1.0
+            && self.share.is_finite()
+            && self.share >= 1.0
     }
 }
