@@ -33,7 +33,7 @@
 #                          (named by scene, -ab, RES, REF_AD, EXTRA and REF_EXTRA; delete
 #                          to re-render)
 #   FLOOR=0.01             relative floor of the error denominator (x mean reference)
-#   OUT=docs/benchmarks-ambient   where runs.tsv and references.tsv go (TAG=x -> runs-x.tsv)
+#   OUT=docs/benchmarks/ambient   where runs.tsv and references.tsv go (TAG=x -> runs-x.tsv)
 #   TESSERA_RADIANCE_BIN   folder holding rpict, oconv, pfilt, pvalue
 #   NO_BUILD=1 / TPICT=path
 #   REPEAT=1               runs of each setting; the CPU time recorded is the smallest (the
@@ -62,7 +62,7 @@ REF_DIR=${REF_DIR:-}
 REF_EXTRA=${REF_EXTRA:-}
 EXTRA=${EXTRA:-}
 FLOOR=${FLOOR:-0.01}
-OUT=${OUT:-"$ROOT/docs/benchmarks-ambient"}
+OUT=${OUT:-"$ROOT/docs/benchmarks/ambient"}
 TAG=${TAG:-}
 [[ $OUT == /* ]] || OUT="$PWD/$OUT"
 mkdir -p "$OUT"

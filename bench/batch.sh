@@ -9,13 +9,13 @@
 #     also pay the cache warm-up of the whole picture), one worker whose job was seeded
 #     with the 16-worker job's merged store (costs-1w-warm.json: steady state).
 # Every job has the same plan (made for 16 workers) and the demo scene at -ab 2.
-# Usage: bash bench/batch.sh [OUTDIR (default docs/benchmarks-batch)]
+# Usage: bash bench/batch.sh [OUTDIR (default docs/benchmarks/batch)]
 # Environment: WORKERS="1 2 4 8 16", NA_LIST="1 5 20 122 auto", NA_WORKERS=16,
 #              RES="-x 320 -y 240", AMB="-ab 2 -ad 512 -as 128 -aa .15 -ar 64", REPEAT=1,
 #              COSTS_RES="-x 640 -y 480" (the cost jobs), COSTS=0 skips them
 set -euo pipefail
 ROOT=$(cd "$(dirname "$0")/.." && pwd)
-OUT=${1:-$ROOT/docs/benchmarks-batch}
+OUT=${1:-$ROOT/docs/benchmarks/batch}
 WORKERS=${WORKERS:-"1 2 4 8 16"}
 NA_LIST=${NA_LIST:-"1 5 20 122 auto"}
 NA_WORKERS=${NA_WORKERS:-16}

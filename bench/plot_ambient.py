@@ -1,7 +1,7 @@
 #!/usr/bin/env python3
 """Plot error against CPU time for bench/ambient.sh results and compute time ratios.
 
-Reads every runs*.tsv in the results folder (default docs/benchmarks-ambient), writes
+Reads every runs*.tsv in the results folder (default docs/benchmarks/ambient), writes
   error-vs-cpu-<scene>-ab<N>.png   one log-log chart per scene and -ab level
   ratios.tsv / ratios.md           rpict CPU time / tpict CPU time at matched error
 Each renderer's Pareto front (runs no cheaper run beats in error) is interpolated
@@ -73,7 +73,7 @@ def main():
         errcol = sys.argv[sys.argv.index("--err") + 1]
         args = [a for a in args if a != errcol]
     root = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
-    out = args[0] if args else os.path.join(root, "docs", "benchmarks-ambient")
+    out = args[0] if args else os.path.join(root, "docs", "benchmarks", "ambient")
     rows = []
     for f in sorted(glob.glob(os.path.join(out, "runs*.tsv"))):
         with open(f) as fh:

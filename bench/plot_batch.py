@@ -6,7 +6,7 @@ Reads RESULTS_DIR/runs.tsv and writes
                 against the number of workers (Fig. 7/8)
   amb-flush.png CPU time and extensive ambient computations against N_A at 16 workers (Fig. 6)
   summary.md    the same numbers as tables, with ratios to one worker
-Usage: python3 bench/plot_batch.py [RESULTS_DIR (default docs/benchmarks-batch)]
+Usage: python3 bench/plot_batch.py [RESULTS_DIR (default docs/benchmarks/batch)]
 Installs matplotlib into a venv ($TESSERA_VENV, default ~/.cache/tessera-bench-venv) when
 the running Python lacks it.
 """
@@ -24,7 +24,7 @@ import matplotlib  # noqa: E402
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 
-out = sys.argv[1] if len(sys.argv) > 1 else "docs/benchmarks-batch"
+out = sys.argv[1] if len(sys.argv) > 1 else "docs/benchmarks/batch"
 rows = list(csv.DictReader(open(os.path.join(out, "runs.tsv")), delimiter="\t"))
 num = ["workers", "wall_s", "cpu_s", "new_values", "shared_in", "t_spec", "t_amb", "t_idle", "t_sync"]
 for r in rows:

@@ -7,9 +7,13 @@
 //! - [`scene`]: the scene language (lexer → primitives → scene), inline commands, `xform`,
 //!   `genbox`.
 //! - [`geometry`]: one file per surface kind, plus the BVH wrapper (obvhs).
-//! - [`material`]: one file per material family.
+//! - [`material`] and [`modifier`]: materials, and the patterns, textures and mixtures that
+//!   modify them (the chain the tracer walks over a shading point).
 //! - [`light`]: light sources and direct lighting.
-//! - [`render`]: the ray tracer, per-pixel sampling and the pixel loop.
+//! - [`ambient`]: indirect light: the irradiance cache with gradients, its settings and its
+//!   stores (Radiance's ambient files, Tessera's append-only logs).
+//! - [`render`]: the ray tracer, shading points and modifier chains, per-pixel sampling and
+//!   the pixel loop.
 //! - [`image`]: pictures in memory and the `hdr`, `exr` and `png` formats.
 //! - [`tpict`]: the rpict-compatible driver behind the `tpict` binary.
 //! - [`job`]: the batch toolkit's job directory: plan, workers, merge, assembly, status.
