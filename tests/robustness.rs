@@ -550,3 +550,61 @@ fn zero_area_light_polygon_is_refused_or_harmless() {
         assert!(!p.join("zl.hdr").exists());
     }
 }
+
+/// Primitives of astronomical size (a sky sphere of radius 1e20, coordinates of 1e25,
+/// polygon vertices of ±1e300) made the BVH build panic inside obvhs (its f32 box areas
+/// overflowed); a light of radiance 1e308 gave infinite pixels in EXR output. Both now
+/// render: the lamp inside the huge sphere is seen, every pixel is finite.
+#[test]
+fn astronomical_sizes_and_radiances_render_finite_pictures() {
+    let t = tempfile::tempdir().unwrap();
+    let p = t.path();
+    std::fs::write(
+        p.join("huge.rad"),
+        "void plastic gray 0 0 5 .5 .5 .5 0 0\n\
+         void light bright 0 0 3 10 10 10\n\
+         bright sphere lamp 0 0 4 0 0 1 .2\n\
+         gray sphere sky 0 0 4 0 0 1 1e20\n",
+    )
+    .unwrap();
+    // Coordinates no renderer can resolve next to a lamp of radius 0.2 (rpict's own output
+    // is not a number here): no panic, finite pixels.
+    std::fs::write(
+        p.join("extreme.rad"),
+        "void plastic gray 0 0 5 .5 .5 .5 0 0\n\
+         void light bright 0 0 3 10 10 10\n\
+         bright sphere lamp 0 0 4 0 0 1 .2\n\
+         gray sphere far 0 0 4 1e25 0 0 1\n\
+         gray polygon wide 0 0 9 -1e300 0 -1 1e300 0 -1 0 1e300 -1\n",
+    )
+    .unwrap();
+    std::fs::write(
+        p.join("hot.rad"),
+        "void light hot 0 0 3 1e308 1e308 1e308\n\
+         hot sphere lamp 0 0 4 0 0 0 .5\n",
+    )
+    .unwrap();
+    let view = [
+        "-vp", "0", "-5", "0", "-vd", "0", "1", "0", "-x", "24", "-y", "24",
+    ];
+    let finite = |img: &Image| img.pixels.iter().flatten().all(|v| v.is_finite());
+    let mut args: Vec<&str> = view.to_vec();
+    args.extend(["-vu", "0", "0", "1", "-vh", "60", "-vv", "60", "huge.rad"]);
+    let huge = render(p, &args, "huge.hdr");
+    assert!(finite(&huge));
+    let brightest = huge.pixels.iter().flatten().fold(0f32, |m, &v| m.max(v));
+    assert!(brightest > 5.0, "the lamp is seen: {brightest}");
+    let mut args: Vec<&str> = view.to_vec();
+    args.push("extreme.rad");
+    assert!(finite(&render(p, &args, "extreme.hdr")));
+    for out in ["hot.exr", "hot.hdr"] {
+        let mut args: Vec<&str> = view.to_vec();
+        args.push("hot.rad");
+        let img = render(p, &args, out);
+        assert!(finite(&img), "{out}");
+        assert!(
+            img.pixels.iter().flatten().any(|&v| v > 1e30),
+            "{out}: the light is seen"
+        );
+    }
+}

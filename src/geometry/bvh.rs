@@ -40,8 +40,12 @@ const PAD_ABS: f64 = 4.0 * FTINY;
 /// How far before the scene-box entry the `f32` ray starts (obvhs culls boxes exiting before
 /// `t = 1e-4`).
 const MARGIN: f64 = 1e-3;
-/// Largest magnitude allowed for a coordinate (keeps `f32` conversions finite).
-const COORD_LIMIT: f64 = 1e30;
+/// Largest magnitude of a box coordinate (relative to the scene origin): boxes are clamped
+/// to it. It keeps the `f32` boxes' surface areas, and obvhs's sums of them, finite: boxes
+/// of about 1e19 and more made its CWBVH conversion index out of bounds (a panic). A ray
+/// starts inside the clamped region, so a surface beyond it is still found: its clamped box
+/// holds the ray's start and the exact f64 intersection has no such limit.
+const COORD_LIMIT: f64 = 1e15;
 /// Capacity of the coincident-hit window of [`Bvh::closest`].
 pub const WINDOW: usize = 16;
 

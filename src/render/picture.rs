@@ -231,7 +231,9 @@ fn overture(
 }
 
 fn to_f32(c: Color) -> [f32; 3] {
-    let c = sanitize(c);
+    // Finite and non-negative, and within f32's range: a radiance beyond it (a light of
+    // 1e308) would otherwise become an infinite pixel.
+    let c = sanitize(c).min(Color::splat(f32::MAX as f64));
     [c.x as f32, c.y as f32, c.z as f32]
 }
 
