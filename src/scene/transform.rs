@@ -126,29 +126,83 @@ fn op_matrix(
     }))
 }
 
-/// Parse transform words from the start of `words`, stopping at the first word that is not
-/// part of a transform. Returns the transform and how many words it consumed. Errors name
-/// the bad option and word.
-pub fn parse_transform(words: &[String]) -> Result<(Transform, usize), String> {
-    let mut total = DMat4::IDENTITY;
-    let mut scale = 1.0;
-    let mut mirrors = false;
-    // Current repeat group.
-    let mut group = DMat4::IDENTITY;
-    let mut g_scale = 1.0;
-    let mut g_mirror = false;
-    let mut g_count: u64 = 1;
-    let mut i = 0;
-    let mut flush = |group: &mut DMat4, g_scale: &mut f64, g_mirror: &mut bool, count: u64| {
-        for _ in 0..count {
-            total = *group * total;
-            scale *= *g_scale;
-            mirrors ^= *g_mirror;
+/// One repeat group of a transform: the product of its options, applied `count` times.
+#[derive(Clone, Copy, Debug)]
+pub struct Group {
+    m: DMat4,
+    scale: f64,
+    mirror: bool,
+    /// How often it applies: the `-i N` that opened it (1 for the first group).
+    pub count: u64,
+}
+
+#[cfg(test)]
+thread_local! {
+    /// Group applications on this thread (tests count the work of `xform -a`).
+    pub(crate) static APPLICATIONS: std::cell::Cell<u64> = const { std::cell::Cell::new(0) };
+}
+
+/// A transform's running product, built group by group ([`TransformState::apply`]).
+#[derive(Clone, Copy, Debug)]
+pub struct TransformState {
+    m: DMat4,
+    scale: f64,
+    mirrors: bool,
+}
+
+impl Default for TransformState {
+    fn default() -> Self {
+        TransformState {
+            m: DMat4::IDENTITY,
+            scale: 1.0,
+            mirrors: false,
         }
-        *group = DMat4::IDENTITY;
-        *g_scale = 1.0;
-        *g_mirror = false;
+    }
+}
+
+impl TransformState {
+    /// Apply `g` once more (the repeat groups are applied one application at a time, so a
+    /// state that has taken `k` applications takes the `k+1`-th in one step: `xform -a`
+    /// builds its copies incrementally, in linear time, with the same arithmetic).
+    pub fn apply(&mut self, g: &Group) {
+        #[cfg(test)]
+        APPLICATIONS.with(|c| c.set(c.get() + 1));
+        self.m = g.m * self.m;
+        self.scale *= g.scale;
+        self.mirrors ^= g.mirror;
+    }
+
+    /// Apply `g` `g.count` times.
+    pub fn apply_group(&mut self, g: &Group) {
+        for _ in 0..g.count {
+            self.apply(g);
+        }
+    }
+
+    /// The transform of this state, with its `words` (as [`Transform::words`]).
+    pub fn finish(&self, words: Vec<String>) -> Transform {
+        Transform {
+            m: self.m,
+            scale: self.scale,
+            mirrors: self.mirrors,
+            invert: false,
+            words,
+        }
+    }
+}
+
+/// Parse transform words from the start of `words` into repeat groups, stopping at the
+/// first word that is not part of a transform. Returns the groups and how many words they
+/// consumed. Errors name the bad option and word.
+pub fn parse_groups(words: &[String]) -> Result<(Vec<Group>, usize), String> {
+    let mut groups = Vec::new();
+    let mut group = Group {
+        m: DMat4::IDENTITY,
+        scale: 1.0,
+        mirror: false,
+        count: 1,
     };
+    let mut i = 0;
     while i < words.len() {
         let w = words[i].as_str();
         if w == "-i" {
@@ -161,36 +215,50 @@ pub fn parse_transform(words: &[String]) -> Result<(Transform, usize), String> {
             if c > 1_000_000 {
                 return Err(format!("repeat count {c} for -i is too large"));
             }
-            flush(&mut group, &mut g_scale, &mut g_mirror, g_count);
-            g_count = c;
+            groups.push(group);
+            group = Group {
+                m: DMat4::IDENTITY,
+                scale: 1.0,
+                mirror: false,
+                count: c,
+            };
             i += 2;
             continue;
         }
         match op_matrix(w, words, i)? {
             Some((m, n, mir, s)) => {
-                group = m * group;
-                g_scale *= s;
-                g_mirror ^= mir;
+                group.m = m * group.m;
+                group.scale *= s;
+                group.mirror ^= mir;
                 i += n;
             }
             None => break,
         }
     }
-    flush(&mut group, &mut g_scale, &mut g_mirror, g_count);
-    let mut out_words: Vec<String> = words[..i].to_vec();
-    if !out_words.is_empty() && out_words[0] != "-i" {
-        out_words.splice(0..0, ["-i".to_string(), "1".to_string()]);
+    groups.push(group);
+    Ok((groups, i))
+}
+
+/// The words real xform appends to a transformed primitive's arguments for `words`: `-i 1`
+/// prepended unless they start with `-i`.
+pub fn appended_words(words: &[String]) -> Vec<String> {
+    let mut out: Vec<String> = words.to_vec();
+    if !out.is_empty() && out[0] != "-i" {
+        out.splice(0..0, ["-i".to_string(), "1".to_string()]);
     }
-    Ok((
-        Transform {
-            m: total,
-            scale,
-            mirrors,
-            invert: false,
-            words: out_words,
-        },
-        i,
-    ))
+    out
+}
+
+/// Parse transform words from the start of `words`, stopping at the first word that is not
+/// part of a transform. Returns the transform and how many words it consumed. Errors name
+/// the bad option and word.
+pub fn parse_transform(words: &[String]) -> Result<(Transform, usize), String> {
+    let (groups, used) = parse_groups(words)?;
+    let mut state = TransformState::default();
+    for g in &groups {
+        state.apply_group(g);
+    }
+    Ok((state.finish(appended_words(&words[..used])), used))
 }
 
 impl Transform {
