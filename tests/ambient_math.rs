@@ -280,7 +280,7 @@ fn hessian_of_a_plane_is_nearly_zero() {
         }
     }
     let b = vec![1.0; m * nphi];
-    let hp = hessian(&pts, &b, m, nphi, n, u, v, usize::MAX).unwrap();
+    let hp = hessian(&pts, &b, (m, nphi), (n, u, v), usize::MAX).unwrap();
     eprintln!("plane Hessian {hp:?}");
     // Against the scale of a surface at distance h: 1/h².
     assert!(hp.iter().all(|x| x.abs() < 0.05 / (h * h)), "{hp:?}");
@@ -289,13 +289,13 @@ fn hessian_of_a_plane_is_nearly_zero() {
         .iter()
         .map(|p| if p.x > 0.0 { 1.0 } else { 0.01 })
         .collect();
-    let hb = hessian(&pts, &b2, m, nphi, n, u, v, usize::MAX).unwrap();
+    let hb = hessian(&pts, &b2, (m, nphi), (n, u, v), usize::MAX).unwrap();
     let (ang, r0, r1) = hessian_radii(&hb).unwrap();
     eprintln!("half-bright Hessian {hb:?}: angle {ang}, radii {r0} {r1}");
     assert!(r0 <= r1 && r0.is_finite() && r0 > 0.0);
     // Nearer surfaces curve irradiance more: halving the distance shrinks the radius.
     let near: Vec<DVec3> = pts.iter().map(|p| *p * 0.5).collect();
-    let hn = hessian(&near, &b2, m, nphi, n, u, v, usize::MAX).unwrap();
+    let hn = hessian(&near, &b2, (m, nphi), (n, u, v), usize::MAX).unwrap();
     let (_, rn0, _) = hessian_radii(&hn).unwrap();
     assert!(rn0 < r0, "{rn0} vs {r0}");
     // Radii follow (4/|λ|)^¼.

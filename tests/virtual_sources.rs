@@ -7,6 +7,7 @@ mod common;
 use common::scene_from_text;
 
 use glam::DVec3;
+use tessera::light::source::Partition;
 use tessera::light::LightSet;
 use tessera::radopt::RenderParams;
 use tessera::render::sampler::Sampler;
@@ -29,16 +30,12 @@ fn virtual_samples_are_offered_only_through_the_mirror() {
         let mut rng = Sampler::for_pixel(0, 0, 0, 0);
         let mut out = Vec::new();
         // -ds .05: the image is split into several partitions seen from these points.
-        lights.sample(
-            &scene,
-            virt,
-            p - scene.origin,
-            1.0,
-            0.05,
-            0.0,
-            &mut rng,
-            &mut out,
-        );
+        let how = Partition {
+            weight: 1.0,
+            ds: 0.05,
+            dj: 0.0,
+        };
+        lights.sample(&scene, (virt, p - scene.origin), how, &mut rng, &mut out);
         out
     };
     // Right above the mirror: the image is seen through it.
@@ -103,9 +100,14 @@ fn sampled_glows_are_the_real_glows_with_a_radius() {
     let p = DVec3::new(0.0, 3.0, 1.0) - scene.origin;
     let mut rng = Sampler::for_pixel(0, 0, 0, 0);
     let mut out = Vec::new();
-    lights.sample(&scene, si, p, 1.0, 0.2, 0.0, &mut rng, &mut out);
+    let how = Partition {
+        weight: 1.0,
+        ds: 0.2,
+        dj: 0.0,
+    };
+    lights.sample(&scene, (si, p), how, &mut rng, &mut out);
     assert!(out.is_empty());
-    lights.sample_glow(&scene, si, p, 0.2, &mut rng, &mut out);
+    lights.sample_glow(&scene, (si, p), 0.2, &mut rng, &mut out);
     assert_eq!(out.len(), 1);
     let s = out[0];
     assert!(s.dist > 2.7 && s.dist < 3.0, "distance {}", s.dist);

@@ -350,15 +350,11 @@ impl<'a> Mesh<'a> {
 /// frame (`u`, `v`): exact derivatives by [`Jet`]s (see the module documentation), of the
 /// mesh thinned to at most about `max_cells` cells by [`subsample_grid`] (`usize::MAX`: the
 /// whole mesh). Returns None for a degenerate mesh.
-#[allow(clippy::too_many_arguments)]
 pub fn hessian(
     pts: &[DVec3],
     b: &[f64],
-    m: usize,
-    nphi: usize,
-    n: DVec3,
-    u: DVec3,
-    v: DVec3,
+    (m, nphi): (usize, usize),
+    (n, u, v): (DVec3, DVec3, DVec3),
     max_cells: usize,
 ) -> Option<[f64; 3]> {
     if pts.len() != m * nphi || b.len() != m * nphi {
@@ -520,7 +516,7 @@ mod tests {
             let (m, nphi) = (4 + (seed as usize % 5), 13 + 3 * (seed as usize % 4));
             let (pts, b) = hemisphere(seed, m, nphi);
             let mesh = Mesh::new(&pts, &b, m, nphi).unwrap();
-            let exact = hessian(&pts, &b, m, nphi, n, u, v, usize::MAX).unwrap();
+            let exact = hessian(&pts, &b, (m, nphi), (n, u, v), usize::MAX).unwrap();
             let dmin = pts.iter().map(|p| p.length()).fold(f64::INFINITY, f64::min);
             let approx = numerical(&mesh, n, u, v, 2e-3 * dmin);
             let scale = exact.iter().map(|x| x.abs()).fold(0.0, f64::max);
@@ -566,17 +562,21 @@ mod tests {
         // property of the mesh alone.
         let (m, nphi) = (6, 19);
         let (pts, b) = hemisphere(7, m, nphi);
-        let h0 = hessian(&pts, &b, m, nphi, DVec3::Z, DVec3::X, DVec3::Y, usize::MAX).unwrap();
+        let h0 = hessian(
+            &pts,
+            &b,
+            (m, nphi),
+            (DVec3::Z, DVec3::X, DVec3::Y),
+            usize::MAX,
+        )
+        .unwrap();
         let rot = glam::DQuat::from_axis_angle(DVec3::new(0.3, -0.8, 0.5).normalize(), 1.1);
         let moved: Vec<DVec3> = pts.iter().map(|p| rot * *p).collect();
         let h1 = hessian(
             &moved,
             &b,
-            m,
-            nphi,
-            rot * DVec3::Z,
-            rot * DVec3::X,
-            rot * DVec3::Y,
+            (m, nphi),
+            (rot * DVec3::Z, rot * DVec3::X, rot * DVec3::Y),
             usize::MAX,
         )
         .unwrap();
@@ -621,9 +621,10 @@ mod tests {
         ] {
             let pts = room(p, lo, hi, m, nphi);
             let (n, u, v) = (DVec3::Z, DVec3::X, DVec3::Y);
-            let full =
-                hessian_radii(&hessian(&pts, &b, m, nphi, n, u, v, usize::MAX).unwrap()).unwrap();
-            let thin = hessian_radii(&hessian(&pts, &b, m, nphi, n, u, v, 256).unwrap()).unwrap();
+            let full = hessian_radii(&hessian(&pts, &b, (m, nphi), (n, u, v), usize::MAX).unwrap())
+                .unwrap();
+            let thin =
+                hessian_radii(&hessian(&pts, &b, (m, nphi), (n, u, v), 256).unwrap()).unwrap();
             for (a, t) in [(full.1, thin.1), (full.2, thin.2)] {
                 assert!((t / a - 1.0).abs() < 0.05, "at {p}: {full:?} vs {thin:?}");
             }
@@ -673,6 +674,6 @@ mod tests {
         assert!(Mesh::new(&pts, &b, 4, 12).is_none());
         let mut z = pts.clone();
         z[5] = DVec3::ZERO;
-        assert!(hessian(&z, &b, 4, 13, DVec3::Z, DVec3::X, DVec3::Y, usize::MAX).is_none());
+        assert!(hessian(&z, &b, (4, 13), (DVec3::Z, DVec3::X, DVec3::Y), usize::MAX).is_none());
     }
 }

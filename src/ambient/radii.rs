@@ -49,8 +49,14 @@ impl Ambient {
         // mean distance (isotropic).
         let hess = if cached && complete && self.settings().hessian && m > 1 && nphi > 2 {
             let pts: Vec<DVec3> = h.cells.iter().map(|c| c.hit).collect();
-            hessian(&pts, lb, m, nphi, n, u0, v0, self.settings().hessian_cells)
-                .and_then(|h| hessian_radii(&h))
+            hessian(
+                &pts,
+                lb,
+                (m, nphi),
+                (n, u0, v0),
+                self.settings().hessian_cells,
+            )
+            .and_then(|h| hessian_radii(&h))
         } else {
             None
         };

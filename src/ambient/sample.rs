@@ -206,13 +206,13 @@ impl Ambient {
             for _ in 0..k {
                 buf.clear();
                 tr.lights
-                    .sample_glow(tr.scene, si, p, tr.params.ds, rng, &mut buf);
+                    .sample_glow(tr.scene, (si, p), tr.params.ds, rng, &mut buf);
                 for smp in &buf {
                     let c = smp.dir.dot(n);
                     if smp.dist <= maxrad || c <= 0.0 {
                         continue;
                     }
-                    let t = tr.shadow(p, smp.dir, smp.dist, si, am, rng);
+                    let t = tr.shadow((p, smp.dir, smp.dist), si, am, rng);
                     sum += smp.radiance * t * (c * smp.omega);
                 }
             }

@@ -3,7 +3,7 @@
 //! estimated from the samples tested at this same point (deterministic per pixel, unlike
 //! Radiance's run-long per-source statistics).
 
-use super::source::SourceSample;
+use super::source::{Partition, SourceSample};
 use super::viscache::{self, VisQuery};
 use crate::color::{bright, Color};
 use crate::render::ray::Hit;
@@ -66,7 +66,12 @@ fn direct_with(
     let samples = &mut scratch.samples;
     samples.clear();
     for si in 0..lights.sources.len() {
-        lights.sample(tr.scene, si, p, weight, params.ds, params.dj, rng, samples);
+        let how = Partition {
+            weight,
+            ds: params.ds,
+            dj: params.dj,
+        };
+        lights.sample(tr.scene, (si, p), how, rng, samples);
     }
     // Potentials.
     let cands = &mut scratch.cands;
@@ -121,12 +126,12 @@ fn direct_with(
         let t = match vis {
             Some(q) => {
                 let (t, traced) = viscache::shadow(q, s.src, || {
-                    tr.shadow(p, s.dir, s.dist, s.src, hit.antimatter, rng)
+                    tr.shadow((p, s.dir, s.dist), s.src, hit.antimatter, rng)
                 });
                 reused += u64::from(!traced);
                 t
             }
-            None => tr.shadow(p, s.dir, s.dist, s.src, hit.antimatter, rng),
+            None => tr.shadow((p, s.dir, s.dist), s.src, hit.antimatter, rng),
         };
         let st = &mut stats[s.src];
         st.0 += bright(t).clamp(0.0, 1.0);

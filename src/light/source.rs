@@ -95,6 +95,17 @@ pub struct Source {
     pub relay: Option<Relay>,
 }
 
+/// How finely a source is partitioned and jittered from a shading point.
+#[derive(Clone, Copy, Debug)]
+pub struct Partition {
+    /// The weight of the ray at the shading point (a lighter ray takes fewer partitions).
+    pub weight: f64,
+    /// `-ds`: the partition size relative to the distance.
+    pub ds: f64,
+    /// `-dj`: the jitter within a partition (0: its centre).
+    pub dj: f64,
+}
+
 /// One sample of a source seen from a shading point.
 #[derive(Clone, Copy, Debug)]
 pub struct SourceSample {
@@ -357,51 +368,49 @@ impl LightSet {
         self.glows.binary_search_by_key(&obj, |g| g.2).is_ok()
     }
 
-    /// Append the samples of source `si` seen from point `p` (relative frame) to `out`.
-    /// `scene` is used to drop polygon samples outside the polygon.
-    #[allow(clippy::too_many_arguments)]
+    /// Append the samples of source `si` seen from point `p` (relative frame) to `out`,
+    /// partitioned as `how` says. `scene` is used to drop polygon samples outside the
+    /// polygon.
     pub fn sample(
         &self,
         scene: &Scene,
-        si: usize,
-        p: DVec3,
-        weight: f64,
-        ds: f64,
-        dj: f64,
+        (si, p): (usize, DVec3),
+        how: Partition,
         rng: &mut Sampler,
         out: &mut Vec<SourceSample>,
     ) {
-        self.sample_within(scene, si, p, weight, ds, dj, rng, out, true)
+        self.sample_within(scene, (si, p), how, rng, out, true)
     }
 
-    /// [`LightSet::sample`] of a glow from any distance: its radius of influence is ignored
-    /// (each sample's `dist` tells the caller how far its point is).
-    #[allow(clippy::too_many_arguments)]
+    /// [`LightSet::sample`] of a glow from any distance (ray weight 1, full jitter): its
+    /// radius of influence is ignored (each sample's `dist` tells the caller how far its
+    /// point is).
     pub fn sample_glow(
         &self,
         scene: &Scene,
-        si: usize,
-        p: DVec3,
+        (si, p): (usize, DVec3),
         ds: f64,
         rng: &mut Sampler,
         out: &mut Vec<SourceSample>,
     ) {
-        self.sample_within(scene, si, p, 1.0, ds, 1.0, rng, out, false)
+        let how = Partition {
+            weight: 1.0,
+            ds,
+            dj: 1.0,
+        };
+        self.sample_within(scene, (si, p), how, rng, out, false)
     }
 
-    #[allow(clippy::too_many_arguments)]
     fn sample_within(
         &self,
         scene: &Scene,
-        si: usize,
-        p: DVec3,
-        weight: f64,
-        ds: f64,
-        dj: f64,
+        (si, p): (usize, DVec3),
+        how: Partition,
         rng: &mut Sampler,
         out: &mut Vec<SourceSample>,
         glow_radius: bool,
     ) {
+        let Partition { weight, ds, dj } = how;
         let src = &self.sources[si];
         // Virtual sources: sample the real source from the mirrored point, then mirror back.
         let (q, relay) = match &src.relay {

@@ -178,7 +178,7 @@ impl NormalMat {
                     result += scolor * tr.trace(&r, rng);
                 }
             } else if !rblt {
-                result += self.sample_lobe(tr, ray, hit, n, scolor, false, frame, rng);
+                result += self.sample_lobe((tr, ray, hit), (n, frame), (scolor, false), rng);
             }
         }
         // Specular transmission.
@@ -188,7 +188,7 @@ impl NormalMat {
                     result += tscolor * tr.trace(&r, rng);
                 }
             } else if !tblt {
-                result += self.sample_lobe(tr, ray, hit, n, tscolor, true, frame, rng);
+                result += self.sample_lobe((tr, ray, hit), (n, frame), (tscolor, true), rng);
             }
         }
         // Direct light.
@@ -280,16 +280,11 @@ impl NormalMat {
     }
 
     /// Importance-sample the Gaussian lobe (reflected or transmitted) with `-ss` samples.
-    #[allow(clippy::too_many_arguments)]
     fn sample_lobe(
         &self,
-        tr: &Tracer,
-        ray: &Ray,
-        hit: &Hit,
-        n: DVec3,
-        scolor: Color,
-        transmit: bool,
-        frame: Option<(DVec3, DVec3)>,
+        (tr, ray, hit): (&Tracer, &Ray, &Hit),
+        (n, frame): (DVec3, Option<(DVec3, DVec3)>),
+        (scolor, transmit): (Color, bool),
         rng: &mut Sampler,
     ) -> Color {
         let ss = tr.params.ss;

@@ -532,12 +532,9 @@ impl<'a> Tracer<'a> {
 
     /// Transmission of a shadow ray from `org` in direction `dir` toward source `si` at
     /// distance `dist` (infinite for distant sources).
-    #[allow(clippy::too_many_arguments)]
     pub fn shadow(
         &self,
-        org: DVec3,
-        dir: DVec3,
-        dist: f64,
+        (org, dir, dist): (DVec3, DVec3, f64),
         si: usize,
         antimatter: [Option<MatId>; MAX_ANTIMATTER],
         rng: &mut Sampler,
