@@ -608,3 +608,35 @@ fn astronomical_sizes_and_radiances_render_finite_pictures() {
         );
     }
 }
+
+/// Input that cannot be scene text is refused before it exhausts memory: reading
+/// `/dev/zero` as a scene grew to 4 GB in 10 s; now its first NUL byte ends the read, and a
+/// line longer than 64 MiB is refused too, both with the file named.
+#[test]
+fn binary_and_endless_input_is_refused_early() {
+    let t = tempfile::tempdir().unwrap();
+    let p = t.path();
+    let zero = tpict_in(p)
+        .args(["-x", "8", "-y", "8", "/dev/zero"])
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&zero.stderr);
+    assert!(!zero.status.success());
+    assert!(
+        err.contains("/dev/zero") && err.contains("binary data"),
+        "{err}"
+    );
+    let mut long = b"void plastic m 0 0 5 .5 .5 .5 0 0\n".to_vec();
+    long.resize(long.len() + (64 << 20) + 16, b'a');
+    std::fs::write(p.join("long.rad"), &long).unwrap();
+    let out = tpict_in(p)
+        .args(["-x", "8", "-y", "8", "long.rad"])
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(!out.status.success());
+    assert!(
+        err.contains("long.rad") && err.contains("longer than 64 MiB"),
+        "{err}"
+    );
+}

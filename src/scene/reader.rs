@@ -172,14 +172,8 @@ pub fn read_scene_files(
     let mut out = Vec::new();
     for p in paths {
         if p == "-" {
-            let mut text = String::new();
-            std::io::stdin()
-                .read_to_string(&mut text)
-                .map_err(|e| SceneError::Io {
-                    loc: Location::new("<stdin>", 0),
-                    path: "-".into(),
-                    reason: e.to_string(),
-                })?;
+            let loc = Location::new("<stdin>", 0);
+            let text = read_text(std::io::stdin().lock(), "-", &loc)?;
             parse_into(&text, Arc::from("<stdin>"), opts, 0, &mut out)?;
             continue;
         }
@@ -208,16 +202,64 @@ fn read_file(path: &Path, named: &str, loc: &Location) -> Result<String, SceneEr
             path: named.to_string(),
         });
     }
-    let bytes = std::fs::read(path).map_err(|e| SceneError::Io {
+    let file = std::fs::File::open(path).map_err(|e| SceneError::Io {
         loc: loc.clone(),
         path: named.to_string(),
         reason: e.to_string(),
     })?;
-    String::from_utf8(bytes).map_err(|_| SceneError::Io {
+    read_text(file, named, loc)
+}
+
+/// Longest line of scene text accepted (a generous bound: Radiance's own lines are short).
+pub const MAX_LINE: usize = 64 << 20;
+
+/// Largest scene text accepted from one file or stream.
+pub const MAX_SCENE_TEXT: u64 = 4 << 30;
+
+/// Read scene text from `r` in chunks, refusing what cannot be a scene before it exhausts
+/// memory: a NUL byte (binary data, such as `/dev/zero`), a line longer than [`MAX_LINE`],
+/// more than [`MAX_SCENE_TEXT`] bytes, or text that is not UTF-8.
+fn read_text(mut r: impl Read, named: &str, loc: &Location) -> Result<String, SceneError> {
+    let fail = |reason: String| SceneError::Io {
         loc: loc.clone(),
         path: named.to_string(),
-        reason: "not UTF-8 text (is it a binary file?)".to_string(),
-    })
+        reason,
+    };
+    let mut bytes: Vec<u8> = Vec::new();
+    let mut chunk = vec![0u8; 1 << 20];
+    let mut line = 0usize;
+    loop {
+        let n = match r.read(&mut chunk) {
+            Ok(0) => break,
+            Ok(n) => n,
+            Err(e) if e.kind() == std::io::ErrorKind::Interrupted => continue,
+            Err(e) => return Err(fail(e.to_string())),
+        };
+        let part = &chunk[..n];
+        if let Some(i) = part.iter().position(|&b| b == 0) {
+            return Err(fail(format!(
+                "binary data (a NUL byte at byte {}): not scene text",
+                bytes.len() + i
+            )));
+        }
+        for &b in part {
+            line = if b == b'\n' { 0 } else { line + 1 };
+            if line > MAX_LINE {
+                return Err(fail(format!(
+                    "a line longer than {} MiB: not scene text",
+                    MAX_LINE >> 20
+                )));
+            }
+        }
+        if (bytes.len() + n) as u64 > MAX_SCENE_TEXT {
+            return Err(fail(format!(
+                "more than {} GiB of scene text",
+                MAX_SCENE_TEXT >> 30
+            )));
+        }
+        bytes.extend_from_slice(part);
+    }
+    String::from_utf8(bytes).map_err(|_| fail("not UTF-8 text (is it a binary file?)".to_string()))
 }
 
 /// Find a file named in a command: absolute as is, relative along the RAYPATH.
