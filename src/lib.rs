@@ -12,6 +12,8 @@
 //! - [`render`]: the ray tracer, per-pixel sampling and the pixel loop.
 //! - [`image`]: pictures in memory and the `hdr`, `exr` and `png` formats.
 //! - [`tpict`]: the rpict-compatible driver behind the `tpict` binary.
+//! - [`runinfo`]: what every tool shares about the running program (software name,
+//!   threads, CPU time, frame names).
 //! - [`job`]: the batch toolkit's job directory: plan, workers, merge, assembly, status.
 
 pub mod ambient;
@@ -25,6 +27,7 @@ pub mod light;
 pub mod material;
 pub mod radopt;
 pub mod render;
+pub mod runinfo;
 pub mod scene;
 pub mod tpict;
 pub mod view;

@@ -63,7 +63,7 @@ pub fn assemble_frame(
         }
     }
     img.header = Header {
-        software: Some(crate::tpict::SOFTWARE.to_string()),
+        software: Some(crate::runinfo::SOFTWARE.to_string()),
         view: Some(fp.view.to_radiance_string()),
         pixaspect: if (0.995..=1.005).contains(&fp.pixaspect) {
             None

@@ -333,7 +333,7 @@ fn tassemble(a: TassembleArgs) -> Result<i32> {
         }
         let path = match &a.output {
             None => None,
-            Some(p) if a.all_frames => Some(PathBuf::from(crate::tpict::frame_name(
+            Some(p) if a.all_frames => Some(PathBuf::from(crate::runinfo::frame_name(
                 &p.display().to_string(),
                 f,
             )?)),

@@ -106,7 +106,7 @@ impl Beat {
             r.t_amb = secs(&a.stats.amb_nanos) / self.threads as f64;
         }
         r.t_spec = (r.t_render - r.t_amb).max(0.0);
-        r.cpu_seconds = crate::tpict::process_cpu_seconds()
+        r.cpu_seconds = crate::runinfo::process_cpu_seconds()
             .map(|c| c - self.start_cpu)
             .unwrap_or(0.0);
         if let Ok(json) = serde_json::to_vec_pretty(&*r) {
@@ -142,12 +142,12 @@ pub fn run_worker(job: &JobDir, wo: &WorkerOptions) -> Result<WorkerSummary> {
     }
     let scene = Scene::build(&prims)?;
     let lights = LightSet::collect(&scene, m.options.params.dr);
-    let threads = crate::tpict::thread_count(wo.threads);
+    let threads = crate::runinfo::thread_count(wo.threads);
     let pool = rayon::ThreadPoolBuilder::new()
         .num_threads(threads)
         .build()
         .context("cannot start render threads")?;
-    let origin_id = crate::tpict::process_origin_id();
+    let origin_id = crate::runinfo::process_origin_id();
     let ambient = Ambient::new(&m.options.params, scene.size, origin_id).map(Arc::new);
     let counters = Arc::new(Counters::default());
     let share = match &ambient {
@@ -185,7 +185,7 @@ pub fn run_worker(job: &JobDir, wo: &WorkerOptions) -> Result<WorkerSummary> {
         ambient: ambient.clone(),
         share: share.clone(),
         threads,
-        start_cpu: crate::tpict::process_cpu_seconds().unwrap_or(0.0),
+        start_cpu: crate::runinfo::process_cpu_seconds().unwrap_or(0.0),
     });
     beat.write(None, None);
     let stop = Arc::new(AtomicBool::new(false));
@@ -386,7 +386,7 @@ fn work(
         let amb_before = ambient
             .as_ref()
             .map(|a| (a.stats.made(), a.stats.amb_nanos.load(Ordering::Relaxed)));
-        let cpu0 = crate::tpict::process_cpu_seconds().unwrap_or(0.0);
+        let cpu0 = crate::runinfo::process_cpu_seconds().unwrap_or(0.0);
         let t0 = Instant::now();
         let progress = RenderProgress::default();
         let pixels = pool.install(|| {
@@ -422,7 +422,7 @@ fn work(
             fingerprint: m.fingerprint.clone(),
             owner: owner.to_string(),
             wall_seconds: wall.as_secs_f64(),
-            cpu_seconds: (crate::tpict::process_cpu_seconds().unwrap_or(0.0) - cpu0).max(0.0),
+            cpu_seconds: (crate::runinfo::process_cpu_seconds().unwrap_or(0.0) - cpu0).max(0.0),
             rays,
             new_values,
             ambient_seconds: amb_secs,
