@@ -1,8 +1,8 @@
 //! Tessera: a Radiance-compatible renderer (`tpict`) and batch toolkit.
 //!
 //! The pipeline, in the order a render runs through it:
-//! - [`radopt`]: Radiance's own option language (`-ab 2 -vp x y z -i+`, `@file`), shared by
-//!   `tpict`, view files and job manifests.
+//! - [`options`]: Radiance's own option language (`-ab 2 -vp x y z -i+`, `@file`), shared by
+//!   `tpict`, view files and job manifests; render, picture and run parameters.
 //! - [`view`]: view types, the view frame and the pixel ↔ ray mapping.
 //! - [`scene`]: the scene language (lexer → primitives → scene), inline commands, `xform`,
 //!   `genbox`.
@@ -25,7 +25,7 @@ pub mod image;
 pub mod job;
 pub mod light;
 pub mod material;
-pub mod radopt;
+pub mod options;
 pub mod render;
 pub mod runinfo;
 pub mod scene;

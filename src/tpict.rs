@@ -3,7 +3,7 @@
 use crate::ambient::Ambient;
 use crate::image::{output, write_picture, Header, Image};
 use crate::light::LightSet;
-use crate::radopt::{defaults_text, parse_rpict_args, Command, RpictOptions};
+use crate::options::{defaults_text, parse_rpict_args, Command, RpictOptions};
 use crate::render::{render_region, FrameSetup, RenderProgress, Tracer};
 use crate::runinfo::{frame_name, process_cpu_seconds, process_origin_id, thread_count, SOFTWARE};
 use crate::scene::{read_scene_files, ReadOptions, Scene};
@@ -74,8 +74,8 @@ fn run_inner(args: &[String], mut log: Log) -> std::result::Result<(), (Log, any
         }
         Command::Render(o) => *o,
     };
-    log.warnings = opts.warnings;
-    if let Some(ef) = &opts.error_file {
+    log.warnings = opts.run.warnings;
+    if let Some(ef) = &opts.run.error_file {
         match std::fs::OpenOptions::new()
             .create(true)
             .append(true)
@@ -104,9 +104,9 @@ fn run_inner(args: &[String], mut log: Log) -> std::result::Result<(), (Log, any
 /// Load and build the scene named by the options.
 pub fn load_scene(opts: &RpictOptions, log: &Log) -> Result<(Scene, LightSet, [u8; 32])> {
     let mut ro = ReadOptions::from_env();
-    ro.allow_commands |= opts.allow_commands;
+    ro.allow_commands |= opts.run.allow_commands;
     let files = if opts.scene_files.is_empty() {
-        if opts.sequence_start.is_some() {
+        if opts.run.sequence_start.is_some() {
             bail!("no scene files given (with -S, views come from standard input, so the scene cannot)");
         }
         vec!["-".to_string()]
@@ -130,13 +130,13 @@ pub fn load_scene(opts: &RpictOptions, log: &Log) -> Result<(Scene, LightSet, [u
 }
 
 fn render_command(args: &[String], opts: &RpictOptions, log: &Log) -> Result<()> {
-    if opts.pm != 0.0 || opts.pd != 0.0 {
+    if opts.picture.pm != 0.0 || opts.picture.pd != 0.0 {
         bail!("-pm (motion blur) and -pd (depth of field) are not supported yet; use -pm 0 -pd 0");
     }
     let (scene, lights, fingerprint) = load_scene(opts, log)?;
     let ambient = Ambient::new(&opts.params, scene.size, process_origin_id());
     let my_origin = ambient.as_ref().map(|a| a.cache.next_id().origin);
-    let amb_file = match (&ambient, &opts.params.af) {
+    let amb_file = match (&ambient, &opts.run.amb_file) {
         (Some(a), Some(_)) if !a.cached() => {
             log.warn("-aa 0 disables the cache: the ambient file is not used");
             None
@@ -147,7 +147,7 @@ fn render_command(args: &[String], opts: &RpictOptions, log: &Log) -> Result<()>
         }
         _ => None,
     };
-    let log_sink = match (&ambient, &opts.amb_log) {
+    let log_sink = match (&ambient, &opts.run.amb_log) {
         (Some(a), Some(_)) if !a.cached() => {
             log.warn("-aa 0 disables the cache: the ambient log is not used");
             None
@@ -170,7 +170,7 @@ fn render_command(args: &[String], opts: &RpictOptions, log: &Log) -> Result<()>
         lights: &lights,
         ambient: ambient.as_ref(),
     };
-    let threads = thread_count(opts.threads);
+    let threads = thread_count(opts.run.threads);
     let pool = rayon::ThreadPoolBuilder::new()
         .num_threads(threads)
         .build()
@@ -189,7 +189,7 @@ fn render_command(args: &[String], opts: &RpictOptions, log: &Log) -> Result<()>
     if let (Some(a), Some(af), Some(me)) = (&ambient, &amb_file, my_origin) {
         save_ambient_file(a, Path::new(af), scene.origin, me, &opts.params)?;
     }
-    if let Some(path) = &opts.stats_file {
+    if let Some(path) = &opts.run.stats_file {
         let mut st = stats.into_inner().unwrap_or_default();
         st.wall_seconds = started.elapsed().as_secs_f64();
         st.cpu_seconds = process_cpu_seconds();
@@ -261,7 +261,7 @@ pub fn open_ambient_log(
         &crate::ambient::fingerprint::options_text(&opts.params),
     );
     if path.exists() {
-        let mut r = LogReader::open(path, Some(&fingerprint), opts.amb_force)?;
+        let mut r = LogReader::open(path, Some(&fingerprint), opts.run.amb_force)?;
         for rec in r.read_available()? {
             a.cache
                 .insert(crate::ambient::cache::CachedValue::from_record(
@@ -269,10 +269,10 @@ pub fn open_ambient_log(
                 ));
         }
     }
-    let writer = LogWriter::open(path, &header, opts.amb_force)?;
+    let writer = LogWriter::open(path, &header, opts.run.amb_force)?;
     let sink = std::sync::Arc::new(LogSink {
         writer: Mutex::new(writer),
-        every: opts.amb_flush.max(1),
+        every: opts.run.amb_flush.max(1),
         origin,
         error: Mutex::new(None),
     });
@@ -309,7 +309,7 @@ pub fn save_ambient_file(
     path: &Path,
     origin: glam::DVec3,
     my_origin: u64,
-    params: &crate::radopt::RenderParams,
+    params: &crate::options::RenderParams,
 ) -> Result<()> {
     use crate::ambient::radfile;
     let mine: Vec<_> = a
@@ -463,16 +463,17 @@ fn render_frames(
     stats: &Mutex<RunStats>,
 ) -> Result<()> {
     let command_line = command_line.to_string();
-    match opts.sequence_start {
+    match opts.run.sequence_start {
         None => {
-            if let Some(o) = &opts.output {
+            if let Some(o) = &opts.run.output {
                 if Path::new(o).exists() {
                     bail!("cannot open output file \"{o}\": File exists");
                 }
             }
-            let mut img = pool.install(|| render_view(ctx, opts, &opts.view, 0, log, stats))?;
+            let mut img =
+                pool.install(|| render_view(ctx, opts, &opts.picture.view, 0, log, stats))?;
             img.header.commands.push(command_line);
-            match &opts.output {
+            match &opts.run.output {
                 Some(o) => {
                     let path = Path::new(o);
                     write_new_picture(path, &img)?;
@@ -483,7 +484,7 @@ fn render_frames(
         Some(start) => {
             let stdin = std::io::stdin();
             let mut frame = start;
-            let mut base = opts.view.clone();
+            let mut base = opts.picture.view.clone();
             for line in stdin.lock().lines() {
                 let line = line.context("reading views from standard input")?;
                 let Some(view) = parse_view_line(&line, &base)? else {
@@ -492,10 +493,10 @@ fn render_frames(
                 base = view.clone();
                 let n = frame;
                 frame += 1;
-                if opts.report_interval > 0.0 {
+                if opts.run.report_interval > 0.0 {
                     log.say(&format!("FRAME {n}: {}", view.to_radiance_string()));
                 }
-                match &opts.output {
+                match &opts.run.output {
                     Some(pattern) => {
                         let name = frame_name(pattern, n)?;
                         let path = Path::new(&name);
@@ -577,8 +578,8 @@ pub fn render_view(
     stats: &Mutex<RunStats>,
 ) -> Result<Image> {
     let vf = view.frame().map_err(|e| anyhow!("bad view: {e}"))?;
-    let mut pa = opts.pa;
-    let (mut x, mut y) = (opts.x, opts.y);
+    let mut pa = opts.picture.pa;
+    let (mut x, mut y) = (opts.picture.x, opts.picture.y);
     normaspect(vf.aspect(), &mut pa, &mut x, &mut y);
     if x == 0 || y == 0 {
         bail!("resolution {x}x{y} is empty");
@@ -588,16 +589,16 @@ pub fn render_view(
         view: &vf,
         xres: x,
         yres: y,
-        pj: opts.pj,
-        ps: opts.ps,
-        pt: opts.pt,
+        pj: opts.picture.pj,
+        ps: opts.picture.ps,
+        pt: opts.picture.pt,
         frame,
         irradiance: opts.params.i,
-        overture: opts.overture_step(),
+        overture: opts.picture.overture_step(&opts.params),
     };
     let progress = RenderProgress::default();
     let start = Instant::now();
-    let bar = if std::io::stderr().is_terminal() && opts.report_interval <= 0.0 {
+    let bar = if std::io::stderr().is_terminal() && opts.run.report_interval <= 0.0 {
         let b = indicatif::ProgressBar::new(100);
         b.set_style(
             indicatif::ProgressStyle::with_template("{bar:40} {percent:>3}% {elapsed} ETA {eta}")
@@ -623,8 +624,8 @@ pub fn render_view(
                 if let Some(b) = &bar {
                     b.set_position(pct as u64);
                 }
-                if opts.report_interval > 0.0
-                    && last.elapsed().as_secs_f64() >= opts.report_interval
+                if opts.run.report_interval > 0.0
+                    && last.elapsed().as_secs_f64() >= opts.run.report_interval
                 {
                     last = Instant::now();
                     log.say(&report_line(&progress, pct, start, ctx.ambient));
@@ -640,7 +641,7 @@ pub fn render_view(
     if let Some(b) = bar {
         b.finish_and_clear();
     }
-    if opts.report_interval > 0.0 {
+    if opts.run.report_interval > 0.0 {
         log.say(&report_line(&progress, 100.0, start, ctx.ambient));
     }
     if let Ok(mut st) = stats.lock() {

@@ -76,7 +76,7 @@ pub fn assemble_frame(
         commands: vec![m.command.clone(), command.to_string()],
         ..Header::default()
     };
-    let p = &m.options.params;
+    let p = &m.params;
     if crate::ambient::settings::computes(p.ab, p.ad) {
         img.header.extra.push((
             crate::tpict::AMBIENT_HEADER_VAR.into(),

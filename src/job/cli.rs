@@ -220,7 +220,7 @@ fn tmerge(a: TmergeArgs) -> Result<i32> {
     let job = JobDir::new(&a.job);
     let m = Manifest::load(&job)?;
     let fp = m.fingerprint_bytes();
-    let opts = crate::ambient::fingerprint::options_text(&m.options.params);
+    let opts = crate::ambient::fingerprint::options_text(&m.params);
     let r = super::merge::merge(&job, &fp, &opts)?;
     if a.json {
         println!("{}", serde_json::to_string_pretty(&r)?);
@@ -250,7 +250,7 @@ fn tmerge(a: TmergeArgs) -> Result<i32> {
     if let Some(path) = &a.export_radiance {
         let store = super::merge::load_store(&job, &fp, false)?;
         let recs = store.map(|s| s.records).unwrap_or_default();
-        let p = &m.options.params;
+        let p = &m.params;
         let line = format!(
             "tmerge -av {} {} {} -aw {} -ab {} -aa {} -ad {} -as {} -ar {}",
             p.av[0], p.av[1], p.av[2], p.aw, p.ab, p.aa, p.ad, p.as_, p.ar

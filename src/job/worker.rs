@@ -130,7 +130,7 @@ pub fn run_worker(job: &JobDir, wo: &WorkerOptions) -> Result<WorkerSummary> {
         raypath: vec![job.root().to_path_buf()],
     };
     let prims = read_scene_files(&[scene_path.display().to_string()], &ro)?;
-    let fp = crate::ambient::fingerprint::fingerprint(&prims, &m.options.params);
+    let fp = crate::ambient::fingerprint::fingerprint(&prims, &m.params);
     if fp != m.fingerprint_bytes() {
         bail!(
             "{}: the scene or the manifest's options changed since the job was planned \
@@ -141,21 +141,21 @@ pub fn run_worker(job: &JobDir, wo: &WorkerOptions) -> Result<WorkerSummary> {
         );
     }
     let scene = Scene::build(&prims)?;
-    let lights = LightSet::collect(&scene, m.options.params.dr);
+    let lights = LightSet::collect(&scene, m.params.dr);
     let threads = crate::runinfo::thread_count(wo.threads);
     let pool = rayon::ThreadPoolBuilder::new()
         .num_threads(threads)
         .build()
         .context("cannot start render threads")?;
     let origin_id = crate::runinfo::process_origin_id();
-    let ambient = Ambient::new(&m.options.params, scene.size, origin_id).map(Arc::new);
+    let ambient = Ambient::new(&m.params, scene.size, origin_id).map(Arc::new);
     let counters = Arc::new(Counters::default());
     let share = match &ambient {
         Some(a) if a.cached() => Some(Share::open(
             job,
             &owner,
             fp,
-            &crate::ambient::fingerprint::options_text(&m.options.params),
+            &crate::ambient::fingerprint::options_text(&m.params),
             scene.origin,
             a.clone(),
             wo.amb_flush,
@@ -252,7 +252,7 @@ fn work(
     };
     let mut watcher = StaleWatcher::new(m.lease_seconds);
     let poll = Duration::from_secs_f64((m.lease_seconds / 10.0).clamp(0.02, 0.25));
-    let tracer = Tracer::new(scene, &m.options.params, lights).with_ambient(ambient.as_deref());
+    let tracer = Tracer::new(scene, &m.params, lights).with_ambient(ambient.as_deref());
     let mut cursor = 0usize;
     let mut idle_since: Option<Instant> = None;
     let mut first_scan = true;
@@ -376,12 +376,12 @@ fn work(
             view: &vf,
             xres: fp.xres,
             yres: fp.yres,
-            pj: m.options.pj,
-            ps: m.options.ps,
-            pt: m.options.pt,
+            pj: m.picture.pj,
+            ps: m.picture.ps,
+            pt: m.picture.pt,
             frame: fp.index,
-            irradiance: m.options.params.i,
-            overture: m.options.overture_step(),
+            irradiance: m.params.i,
+            overture: m.picture.overture_step(&m.params),
         };
         let amb_before = ambient
             .as_ref()

@@ -8,7 +8,7 @@ use crate::light::direct::direct;
 use crate::light::source::LightSet;
 use crate::material::emitter::EmitterKind;
 use crate::material::{MatId, Material};
-use crate::radopt::RenderParams;
+use crate::options::RenderParams;
 use crate::scene::Scene;
 use crate::FTINY;
 use glam::DVec3;
