@@ -10,6 +10,8 @@
 //! - [`material`]: one file per material family.
 //! - [`light`]: light sources and direct lighting.
 //! - [`render`]: the ray tracer, per-pixel sampling and the pixel loop.
+//! - [`session`]: one render session (scene, lights, threads, ambient calculation and its
+//!   stores), used by `tpict` and `tpiece` alike.
 //! - [`image`]: pictures in memory and the `hdr`, `exr` and `png` formats.
 //! - [`tpict`]: the rpict-compatible driver behind the `tpict` binary.
 //! - [`runinfo`]: what every tool shares about the running program (software name,
@@ -29,6 +31,7 @@ pub mod options;
 pub mod render;
 pub mod runinfo;
 pub mod scene;
+pub mod session;
 pub mod tpict;
 pub mod view;
 

@@ -79,7 +79,7 @@ pub fn assemble_frame(
     let p = &m.params;
     if crate::ambient::settings::computes(p.ab, p.ad) {
         img.header.extra.push((
-            crate::tpict::AMBIENT_HEADER_VAR.into(),
+            crate::session::AMBIENT_HEADER_VAR.into(),
             format!(" {}", p.amb.to_text()),
         ));
     }

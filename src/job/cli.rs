@@ -2,9 +2,9 @@
 //! the process exit status; errors are printed as `<program>: error: ...`.
 
 use super::manifest::{create_job, Manifest, PlanRequest};
-use super::share::FlushPolicy;
 use super::worker::{run_worker, WorkerOptions};
 use super::JobDir;
+use crate::session::store::FlushPolicy;
 use anyhow::{anyhow, bail, Result};
 use clap::Parser;
 use std::path::PathBuf;
