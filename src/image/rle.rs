@@ -1,5 +1,5 @@
-//! RGBE pixels and the scanline codec of Radiance pictures (see [`super::hdr`] for the
-//! format): new run-length encoding (four component streams of run and literal packets),
+//! RGBE pixels and the scanline codec of Radiance pictures (the format is described in
+//! `hdr.rs`): new run-length encoding (four component streams of run and literal packets),
 //! old run-length encoding (`1 1 1 n` repeats) and flat scanlines.
 
 use std::io::{self, BufRead};
