@@ -1,8 +1,8 @@
 //! Tessera: a Radiance-compatible renderer (`tpict`) and batch toolkit.
 //!
 //! The pipeline, in the order a render runs through it:
-//! - [`radopt`]: Radiance's own option language (`-ab 2 -vp x y z -i+`, `@file`), shared by
-//!   `tpict`, view files and job manifests.
+//! - [`options`]: Radiance's own option language (`-ab 2 -vp x y z -i+`, `@file`), shared by
+//!   `tpict`, view files and job manifests; render, picture and run parameters.
 //! - [`view`]: view types, the view frame and the pixel ↔ ray mapping.
 //! - [`scene`]: the scene language (lexer → primitives → scene), inline commands, `xform`,
 //!   `genbox`.
@@ -14,8 +14,12 @@
 //!   stores (Radiance's ambient files, Tessera's append-only logs).
 //! - [`render`]: the ray tracer, shading points and modifier chains, per-pixel sampling and
 //!   the pixel loop.
+//! - [`session`]: one render session (scene, lights, threads, ambient calculation and its
+//!   stores), used by `tpict` and `tpiece` alike.
 //! - [`image`]: pictures in memory and the `hdr`, `exr` and `png` formats.
 //! - [`tpict`]: the rpict-compatible driver behind the `tpict` binary.
+//! - [`runinfo`]: what every tool shares about the running program (software name,
+//!   threads, CPU time, frame names).
 //! - [`job`]: the batch toolkit's job directory: plan, workers, merge, assembly, status.
 
 pub mod ambient;
@@ -28,9 +32,11 @@ pub mod job;
 pub mod light;
 pub mod material;
 pub mod modifier;
-pub mod radopt;
+pub mod options;
 pub mod render;
+pub mod runinfo;
 pub mod scene;
+pub mod session;
 pub mod tpict;
 pub mod view;
 

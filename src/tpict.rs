@@ -2,10 +2,11 @@
 
 use crate::ambient::Ambient;
 use crate::image::{output, write_picture, Header, Image};
-use crate::light::LightSet;
-use crate::radopt::{defaults_text, parse_rpict_args, Command, RpictOptions};
-use crate::render::{render_region, FrameSetup, RenderProgress, Tracer};
-use crate::scene::{read_scene_files, ReadOptions, Scene};
+use crate::options::{defaults_text, parse_rpict_args, Command, RpictOptions, RunParams};
+use crate::render::RenderProgress;
+use crate::runinfo::{frame_name, process_cpu_seconds, SOFTWARE};
+use crate::scene::ReadOptions;
+use crate::session::{Region, SceneSource, Session};
 use crate::view::{normaspect, parse_view_line, View};
 use anyhow::{anyhow, bail, Context, Result};
 use std::io::{BufRead, IsTerminal, Write};
@@ -13,9 +14,6 @@ use std::path::Path;
 use std::sync::atomic::Ordering;
 use std::sync::Mutex;
 use std::time::{Duration, Instant};
-
-/// Version string printed by `-version` and written as `SOFTWARE=`.
-pub const SOFTWARE: &str = concat!("Tessera tpict ", env!("CARGO_PKG_VERSION"));
 
 /// Where messages go (stderr, or the `-e` file).
 pub struct Log {
@@ -76,8 +74,8 @@ fn run_inner(args: &[String], mut log: Log) -> std::result::Result<(), (Log, any
         }
         Command::Render(o) => *o,
     };
-    log.warnings = opts.warnings;
-    if let Some(ef) = &opts.error_file {
+    log.warnings = opts.run.warnings;
+    if let Some(ef) = &opts.run.error_file {
         match std::fs::OpenOptions::new()
             .create(true)
             .append(true)
@@ -103,116 +101,85 @@ fn run_inner(args: &[String], mut log: Log) -> std::result::Result<(), (Log, any
     }
 }
 
-/// Number of render threads: `-n`, else `SLURM_CPUS_PER_TASK`, else all cores.
-pub fn thread_count(opt: Option<usize>) -> usize {
-    if let Some(n) = opt {
-        return n.max(1);
-    }
-    if let Ok(v) = std::env::var("SLURM_CPUS_PER_TASK") {
-        if let Ok(n) = v.trim().parse::<usize>() {
-            if n > 0 {
-                return n;
-            }
-        }
-    }
-    std::thread::available_parallelism()
-        .map(|n| n.get())
-        .unwrap_or(1)
-}
-
-/// Load and build the scene named by the options.
-pub fn load_scene(opts: &RpictOptions, log: &Log) -> Result<(Scene, LightSet, [u8; 32])> {
+/// Read the scene named by the options and start the render session, its warnings logged.
+pub fn start_session(opts: &RpictOptions, log: &Log) -> Result<Session> {
     let mut ro = ReadOptions::from_env();
-    ro.allow_commands |= opts.allow_commands;
+    ro.allow_commands |= opts.run.allow_commands;
     let files = if opts.scene_files.is_empty() {
-        if opts.sequence_start.is_some() {
+        if opts.run.sequence_start.is_some() {
             bail!("no scene files given (with -S, views come from standard input, so the scene cannot)");
         }
         vec!["-".to_string()]
     } else {
         opts.scene_files.clone()
     };
-    let prims = read_scene_files(&files, &ro)?;
-    let fp = crate::ambient::fingerprint::fingerprint(&prims, &opts.params);
-    let scene = Scene::build(&prims)?;
-    for w in &scene.warnings {
+    let source = SceneSource::read(&files, &ro, &opts.params)?;
+    let session = Session::start(opts.params.clone(), source, opts.run.threads)?;
+    for w in &session.warnings {
         log.warn(w);
     }
-    let lights = LightSet::collect(&scene, opts.params.dr);
-    for w in &lights.warnings {
-        log.warn(w);
-    }
-    if lights.sources.is_empty() {
-        log.warn("no light sources found");
-    }
-    Ok((scene, lights, fp))
+    Ok(session)
 }
 
-fn render_command(args: &[String], opts: &RpictOptions, log: &Log) -> Result<()> {
-    if opts.pm != 0.0 || opts.pd != 0.0 {
-        bail!("-pm (motion blur) and -pd (depth of field) are not supported yet; use -pm 0 -pd 0");
-    }
-    let (scene, lights, fingerprint) = load_scene(opts, log)?;
-    let ambient = Ambient::new(&opts.params, scene.size, process_origin_id());
-    let my_origin = ambient.as_ref().map(|a| a.cache.next_id().origin);
-    let amb_file = match (&ambient, &opts.params.af) {
-        (Some(a), Some(_)) if !a.cached() => {
+/// Attach the ambient stores the run options ask for (`-af`, `--amb-log`); returns the
+/// ambient file to append to at the end.
+fn open_stores(session: &mut Session, run: &RunParams, log: &Log) -> Result<Option<String>> {
+    let uncached = session.ambient.is_some() && session.cached_ambient().is_none();
+    let amb_file = match &run.amb_file {
+        Some(_) if uncached => {
             log.warn("-aa 0 disables the cache: the ambient file is not used");
             None
         }
-        (Some(a), Some(af)) => {
-            load_ambient_file(a, Path::new(af), scene.origin, log)?;
+        Some(af) if session.ambient.is_some() => {
+            if let Some(w) = session.load_ambient_file(Path::new(af))? {
+                log.warn(&w);
+            }
             Some(af.clone())
         }
         _ => None,
     };
-    let log_sink = match (&ambient, &opts.amb_log) {
-        (Some(a), Some(_)) if !a.cached() => {
-            log.warn("-aa 0 disables the cache: the ambient log is not used");
-            None
+    match &run.amb_log {
+        Some(_) if uncached => log.warn("-aa 0 disables the cache: the ambient log is not used"),
+        Some(path) if session.ambient.is_some() => {
+            session.open_log(Path::new(path), run.amb_force, run.amb_flush)?
         }
-        (Some(a), Some(path)) => Some(open_ambient_log(
-            a,
-            Path::new(path),
-            fingerprint,
-            opts,
-            scene.origin,
-        )?),
-        (None, Some(_)) => {
-            log.warn("--amb-log has no effect without -ab > 0");
-            None
-        }
-        _ => None,
+        Some(_) => log.warn("--amb-log has no effect without -ab > 0"),
+        None => {}
+    }
+    Ok(amb_file)
+}
+
+fn render_command(args: &[String], opts: &RpictOptions, log: &Log) -> Result<()> {
+    if opts.picture.pm != 0.0 || opts.picture.pd != 0.0 {
+        bail!("-pm (motion blur) and -pd (depth of field) are not supported yet; use -pm 0 -pd 0");
+    }
+    let mut session = start_session(opts, log)?;
+    let amb_file = open_stores(&mut session, &opts.run, log)?;
+    let run = Run {
+        opts,
+        session: &session,
+        command_line: format!("tpict {}", args.join(" ")),
+        log,
+        stats: Mutex::new(RunStats {
+            software: SOFTWARE.to_string(),
+            threads: session.threads,
+            ..RunStats::default()
+        }),
     };
-    let ctx = RenderCtx {
-        scene: &scene,
-        lights: &lights,
-        ambient: ambient.as_ref(),
-    };
-    let threads = thread_count(opts.threads);
-    let pool = rayon::ThreadPoolBuilder::new()
-        .num_threads(threads)
-        .build()
-        .context("cannot start render threads")?;
-    let command_line = format!("tpict {}", args.join(" "));
-    let stats = Mutex::new(RunStats {
-        software: SOFTWARE.to_string(),
-        threads,
-        ..RunStats::default()
-    });
     let started = Instant::now();
-    let result = render_frames(opts, &ctx, &pool, &command_line, log, &stats);
-    if let Some(sink) = &log_sink {
-        sink.finish()?;
+    let result = match opts.run.sequence_start {
+        None => run.render_single(),
+        Some(start) => run.render_sequence(start),
+    };
+    session.finish()?;
+    if let Some(af) = &amb_file {
+        session.save_ambient_file(Path::new(af))?;
     }
-    if let (Some(a), Some(af), Some(me)) = (&ambient, &amb_file, my_origin) {
-        save_ambient_file(a, Path::new(af), scene.origin, me, &opts.params)?;
-    }
-    if let Some(path) = &opts.stats_file {
-        let mut st = stats.into_inner().unwrap_or_default();
+    if let Some(path) = &opts.run.stats_file {
+        let mut st = run.stats.into_inner().unwrap_or_default();
         st.wall_seconds = started.elapsed().as_secs_f64();
         st.cpu_seconds = process_cpu_seconds();
-        if let Some(a) = &ambient {
+        if let Some(a) = &session.ambient {
             st.ambient = Some(AmbientReport::from_stats(a));
         }
         st.rays_per_second = if st.wall_seconds > 0.0 {
@@ -227,178 +194,209 @@ fn render_command(args: &[String], opts: &RpictOptions, log: &Log) -> Result<()>
     result
 }
 
-/// Appends this process's new ambient values to a Tessera ambient log, one write per
-/// `--amb-flush` values.
-pub struct LogSink {
-    writer: Mutex<crate::ambient::log::LogWriter>,
-    every: usize,
-    origin: glam::DVec3,
-    error: Mutex<Option<String>>,
+/// What every frame of a run shares: the options, the session, the log and the statistics.
+struct Run<'a> {
+    opts: &'a RpictOptions,
+    session: &'a Session,
+    command_line: String,
+    log: &'a Log,
+    stats: Mutex<RunStats>,
 }
 
-impl LogSink {
-    /// Flush what is pending and report the first error met while rendering.
-    pub fn finish(&self) -> Result<()> {
-        if let Ok(mut w) = self.writer.lock() {
-            w.flush().map_err(|e| anyhow!("ambient log: {e}"))?;
+impl Run<'_> {
+    /// One picture of the options' view, to `-o` (never clobbered) or standard output.
+    fn render_single(&self) -> Result<()> {
+        let out = self.opts.run.output.as_deref();
+        if let Some(o) = out {
+            if Path::new(o).exists() {
+                bail!("cannot open output file \"{o}\": File exists");
+            }
         }
-        match self.error.lock().ok().and_then(|mut e| e.take()) {
-            Some(e) => Err(anyhow!("ambient log: {e}")),
-            None => Ok(()),
+        let mut img = self.render_view(&self.opts.picture.view, 0)?;
+        img.header.commands.push(self.command_line.clone());
+        match out {
+            Some(o) => write_new_picture(Path::new(o), &img),
+            None => Ok(write_picture(None, &img)?),
         }
     }
-}
 
-impl crate::ambient::cache::ValueSink for std::sync::Arc<LogSink> {
-    fn accept(&self, v: &crate::ambient::cache::CachedValue) {
-        if let Ok(mut w) = self.writer.lock() {
-            w.push(&v.to_record(self.origin));
-            if w.pending() >= self.every {
-                if let Err(e) = w.flush() {
-                    if let Ok(mut slot) = self.error.lock() {
-                        slot.get_or_insert(e.to_string());
-                    }
+    /// `-S`: one picture per view line of standard input, frames numbered from `start`.
+    fn render_sequence(&self, start: u32) -> Result<()> {
+        let stdin = std::io::stdin();
+        let mut frame = start;
+        let mut base = self.opts.picture.view.clone();
+        for line in stdin.lock().lines() {
+            let line = line.context("reading views from standard input")?;
+            let Some(view) = parse_view_line(&line, &base)? else {
+                continue;
+            };
+            base = view.clone();
+            let n = frame;
+            frame += 1;
+            if self.opts.run.report_interval > 0.0 {
+                self.log
+                    .say(&format!("FRAME {n}: {}", view.to_radiance_string()));
+            }
+            match &self.opts.run.output {
+                Some(pattern) => self.render_frame_file(&view, n, &frame_name(pattern, n)?)?,
+                None => {
+                    let img = self.render_frame(&view, n)?;
+                    write_picture(None, &img)?;
                 }
             }
         }
-    }
-}
-
-/// Open (or create) a Tessera ambient log: refuse it when its fingerprint does not match
-/// the scene and ambient options (unless `--amb-force`), load its values into the cache and
-/// append this process's new values to it.
-pub fn open_ambient_log(
-    a: &Ambient,
-    path: &Path,
-    fingerprint: [u8; 32],
-    opts: &RpictOptions,
-    origin: glam::DVec3,
-) -> Result<std::sync::Arc<LogSink>> {
-    use crate::ambient::log::{LogHeader, LogReader, LogWriter};
-    let header = LogHeader::new(
-        fingerprint,
-        &crate::ambient::fingerprint::options_text(&opts.params),
-    );
-    if path.exists() {
-        let mut r = LogReader::open(path, Some(&fingerprint), opts.amb_force)?;
-        for rec in r.read_available()? {
-            a.cache
-                .insert(crate::ambient::cache::CachedValue::from_record(
-                    &rec, origin,
-                ));
+        if frame == start {
+            // As rpict: standard input held no view line (`VIEW=`, `rview ...`).
+            self.log.warn("no output produced");
         }
+        Ok(())
     }
-    let writer = LogWriter::open(path, &header, opts.amb_force)?;
-    let sink = std::sync::Arc::new(LogSink {
-        writer: Mutex::new(writer),
-        every: opts.amb_flush.max(1),
-        origin,
-        error: Mutex::new(None),
-    });
-    a.cache.set_sink(Box::new(sink.clone()));
-    Ok(sink)
-}
 
-/// Load the values of a Radiance ambient file (`-af`) into the cache, if the file exists.
-pub fn load_ambient_file(a: &Ambient, path: &Path, origin: glam::DVec3, log: &Log) -> Result<()> {
-    if !path.exists() {
-        return Ok(());
+    /// One frame of a sequence with its header.
+    fn render_frame(&self, view: &View, n: u32) -> Result<Image> {
+        let mut img = self.render_view(view, n)?;
+        img.header.commands.push(self.command_line.clone());
+        img.header.frame = Some(n);
+        Ok(img)
     }
-    let (_, records, report) = crate::ambient::radfile::read_file(path)
-        .with_context(|| format!("cannot read ambient file {}", path.display()))?;
-    for r in &records {
-        a.cache
-            .insert(crate::ambient::cache::CachedValue::from_record(r, origin));
-    }
-    if report.invalid > 0 || report.trailing_bytes > 0 {
-        log.warn(&format!(
-            "ambient file {}: ignored {} invalid records and {} trailing bytes",
-            path.display(),
-            report.invalid,
-            report.trailing_bytes
-        ));
-    }
-    Ok(())
-}
 
-/// Append this process's new values to a Radiance ambient file (`-af`), creating it with a
-/// header when it does not exist. The new values go out in one write.
-pub fn save_ambient_file(
-    a: &Ambient,
-    path: &Path,
-    origin: glam::DVec3,
-    my_origin: u64,
-    params: &crate::radopt::RenderParams,
-) -> Result<()> {
-    use crate::ambient::radfile;
-    let mine: Vec<_> = a
-        .cache
-        .all()
-        .into_iter()
-        .filter(|v| v.id.origin == my_origin)
-        .map(|v| v.to_record(origin))
-        .collect();
-    let mut bytes = Vec::with_capacity(mine.len() * radfile::RECORD_SIZE);
-    for r in &mine {
-        radfile::write_record(&mut bytes, r)?;
-    }
-    if path.exists() {
-        let mut f = std::fs::OpenOptions::new()
-            .append(true)
+    /// One frame of a sequence to its own file, claimed first as rpict does: a frame whose
+    /// file exists belongs to another process (or is done) and is skipped.
+    fn render_frame_file(&self, view: &View, n: u32, name: &str) -> Result<()> {
+        let path = Path::new(name);
+        match std::fs::OpenOptions::new()
+            .write(true)
+            .create_new(true)
             .open(path)
-            .with_context(|| format!("cannot append to ambient file {}", path.display()))?;
-        f.write_all(&bytes)
-            .with_context(|| format!("cannot append to ambient file {}", path.display()))?;
-    } else {
-        let line = format!(
-            "tpict -av {} {} {} -aw {} -ab {} -aa {} -ad {} -as {} -ar {}",
-            params.av[0],
-            params.av[1],
-            params.av[2],
-            params.aw,
-            params.ab,
-            params.aa,
-            params.ad,
-            params.as_,
-            params.ar
-        );
-        let mut out = Vec::new();
-        radfile::write_header(&mut out, &line, SOFTWARE)?;
-        out.extend_from_slice(&bytes);
-        output::write_atomic(path, |f| f.write_all(&out))
-            .with_context(|| format!("cannot write ambient file {}", path.display()))?;
+        {
+            Ok(_) => {}
+            Err(e) if e.kind() == std::io::ErrorKind::AlreadyExists => return Ok(()),
+            Err(e) => bail!("cannot create output file \"{name}\": {e}"),
+        }
+        let img = match self.render_frame(view, n) {
+            Ok(img) => img,
+            Err(e) => {
+                let _ = std::fs::remove_file(path);
+                return Err(e);
+            }
+        };
+        // Replace the claimed (empty) file atomically with the picture.
+        if let Err(e) = write_picture(Some(path), &img) {
+            let _ = std::fs::remove_file(path);
+            return Err(anyhow!(e));
+        }
+        Ok(())
     }
-    Ok(())
-}
 
-/// What every frame of a run shares: the scene, its lights and the irradiance cache.
-pub struct RenderCtx<'a> {
-    /// The scene.
-    pub scene: &'a Scene,
-    /// Its light sources.
-    pub lights: &'a LightSet,
-    /// The irradiance cache (`-ab` > 0), kept across frames.
-    pub ambient: Option<&'a Ambient>,
-}
-
-/// An id for this process's ambient values: a hash of host name, process id and start time.
-pub fn process_origin_id() -> u64 {
-    let host = std::fs::read_to_string("/proc/sys/kernel/hostname").unwrap_or_default();
-    let t = std::time::SystemTime::now()
-        .duration_since(std::time::UNIX_EPOCH)
-        .map(|d| d.as_nanos() as u64)
-        .unwrap_or(0);
-    let mut h: u64 = 0xcbf2_9ce4_8422_2325;
-    for b in host
-        .trim()
-        .bytes()
-        .chain(std::process::id().to_le_bytes())
-        .chain(t.to_le_bytes())
-    {
-        h ^= b as u64;
-        h = h.wrapping_mul(0x0100_0000_01b3);
+    /// Render one view at the options' resolution into a picture with its header.
+    fn render_view(&self, view: &View, frame: u32) -> Result<Image> {
+        let (opts, session) = (self.opts, self.session);
+        let vf = view.frame().map_err(|e| anyhow!("bad view: {e}"))?;
+        let mut pa = opts.picture.pa;
+        let (mut x, mut y) = (opts.picture.x, opts.picture.y);
+        normaspect(vf.aspect(), &mut pa, &mut x, &mut y);
+        if x == 0 || y == 0 {
+            bail!("resolution {x}x{y} is empty");
+        }
+        let fs = opts
+            .picture
+            .frame_setup(&session.params, &vf, (x, y), frame);
+        let progress = RenderProgress::default();
+        let start = Instant::now();
+        let region = Region {
+            x0: 0,
+            y0: 0,
+            x1: x,
+            y1: y,
+        };
+        let pixels = self.with_reports(&progress, start, || session.render(&fs, region, &progress));
+        if let Ok(mut st) = self.stats.lock() {
+            let rays = progress.rays.load(Ordering::Relaxed);
+            st.total_rays += rays;
+            st.frames.push(FrameStats {
+                frame,
+                width: x,
+                height: y,
+                rays,
+                wall_seconds: start.elapsed().as_secs_f64(),
+            });
+        }
+        let mut img = Image::new(x, y);
+        img.pixels = pixels;
+        img.header = Header {
+            software: Some(SOFTWARE.to_string()),
+            view: Some(view.to_radiance_string()),
+            pixaspect: if (0.995..=1.005).contains(&pa) {
+                None
+            } else {
+                Some(pa)
+            },
+            exposure: 1.0,
+            format: "32-bit_rle_rgbe".to_string(),
+            extra: session.ambient_header(),
+            ..Header::default()
+        };
+        Ok(img)
     }
-    h
+
+    /// Run `render` while a progress bar (on a terminal) or `-t` reports show its progress.
+    fn with_reports<T>(
+        &self,
+        progress: &RenderProgress,
+        start: Instant,
+        render: impl FnOnce() -> T,
+    ) -> T {
+        let interval = self.opts.run.report_interval;
+        let ambient = self.session.ambient.as_deref();
+        let bar = if std::io::stderr().is_terminal() && interval <= 0.0 {
+            let b = indicatif::ProgressBar::new(100);
+            b.set_style(
+                indicatif::ProgressStyle::with_template(
+                    "{bar:40} {percent:>3}% {elapsed} ETA {eta}",
+                )
+                .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar()),
+            );
+            Some(b)
+        } else {
+            None
+        };
+        let done = std::sync::atomic::AtomicBool::new(false);
+        let out = std::thread::scope(|s| {
+            let reporter = s.spawn(|| {
+                let mut last = Instant::now();
+                while !done.load(Ordering::Relaxed) {
+                    // Parked rather than slept, so that the render's end (which unparks this
+                    // thread) is not delayed by up to 100 ms waiting for the join below.
+                    std::thread::park_timeout(Duration::from_millis(100));
+                    if done.load(Ordering::Relaxed) {
+                        break;
+                    }
+                    let total = progress.rows_total.load(Ordering::Relaxed).max(1);
+                    let pct =
+                        100.0 * progress.rows_done.load(Ordering::Relaxed) as f64 / total as f64;
+                    if let Some(b) = &bar {
+                        b.set_position(pct as u64);
+                    }
+                    if interval > 0.0 && last.elapsed().as_secs_f64() >= interval {
+                        last = Instant::now();
+                        self.log.say(&report_line(progress, pct, start, ambient));
+                    }
+                }
+            });
+            let out = render();
+            done.store(true, Ordering::Relaxed);
+            reporter.thread().unpark();
+            let _ = reporter.join();
+            out
+        });
+        if let Some(b) = bar {
+            b.finish_and_clear();
+        }
+        if interval > 0.0 {
+            self.log.say(&report_line(progress, 100.0, start, ambient));
+        }
+        out
+    }
 }
 
 /// Ambient counters in `--stats` output.
@@ -492,109 +490,6 @@ pub struct FrameStats {
     pub wall_seconds: f64,
 }
 
-/// User + system CPU seconds of this process (Linux `/proc/self/stat`), or None.
-pub fn process_cpu_seconds() -> Option<f64> {
-    let text = std::fs::read_to_string("/proc/self/stat").ok()?;
-    // Fields after the parenthesised command name; utime and stime are fields 14 and 15.
-    let rest = &text[text.rfind(')')? + 2..];
-    let f: Vec<&str> = rest.split_whitespace().collect();
-    let utime: f64 = f.get(11)?.parse().ok()?;
-    let stime: f64 = f.get(12)?.parse().ok()?;
-    Some((utime + stime) / 100.0)
-}
-
-#[allow(clippy::too_many_arguments)]
-fn render_frames(
-    opts: &RpictOptions,
-    ctx: &RenderCtx,
-    pool: &rayon::ThreadPool,
-    command_line: &str,
-    log: &Log,
-    stats: &Mutex<RunStats>,
-) -> Result<()> {
-    let command_line = command_line.to_string();
-    match opts.sequence_start {
-        None => {
-            if let Some(o) = &opts.output {
-                if Path::new(o).exists() {
-                    bail!("cannot open output file \"{o}\": File exists");
-                }
-            }
-            let mut img = pool.install(|| render_view(ctx, opts, &opts.view, 0, log, stats))?;
-            img.header.commands.push(command_line);
-            match &opts.output {
-                Some(o) => {
-                    let path = Path::new(o);
-                    write_new_picture(path, &img)?;
-                }
-                None => write_picture(None, &img)?,
-            }
-        }
-        Some(start) => {
-            let stdin = std::io::stdin();
-            let mut frame = start;
-            let mut base = opts.view.clone();
-            for line in stdin.lock().lines() {
-                let line = line.context("reading views from standard input")?;
-                let Some(view) = parse_view_line(&line, &base)? else {
-                    continue;
-                };
-                base = view.clone();
-                let n = frame;
-                frame += 1;
-                if opts.report_interval > 0.0 {
-                    log.say(&format!("FRAME {n}: {}", view.to_radiance_string()));
-                }
-                match &opts.output {
-                    Some(pattern) => {
-                        let name = frame_name(pattern, n)?;
-                        let path = Path::new(&name);
-                        // Claim the frame as rpict does: create its file with O_EXCL; a frame
-                        // whose file exists belongs to another process (or is done).
-                        match std::fs::OpenOptions::new()
-                            .write(true)
-                            .create_new(true)
-                            .open(path)
-                        {
-                            Ok(_) => {}
-                            Err(e) if e.kind() == std::io::ErrorKind::AlreadyExists => continue,
-                            Err(e) => bail!("cannot create output file \"{name}\": {e}"),
-                        }
-                        let rendered =
-                            pool.install(|| render_view(ctx, opts, &view, n, log, stats));
-                        let mut img = match rendered {
-                            Ok(img) => img,
-                            Err(e) => {
-                                let _ = std::fs::remove_file(path);
-                                return Err(e);
-                            }
-                        };
-                        img.header.commands.push(command_line.clone());
-                        img.header.frame = Some(n);
-                        // Replace the claimed (empty) file atomically with the picture.
-                        if let Err(e) = write_picture(Some(path), &img) {
-                            let _ = std::fs::remove_file(path);
-                            return Err(anyhow!(e));
-                        }
-                    }
-                    None => {
-                        let mut img =
-                            pool.install(|| render_view(ctx, opts, &view, n, log, stats))?;
-                        img.header.commands.push(command_line.clone());
-                        img.header.frame = Some(n);
-                        write_picture(None, &img)?;
-                    }
-                }
-            }
-            if frame == start {
-                // As rpict: standard input held no view line (`VIEW=`, `rview ...`).
-                log.warn("no output produced");
-            }
-        }
-    }
-    Ok(())
-}
-
 /// Write a picture to a path that must not exist yet (never clobbers).
 fn write_new_picture(path: &Path, img: &Image) -> Result<()> {
     use crate::image::PictureFormat;
@@ -616,174 +511,6 @@ fn write_new_picture(path: &Path, img: &Image) -> Result<()> {
         }
     }
 }
-
-/// Expand a printf-style frame pattern (`%d`, `%03d`, `%%`).
-pub fn frame_name(pattern: &str, n: u32) -> Result<String> {
-    let mut out = String::new();
-    let mut chars = pattern.chars().peekable();
-    let mut used = false;
-    while let Some(c) = chars.next() {
-        if c != '%' {
-            out.push(c);
-            continue;
-        }
-        if chars.peek() == Some(&'%') {
-            chars.next();
-            out.push('%');
-            continue;
-        }
-        let mut spec = String::new();
-        while let Some(&d) = chars.peek() {
-            if d.is_ascii_digit() {
-                spec.push(d);
-                chars.next();
-            } else {
-                break;
-            }
-        }
-        match chars.next() {
-            Some('d') | Some('i') => {
-                let zero = spec.starts_with('0');
-                let width: usize = spec.parse().unwrap_or(0);
-                if zero {
-                    out.push_str(&format!("{n:0width$}"));
-                } else {
-                    out.push_str(&format!("{n:width$}"));
-                }
-                used = true;
-            }
-            other => bail!(
-                "output pattern '{pattern}': unsupported conversion '%{spec}{}'",
-                other.map(String::from).unwrap_or_default()
-            ),
-        }
-    }
-    if !used {
-        bail!("output pattern '{pattern}' needs a %d for the frame number with -S");
-    }
-    Ok(out)
-}
-
-/// Render one view at the options' resolution into a picture with its header.
-pub fn render_view(
-    ctx: &RenderCtx,
-    opts: &RpictOptions,
-    view: &View,
-    frame: u32,
-    log: &Log,
-    stats: &Mutex<RunStats>,
-) -> Result<Image> {
-    let vf = view.frame().map_err(|e| anyhow!("bad view: {e}"))?;
-    let mut pa = opts.pa;
-    let (mut x, mut y) = (opts.x, opts.y);
-    normaspect(vf.aspect(), &mut pa, &mut x, &mut y);
-    if x == 0 || y == 0 {
-        bail!("resolution {x}x{y} is empty");
-    }
-    let tracer = Tracer::new(ctx.scene, &opts.params, ctx.lights).with_ambient(ctx.ambient);
-    let fs = FrameSetup {
-        view: &vf,
-        xres: x,
-        yres: y,
-        pj: opts.pj,
-        ps: opts.ps,
-        pt: opts.pt,
-        frame,
-        irradiance: opts.params.i,
-        overture: opts.overture_step(),
-    };
-    let progress = RenderProgress::default();
-    let start = Instant::now();
-    let bar = if std::io::stderr().is_terminal() && opts.report_interval <= 0.0 {
-        let b = indicatif::ProgressBar::new(100);
-        b.set_style(
-            indicatif::ProgressStyle::with_template("{bar:40} {percent:>3}% {elapsed} ETA {eta}")
-                .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar()),
-        );
-        Some(b)
-    } else {
-        None
-    };
-    let done = std::sync::atomic::AtomicBool::new(false);
-    let pixels = std::thread::scope(|s| {
-        let reporter = s.spawn(|| {
-            let mut last = Instant::now();
-            while !done.load(Ordering::Relaxed) {
-                // Parked rather than slept, so that the render's end (which unparks this
-                // thread) is not delayed by up to 100 ms waiting for the join below.
-                std::thread::park_timeout(Duration::from_millis(100));
-                if done.load(Ordering::Relaxed) {
-                    break;
-                }
-                let total = progress.rows_total.load(Ordering::Relaxed).max(1);
-                let pct = 100.0 * progress.rows_done.load(Ordering::Relaxed) as f64 / total as f64;
-                if let Some(b) = &bar {
-                    b.set_position(pct as u64);
-                }
-                if opts.report_interval > 0.0
-                    && last.elapsed().as_secs_f64() >= opts.report_interval
-                {
-                    last = Instant::now();
-                    log.say(&report_line(&progress, pct, start, ctx.ambient));
-                }
-            }
-        });
-        let px = render_region(&tracer, &fs, 0, 0, x, y, &progress);
-        done.store(true, Ordering::Relaxed);
-        reporter.thread().unpark();
-        let _ = reporter.join();
-        px
-    });
-    if let Some(b) = bar {
-        b.finish_and_clear();
-    }
-    if opts.report_interval > 0.0 {
-        log.say(&report_line(&progress, 100.0, start, ctx.ambient));
-    }
-    if let Ok(mut st) = stats.lock() {
-        let rays = progress.rays.load(Ordering::Relaxed);
-        st.total_rays += rays;
-        st.frames.push(FrameStats {
-            frame,
-            width: x,
-            height: y,
-            rays,
-            wall_seconds: start.elapsed().as_secs_f64(),
-        });
-    }
-    let mut img = Image::new(x, y);
-    img.pixels = pixels;
-    img.header = Header {
-        software: Some(SOFTWARE.to_string()),
-        view: Some(view.to_radiance_string()),
-        pixaspect: if (0.995..=1.005).contains(&pa) {
-            None
-        } else {
-            Some(pa)
-        },
-        exposure: 1.0,
-        format: "32-bit_rle_rgbe".to_string(),
-        extra: ambient_header(ctx.ambient),
-        ..Header::default()
-    };
-    Ok(img)
-}
-
-/// The picture header's record of Tessera's ambient settings (`TESSERA_AMBIENT=` with every
-/// setting as an option), when the ambient calculation runs.
-pub fn ambient_header(ambient: Option<&Ambient>) -> Vec<(String, String)> {
-    ambient
-        .map(|a| {
-            vec![(
-                AMBIENT_HEADER_VAR.to_string(),
-                format!(" {}", a.settings().to_text()),
-            )]
-        })
-        .unwrap_or_default()
-}
-
-/// The header variable of [`ambient_header`].
-pub const AMBIENT_HEADER_VAR: &str = "TESSERA_AMBIENT";
 
 fn report_line(p: &RenderProgress, pct: f64, start: Instant, amb: Option<&Ambient>) -> String {
     let hours = start.elapsed().as_secs_f64() / 3600.0;

@@ -9,7 +9,7 @@ use std::path::Path;
 
 use glam::DVec3;
 
-use crate::radopt::{parse_f64, OptError};
+use crate::options::words::{parse_f64, OptError};
 use crate::FTINY;
 
 /// A Radiance view projection (`-vt?`).

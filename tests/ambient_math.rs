@@ -10,7 +10,7 @@ use tessera::ambient::hemisphere::{cell_variances, super_sample_shares};
 use tessera::ambient::hessian::{hessian, hessian_radii};
 use tessera::ambient::settings::AmbientSettings;
 use tessera::light::LightSet;
-use tessera::radopt::RenderParams;
+use tessera::options::RenderParams;
 use tessera::render::{render_region, FrameSetup, RenderProgress, Tracer};
 use tessera::scene::{read_scene_files, ReadOptions, Scene};
 use tessera::view::{normaspect, read_view_file, View};

@@ -10,7 +10,7 @@ use tessera::light::LightSet;
 use tessera::modifier::{
     MixCoefficient, ModifierKind, ModifierLookup, ModifierTypes, Pattern, Texture,
 };
-use tessera::radopt::RenderParams;
+use tessera::options::RenderParams;
 use tessera::render::ray::Ray;
 use tessera::render::sampler::Sampler;
 use tessera::render::shading::ShadingPoint;

@@ -6,9 +6,9 @@ use std::process::Command as Proc;
 use glam::DVec3;
 use proptest::prelude::*;
 use tessera::ambient::settings::AmbientSettings;
-use tessera::radopt::{
+use tessera::options::{
     defaults_text, expand_args, parse_rpict_args, split_words, to_args, Command, OptError,
-    RenderParams, RpictOptions,
+    PictureParams, RenderParams, RpictOptions, RunParams,
 };
 use tessera::view::{View, ViewType};
 
@@ -152,20 +152,29 @@ fn parses_everything() {
          -i -u+ -bv0 -dv- -dt 0.1 -dc 0.3 -dj 0.5 -ds 0.2 -dr 0 -dp 64 -ss 0.5 -st 0.3 \
          -lr -8 -lw 0.001 -me 0.1 0.2 0.3 -ma 0.5 0.5 0.5 -mg 0.7 -ms 0.2 -pRGB a.rad b.rad",
     );
-    assert_eq!(o.view.vtype, ViewType::Hemispherical);
-    assert_eq!(o.view.vp, DVec3::new(1.0, 2.0, 3.0));
+    assert_eq!(o.picture.view.vtype, ViewType::Hemispherical);
+    assert_eq!(o.picture.view.vp, DVec3::new(1.0, 2.0, 3.0));
     assert_eq!(
-        (o.x, o.y, o.pa, o.pj, o.pm, o.pd, o.ps, o.pt),
+        (
+            o.picture.x,
+            o.picture.y,
+            o.picture.pa,
+            o.picture.pj,
+            o.picture.pm,
+            o.picture.pd,
+            o.picture.ps,
+            o.picture.pt
+        ),
         (100, 80, 0.0, 0.5, 0.1, 0.02, 2, 0.1)
     );
-    assert_eq!(o.report_interval, 10.0);
-    assert!(!o.warnings);
-    assert_eq!(o.threads, Some(3));
-    assert_eq!(o.output.as_deref(), Some("out%03d.hdr"));
-    assert_eq!(o.sequence_start, Some(2));
-    assert_eq!(o.error_file.as_deref(), Some("err.log"));
-    assert!(o.allow_commands);
-    assert_eq!(o.stats_file.as_deref(), Some("st.json"));
+    assert_eq!(o.run.report_interval, 10.0);
+    assert!(!o.run.warnings);
+    assert_eq!(o.run.threads, Some(3));
+    assert_eq!(o.run.output.as_deref(), Some("out%03d.hdr"));
+    assert_eq!(o.run.sequence_start, Some(2));
+    assert_eq!(o.run.error_file.as_deref(), Some("err.log"));
+    assert!(o.run.allow_commands);
+    assert_eq!(o.run.stats_file.as_deref(), Some("st.json"));
     let p = &o.params;
     assert_eq!(
         (p.ab, p.aa, p.ar, p.ad, p.as_, p.aw),
@@ -173,7 +182,7 @@ fn parses_everything() {
     );
     assert_eq!(p.av, [1.0; 3]);
     assert_eq!(p.ae, vec!["glass", "metal"]);
-    assert_eq!(p.af.as_deref(), Some("amb.dat"));
+    assert_eq!(o.run.amb_file.as_deref(), Some("amb.dat"));
     assert!(p.i && p.u && !p.bv && !p.dv);
     assert_eq!(
         (p.dt, p.dc, p.dj, p.ds, p.dr, p.dp),
@@ -244,12 +253,12 @@ fn view_files_apply_in_order() {
     .unwrap();
     let vfs = vf.display().to_string();
     let o = render(&format!("-vp 9 9 9 -vh 30 -vtl -vf {vfs} -vv 20 s.rad"));
-    assert_eq!(o.view.vp, DVec3::new(3.0, 2.0, 5.0));
-    assert_eq!(o.view.vh, 45.0);
-    assert_eq!(o.view.vv, 20.0);
-    assert_eq!(o.view.vtype, ViewType::Parallel); // not set by the file
-                                                  // The file's -x/-y are not view options.
-    assert_eq!((o.x, o.y), (512, 512));
+    assert_eq!(o.picture.view.vp, DVec3::new(3.0, 2.0, 5.0));
+    assert_eq!(o.picture.view.vh, 45.0);
+    assert_eq!(o.picture.view.vv, 20.0);
+    assert_eq!(o.picture.view.vtype, ViewType::Parallel); // not set by the file
+                                                          // The file's -x/-y are not view options.
+    assert_eq!((o.picture.x, o.picture.y), (512, 512));
 }
 
 #[test]
@@ -296,7 +305,7 @@ fn at_files_and_env() {
         panic!()
     };
     assert_eq!((o.params.ab, o.params.aa, o.params.i), (4, 0.05, true));
-    assert_eq!(o.output.as_deref(), Some("my pic.hdr"));
+    assert_eq!(o.run.output.as_deref(), Some("my pic.hdr"));
     // Missing file names the file.
     let e = expand_args(&w("@/no/such/file.opt")).unwrap_err();
     assert!(e.to_string().contains("/no/such/file.opt"), "{e}");
@@ -380,15 +389,21 @@ prop_compose! {
         amb_log in proptest::option::of(name()),
         amb_flush in 1usize..1000,
         amb_force in any::<bool>(),
+        amb_file in proptest::option::of(name()),
         overture in any::<bool>(),
         p in any_params(),
     ) -> RpictOptions {
         RpictOptions {
-            view: View { vtype, vp: DVec3::from_array(vp), vd: DVec3::from_array(vd), vu: DVec3::Z,
-                         vh, vv, vo, va, vs, vl },
-            params: p, x, y, pa, pj, pm, pd, ps, pt, report_interval: t as f64, warnings,
-            threads, output, sequence_start: seq, error_file, allow_commands, stats_file,
-            amb_log, amb_flush, amb_force, overture,
+            picture: PictureParams {
+                view: View { vtype, vp: DVec3::from_array(vp), vd: DVec3::from_array(vd),
+                             vu: DVec3::Z, vh, vv, vo, va, vs, vl },
+                x, y, pa, pj, pm, pd, ps, pt, overture,
+            },
+            params: p,
+            run: RunParams {
+                report_interval: t as f64, warnings, threads, output, sequence_start: seq,
+                error_file, allow_commands, stats_file, amb_file, amb_log, amb_flush, amb_force,
+            },
             scene_files: vec!["scene.rad".into()],
         }
     }
@@ -402,14 +417,14 @@ prop_compose! {
         av in prop::array::uniform3(-1.0f64..10.0), aw in 0i32..100, ab in -2i32..8,
         aa in 0.0f64..1.0, ar in 0i32..4096, ad in 0i32..4096, as_ in 0i32..4096,
         names in proptest::collection::vec(name(), 0..4), include in any::<bool>(),
-        af in proptest::option::of(name()), i in any::<bool>(), u in any::<bool>(),
+        i in any::<bool>(), u in any::<bool>(),
         bv in any::<bool>(), me in prop::array::uniform3(0.0f64..1.0),
         ma in prop::array::uniform3(0.0f64..1.0), mg in -1.0f64..1.0, ms in 0.0f64..1.0,
         amb in any_settings(),
     ) -> RenderParams {
         let (ae, ai) = if include { (vec![], names) } else { (names, vec![]) };
         RenderParams { dt, dc, dj, ds, dr, dp, dv, ss, st, lr, lw, av, aw, ab, aa, ar, ad, as_,
-                       ae, ai, af, i, u, bv, me, ma, mg, ms, amb }
+                       ae, ai, i, u, bv, me, ma, mg, ms, amb }
     }
 }
 
@@ -485,8 +500,8 @@ proptest! {
 fn boolean_suffixes() {
     // rpict 6.0a itself accepts only bare, + - 1 0; tpict also takes the man page's y/t/n/f.
     let o = render("-iy -uT -bvf -dvN -wn");
-    assert!(o.params.i && o.params.u && !o.params.bv && !o.params.dv && !o.warnings);
+    assert!(o.params.i && o.params.u && !o.params.bv && !o.params.dv && !o.run.warnings);
     let o = render("-i -i -u1 -bv0 -dv -w");
-    assert!(!o.params.i && o.params.u && !o.params.bv && !o.params.dv && !o.warnings);
+    assert!(!o.params.i && o.params.u && !o.params.bv && !o.params.dv && !o.run.warnings);
     assert_eq!(err("-ix"), "unknown option -ix");
 }

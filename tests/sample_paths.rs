@@ -7,7 +7,7 @@ use common::scene_from_text;
 
 use glam::DVec3;
 use tessera::light::LightSet;
-use tessera::radopt::RenderParams;
+use tessera::options::RenderParams;
 use tessera::render::ray::{Ray, RayKind};
 use tessera::render::sampler::Sampler;
 use tessera::render::Tracer;

@@ -5,7 +5,7 @@ use std::process::Command;
 
 use glam::DVec3;
 use proptest::prelude::*;
-use tessera::radopt::OptError;
+use tessera::options::OptError;
 use tessera::view::{normaspect, parse_view_line, read_view_file, View, ViewType};
 
 mod common;

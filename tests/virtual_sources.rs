@@ -9,7 +9,7 @@ use common::scene_from_text;
 use glam::DVec3;
 use tessera::light::source::Partition;
 use tessera::light::LightSet;
-use tessera::radopt::RenderParams;
+use tessera::options::RenderParams;
 use tessera::render::sampler::Sampler;
 
 /// A square light 2 units above a small mirror (1 × 1, at z = 0, facing up); the light's

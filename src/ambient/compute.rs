@@ -10,7 +10,7 @@ use super::cache::AmbientCache;
 use super::settings::{caches, computes, AmbientSettings, AS0_SPLIT_LIMIT, CACHE_MIN_AA};
 use crate::color::{bright, Color};
 use crate::light::viscache::VisQuery;
-use crate::radopt::RenderParams;
+use crate::options::render::RenderParams;
 use crate::render::ray::{Hit, Ray};
 use crate::render::sampler::Sampler;
 use crate::render::trace::{DirectPlan, IndirectLight, IndirectRequest, Tracer};

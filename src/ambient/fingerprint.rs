@@ -7,8 +7,8 @@
 //! ambient values. The digest is 256 bits from four independently seeded 64-bit FNV-1a
 //! streams with a final avalanche mix (a content check, not a cryptographic hash).
 
-use crate::radopt::RenderParams;
-use crate::scene::Primitive;
+use crate::options::render::RenderParams;
+use crate::scene::primitive::Primitive;
 
 struct Hasher([u64; 4]);
 

@@ -229,7 +229,7 @@ mod tests {
     use super::*;
     use crate::ambient::compute::tests::{elevation, test_ambient, test_ambient_with, unit_value};
     use crate::ambient::settings::AmbientSettings;
-    use crate::radopt::RenderParams;
+    use crate::options::RenderParams;
 
     const Z: DVec3 = DVec3::Z;
 

@@ -402,7 +402,7 @@ pub fn glow_samples(cells: usize) -> usize {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::radopt::RenderParams;
+    use crate::options::RenderParams;
 
     #[test]
     fn divisions_follow_weight_and_lw() {

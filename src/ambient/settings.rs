@@ -3,7 +3,7 @@
 //!
 //! They are options like any other (`--amb-share-max 1`, `--amb-corral off`, ...), parsed
 //! here from Radiance-style words so that `tpict`, view/option files and job manifests share
-//! them, kept in [`crate::radopt::RenderParams::amb`], hashed into the ambient fingerprint
+//! them, kept in [`crate::options::RenderParams::amb`], hashed into the ambient fingerprint
 //! (two processes with different settings never share values) and written into picture
 //! headers and `--stats`. Nothing else configures the calculation.
 

@@ -7,7 +7,7 @@
 use glam::DVec3;
 
 use super::{disk_bounds, perp_frame, pick_root, quadratic_half, turn_fraction, vec_at};
-use crate::scene::Primitive;
+use crate::scene::primitive::Primitive;
 
 /// Which of the four cone-family types a [`Cone`] is.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]

@@ -25,7 +25,7 @@
 
 use glam::DVec3;
 
-use crate::scene::Primitive;
+use crate::scene::primitive::Primitive;
 use crate::FTINY;
 
 pub mod bvh;

@@ -8,7 +8,7 @@
 
 use glam::DVec3;
 
-use crate::scene::Primitive;
+use crate::scene::primitive::Primitive;
 use crate::FTINY;
 
 /// Relative tolerance for the non-planar-vertex warning (Radiance's `VERTEPS`).

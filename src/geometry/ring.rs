@@ -3,7 +3,7 @@
 use glam::DVec3;
 
 use super::{disk_bounds, perp_frame, turn_fraction, vec_at};
-use crate::scene::Primitive;
+use crate::scene::primitive::Primitive;
 use crate::FTINY;
 
 /// A flat annulus around `center` in the plane with unit `normal` (a disk when `r0 == 0`).

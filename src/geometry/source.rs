@@ -3,7 +3,7 @@
 use glam::DVec3;
 
 use super::{check_finite, vec_at};
-use crate::scene::Primitive;
+use crate::scene::primitive::Primitive;
 
 /// A distant source: direction toward the source (unit), full angular diameter in degrees,
 /// solid angle 2π(1−cos(angle/2)).

@@ -3,7 +3,7 @@
 use glam::DVec3;
 
 use super::{pick_root, quadratic_half, vec_at};
-use crate::scene::Primitive;
+use crate::scene::primitive::Primitive;
 
 /// A sphere (outward normal) or bubble (`inward`, normal toward the centre).
 #[derive(Clone, Debug)]

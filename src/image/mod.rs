@@ -18,6 +18,7 @@ pub mod exr;
 pub mod hdr;
 pub mod output;
 pub mod png;
+pub mod rle;
 
 use std::fmt;
 use std::path::{Path, PathBuf};

@@ -63,7 +63,7 @@ pub fn assemble_frame(
         }
     }
     img.header = Header {
-        software: Some(crate::tpict::SOFTWARE.to_string()),
+        software: Some(crate::runinfo::SOFTWARE.to_string()),
         view: Some(fp.view.to_radiance_string()),
         pixaspect: if (0.995..=1.005).contains(&fp.pixaspect) {
             None
@@ -76,10 +76,10 @@ pub fn assemble_frame(
         commands: vec![m.command.clone(), command.to_string()],
         ..Header::default()
     };
-    let p = &m.options.params;
+    let p = &m.params;
     if crate::ambient::settings::computes(p.ab, p.ad) {
         img.header.extra.push((
-            crate::tpict::AMBIENT_HEADER_VAR.into(),
+            crate::session::AMBIENT_HEADER_VAR.into(),
             format!(" {}", p.amb.to_text()),
         ));
     }

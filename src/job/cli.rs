@@ -2,9 +2,9 @@
 //! the process exit status; errors are printed as `<program>: error: ...`.
 
 use super::manifest::{create_job, Manifest, PlanRequest};
-use super::share::FlushPolicy;
 use super::worker::{run_worker, WorkerOptions};
 use super::JobDir;
+use crate::session::store::FlushPolicy;
 use anyhow::{anyhow, bail, Result};
 use clap::Parser;
 use std::path::PathBuf;
@@ -220,7 +220,7 @@ fn tmerge(a: TmergeArgs) -> Result<i32> {
     let job = JobDir::new(&a.job);
     let m = Manifest::load(&job)?;
     let fp = m.fingerprint_bytes();
-    let opts = crate::ambient::fingerprint::options_text(&m.options.params);
+    let opts = crate::ambient::fingerprint::options_text(&m.params);
     let r = super::merge::merge(&job, &fp, &opts)?;
     if a.json {
         println!("{}", serde_json::to_string_pretty(&r)?);
@@ -250,7 +250,7 @@ fn tmerge(a: TmergeArgs) -> Result<i32> {
     if let Some(path) = &a.export_radiance {
         let store = super::merge::load_store(&job, &fp, false)?;
         let recs = store.map(|s| s.records).unwrap_or_default();
-        let p = &m.options.params;
+        let p = &m.params;
         let line = format!(
             "tmerge -av {} {} {} -aw {} -ab {} -aa {} -ad {} -as {} -ar {}",
             p.av[0], p.av[1], p.av[2], p.aw, p.ab, p.aa, p.ad, p.as_, p.ar
@@ -333,7 +333,7 @@ fn tassemble(a: TassembleArgs) -> Result<i32> {
         }
         let path = match &a.output {
             None => None,
-            Some(p) if a.all_frames => Some(PathBuf::from(crate::tpict::frame_name(
+            Some(p) if a.all_frames => Some(PathBuf::from(crate::runinfo::frame_name(
                 &p.display().to_string(),
                 f,
             )?)),

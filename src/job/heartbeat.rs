@@ -10,7 +10,7 @@
 use serde::{Deserialize, Serialize};
 use std::collections::HashMap;
 use std::path::Path;
-use std::sync::atomic::{AtomicU64, Ordering};
+use std::sync::atomic::AtomicU64;
 use std::time::{Duration, Instant};
 
 /// A worker's heartbeat file.
@@ -65,7 +65,8 @@ pub struct WorkerRecord {
     pub error: Option<String>,
 }
 
-/// Counters a worker updates while it runs (read by its heartbeat thread).
+/// Counters a worker updates while it runs (read by its heartbeat thread; the ambient
+/// store keeps its own, [`crate::session::store::StoreCounters`]).
 #[derive(Debug, Default)]
 pub struct Counters {
     /// Tiles written.
@@ -74,24 +75,13 @@ pub struct Counters {
     pub render_ns: AtomicU64,
     /// Nanoseconds idle.
     pub idle_ns: AtomicU64,
-    /// Nanoseconds syncing ambient logs.
-    pub sync_ns: AtomicU64,
-    /// Values read from others.
-    pub shared_in: AtomicU64,
-    /// Values written to the own log.
-    pub shared_out: AtomicU64,
-    /// Current N_A.
-    pub amb_flush: AtomicU64,
     /// Tiles re-claimed from other owners.
     pub reclaimed: AtomicU64,
     /// Rays traced.
     pub rays: AtomicU64,
 }
 
-/// Add a duration to a nanosecond counter.
-pub fn add_time(c: &AtomicU64, d: Duration) {
-    c.fetch_add(d.as_nanos() as u64, Ordering::Relaxed);
-}
+pub use crate::session::store::add_time;
 
 /// How often a worker with lease `lease` beats.
 pub fn beat_interval(lease: f64) -> Duration {

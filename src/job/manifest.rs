@@ -1,8 +1,8 @@
 //! The job manifest (`manifest.json`) and job creation (`tplan`).
 
 use super::plan::{check_cover, plan_fixed, plan_tiles, TileRect, TILES_PER_WORKER};
-use super::{hex32, parse_hex32, task_name, JobDir};
-use crate::radopt::{parse_rpict_args, Command, RpictOptions};
+use super::{check_plain_name, hex32, parse_hex32, task_name, JobDir};
+use crate::options::{parse_rpict_args, Command, PictureParams, RenderParams, RpictOptions};
 use crate::scene::{read_scene_files, Primitive, ReadOptions, Scene};
 use crate::view::{normaspect, parse_view_line, View};
 use anyhow::{anyhow, bail, Context, Result};
@@ -39,7 +39,11 @@ pub struct FramePlan {
 }
 
 /// The job manifest.
+///
+/// Manifests written before the options split (an `options` object holding tpict's whole
+/// command line) still read: their render and picture parameters are taken from it.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(try_from = "ManifestFile")]
 pub struct Manifest {
     /// Always [`FORMAT`].
     pub format: String,
@@ -49,9 +53,10 @@ pub struct Manifest {
     pub software: String,
     /// The `tplan` command line (for picture headers).
     pub command: String,
-    /// Render options (rpict's meaning). The scene is `scene_file`; options that make no
-    /// sense in a job (`-o`, `-S`, `-af`, `--stats`, `--amb-log`) are cleared.
-    pub options: RpictOptions,
+    /// The rendering parameters (the light transport; hashed into the fingerprint).
+    pub params: RenderParams,
+    /// The picture parameters (the first frame's view, resolution, pixel options).
+    pub picture: PictureParams,
     /// The flattened scene, a file name in the job directory.
     pub scene_file: String,
     /// The scene files as given to tplan (informational).
@@ -66,6 +71,61 @@ pub struct Manifest {
     pub workers_expected: usize,
     /// The frames.
     pub frames: Vec<FramePlan>,
+}
+
+/// A manifest as stored: today's (`params`, `picture`) or one written before the options
+/// split (`options`, tpict's command line, of which only render and picture parameters are
+/// used).
+#[derive(Deserialize)]
+struct ManifestFile {
+    format: String,
+    version: u32,
+    software: String,
+    command: String,
+    params: Option<RenderParams>,
+    picture: Option<PictureParams>,
+    options: Option<OldOptions>,
+    scene_file: String,
+    scene_sources: Vec<String>,
+    primitives: usize,
+    fingerprint: String,
+    lease_seconds: f64,
+    workers_expected: usize,
+    frames: Vec<FramePlan>,
+}
+
+/// The `options` object of a manifest written before the options split.
+#[derive(Deserialize)]
+struct OldOptions {
+    params: RenderParams,
+    #[serde(flatten)]
+    picture: PictureParams,
+}
+
+impl TryFrom<ManifestFile> for Manifest {
+    type Error = String;
+    fn try_from(f: ManifestFile) -> std::result::Result<Manifest, String> {
+        let (params, picture) = match (f.params, f.picture, f.options) {
+            (Some(r), Some(p), _) => (r, p),
+            (None, None, Some(o)) => (o.params, o.picture),
+            _ => return Err("missing field `params` or `picture`".into()),
+        };
+        Ok(Manifest {
+            format: f.format,
+            version: f.version,
+            software: f.software,
+            command: f.command,
+            params,
+            picture,
+            scene_file: f.scene_file,
+            scene_sources: f.scene_sources,
+            primitives: f.primitives,
+            fingerprint: f.fingerprint,
+            lease_seconds: f.lease_seconds,
+            workers_expected: f.workers_expected,
+            frames: f.frames,
+        })
+    }
 }
 
 impl Manifest {
@@ -165,19 +225,6 @@ impl Manifest {
     }
 }
 
-/// A file name with no directory part, not `.`/`..`, not hidden.
-pub fn check_plain_name(name: &str) -> Result<()> {
-    if name.is_empty()
-        || name.contains('/')
-        || name.contains('\\')
-        || name.starts_with('.')
-        || name.contains('\0')
-    {
-        bail!("'{name}' must be a plain file name inside the job directory");
-    }
-    Ok(())
-}
-
 /// What `tplan` was asked for.
 #[derive(Clone, Debug, Default)]
 pub struct PlanRequest {
@@ -209,7 +256,7 @@ pub fn scene_text(prims: &[Primitive], sources: &[String]) -> String {
     let _ = writeln!(
         s,
         "# Flattened by {} from: {}",
-        crate::tpict::SOFTWARE,
+        crate::runinfo::SOFTWARE,
         sources.join(" ")
     );
     for p in prims {
@@ -243,20 +290,20 @@ pub fn create_job(dir: &Path, req: &PlanRequest) -> Result<Manifest> {
         Command::Render(o) => *o,
         _ => bail!("tplan needs render options and scene files after '--'"),
     };
-    let mut opts: RpictOptions = opts;
-    if opts.sequence_start.is_some() {
+    let opts: RpictOptions = opts;
+    if opts.run.sequence_start.is_some() {
         bail!("-S has no meaning in a job: give the frames' views with --frames VIEWFILE");
     }
-    if opts.output.is_some() {
+    if opts.run.output.is_some() {
         bail!("-o has no meaning in a job: pictures come from tassemble");
     }
-    if opts.params.af.is_some() {
+    if opts.run.amb_file.is_some() {
         bail!("-af has no meaning in a job: seed the job's ambient store with --ambient FILE");
     }
-    if opts.amb_log.is_some() || opts.stats_file.is_some() {
+    if opts.run.amb_log.is_some() || opts.run.stats_file.is_some() {
         bail!("--amb-log and --stats have no meaning in a job: workers keep their own logs and statistics");
     }
-    if opts.pm != 0.0 || opts.pd != 0.0 {
+    if opts.picture.pm != 0.0 || opts.picture.pd != 0.0 {
         bail!("-pm (motion blur) and -pd (depth of field) are not supported yet; use -pm 0 -pd 0");
     }
     if opts.scene_files.is_empty() {
@@ -275,7 +322,7 @@ pub fn create_job(dir: &Path, req: &PlanRequest) -> Result<Manifest> {
     }
     // Scene: read, check that it builds, flatten.
     let mut ro = ReadOptions::from_env();
-    ro.allow_commands |= opts.allow_commands;
+    ro.allow_commands |= opts.run.allow_commands;
     let prims = read_scene_files(&opts.scene_files, &ro)?;
     let scene = Scene::build(&prims)?;
     for w in &scene.warnings {
@@ -286,11 +333,11 @@ pub fn create_job(dir: &Path, req: &PlanRequest) -> Result<Manifest> {
     // Frames.
     let mut views: Vec<View> = Vec::new();
     match &req.frames {
-        None => views.push(opts.view.clone()),
+        None => views.push(opts.picture.view.clone()),
         Some(vf) => {
             let content = std::fs::read_to_string(vf)
                 .with_context(|| format!("cannot read frames file {vf}"))?;
-            let mut base = opts.view.clone();
+            let mut base = opts.picture.view.clone();
             for (i, line) in content.lines().enumerate() {
                 let v = parse_view_line(line, &base).map_err(|e| anyhow!("{vf}:{}: {e}", i + 1))?;
                 if let Some(v) = v {
@@ -309,8 +356,8 @@ pub fn create_job(dir: &Path, req: &PlanRequest) -> Result<Manifest> {
     let mut frames = Vec::new();
     for (i, v) in views.into_iter().enumerate() {
         let vfr = v.frame().map_err(|e| anyhow!("bad view: {e}"))?;
-        let mut pa = opts.pa;
-        let (mut x, mut y) = (opts.x, opts.y);
+        let mut pa = opts.picture.pa;
+        let (mut x, mut y) = (opts.picture.x, opts.picture.y);
         normaspect(vfr.aspect(), &mut pa, &mut x, &mut y);
         if x == 0 || y == 0 || x > MAX_RES || y > MAX_RES {
             bail!("resolution {x}x{y} is out of range");
@@ -336,11 +383,13 @@ pub fn create_job(dir: &Path, req: &PlanRequest) -> Result<Manifest> {
             tiles,
         });
     }
-    let sources = opts.scene_files.clone();
-    opts.scene_files = vec!["scene.rad".into()];
-    opts.view = frames[0].view.clone();
-    opts.error_file = None;
-    opts.threads = None;
+    let RpictOptions {
+        params,
+        mut picture,
+        scene_files: sources,
+        ..
+    } = opts;
+    picture.view = frames[0].view.clone();
     let lease = req.lease.unwrap_or(DEFAULT_LEASE);
     if !(lease.is_finite() && lease > 0.0) {
         bail!("--lease must be a positive number of seconds");
@@ -348,9 +397,10 @@ pub fn create_job(dir: &Path, req: &PlanRequest) -> Result<Manifest> {
     let m = Manifest {
         format: FORMAT.into(),
         version: VERSION,
-        software: crate::tpict::SOFTWARE.into(),
+        software: crate::runinfo::SOFTWARE.into(),
         command: req.command.clone(),
-        options: opts,
+        params,
+        picture,
         scene_file: "scene.rad".into(),
         scene_sources: sources,
         primitives: prims.len(),
@@ -424,12 +474,59 @@ mod tests {
             assert_eq!(a.rargs, b.rargs);
         }
     }
-
     #[test]
-    fn plain_names() {
-        check_plain_name("scene.rad").unwrap();
-        for bad in ["", "../x", "a/b", ".hidden", "..", "/etc/passwd"] {
-            assert!(check_plain_name(bad).is_err(), "{bad}");
+    fn manifests_from_before_the_options_split_still_read() {
+        let mut picture = PictureParams {
+            x: 40,
+            ps: 2,
+            ..PictureParams::default()
+        };
+        picture.view.vh = 30.0;
+        let params = RenderParams {
+            ab: 2,
+            ..RenderParams::default()
+        };
+        let m = Manifest {
+            format: FORMAT.into(),
+            version: VERSION,
+            software: "t".into(),
+            command: "tplan".into(),
+            params: params.clone(),
+            picture: picture.clone(),
+            scene_file: "scene.rad".into(),
+            scene_sources: vec!["a.rad".into()],
+            primitives: 3,
+            fingerprint: "00".repeat(32),
+            lease_seconds: 180.0,
+            workers_expected: 2,
+            frames: Vec::new(),
+        };
+        let now = serde_json::to_value(&m).unwrap();
+        assert_eq!(serde_json::from_value::<Manifest>(now.clone()).unwrap(), m);
+        // The old layout: tpict's whole command line under `options`.
+        let mut old = now.clone();
+        let o = old.as_object_mut().unwrap();
+        let mut options = o.remove("picture").unwrap();
+        let mut p = o.remove("params").unwrap();
+        p.as_object_mut()
+            .unwrap()
+            .insert("af".into(), serde_json::Value::Null);
+        let opts = options.as_object_mut().unwrap();
+        opts.insert("params".into(), p);
+        opts.remove("overture");
+        for (k, v) in [
+            ("report_interval", serde_json::json!(0.0)),
+            ("warnings", serde_json::json!(true)),
+            ("threads", serde_json::Value::Null),
+            ("scene_files", serde_json::json!(["scene.rad"])),
+        ] {
+            opts.insert(k.into(), v);
         }
+        o.insert("options".into(), options);
+        assert_eq!(serde_json::from_value::<Manifest>(old).unwrap(), m);
+        // Neither layout: refused.
+        let mut none = now;
+        none.as_object_mut().unwrap().remove("params");
+        assert!(serde_json::from_value::<Manifest>(none).is_err());
     }
 }

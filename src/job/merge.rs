@@ -73,11 +73,10 @@ pub fn load_store(job: &JobDir, fingerprint: &[u8; 32], force: bool) -> Result<O
         if index.format != STORE_FORMAT || index.version != 1 {
             bail!("{}: not a version-1 store index", ip.display());
         }
-        super::manifest::check_plain_name(&index.store)
+        super::check_plain_name(&index.store)
             .with_context(|| format!("{}: store", ip.display()))?;
         for name in index.logs.keys() {
-            super::manifest::check_plain_name(name)
-                .with_context(|| format!("{}: log name", ip.display()))?;
+            super::check_plain_name(name).with_context(|| format!("{}: log name", ip.display()))?;
         }
         let sp = job.merged().join(&index.store);
         let mut reader = match LogReader::open(&sp, Some(fingerprint), force) {
@@ -337,7 +336,7 @@ pub fn seed_store(job: &JobDir, path: &Path, fingerprint: &[u8; 32], force: bool
 pub fn export_radiance(path: &Path, records: &[AmbRecord], options_line: &str) -> Result<()> {
     use crate::ambient::radfile;
     let mut out = Vec::new();
-    radfile::write_header(&mut out, options_line, crate::tpict::SOFTWARE)?;
+    radfile::write_header(&mut out, options_line, crate::runinfo::SOFTWARE)?;
     for r in records {
         radfile::write_record(&mut out, r)?;
     }

@@ -226,6 +226,19 @@ pub fn sync_dir(dir: &Path) {
     }
 }
 
+/// A file name with no directory part, not `.`/`..`, not hidden.
+pub fn check_plain_name(name: &str) -> Result<()> {
+    if name.is_empty()
+        || name.contains('/')
+        || name.contains('\\')
+        || name.starts_with('.')
+        || name.contains('\0')
+    {
+        bail!("'{name}' must be a plain file name inside the job directory");
+    }
+    Ok(())
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -246,5 +259,13 @@ mod tests {
         check_worker_id(&default_worker_id()).unwrap();
         let f = [0xa5u8; 32];
         assert_eq!(parse_hex32(&hex32(&f)), Some(f));
+    }
+
+    #[test]
+    fn plain_names() {
+        check_plain_name("scene.rad").unwrap();
+        for bad in ["", "../x", "a/b", ".hidden", "..", "/etc/passwd"] {
+            assert!(check_plain_name(bad).is_err(), "{bad}");
+        }
     }
 }

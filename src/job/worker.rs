@@ -16,18 +16,24 @@
 use super::heartbeat::{
     add_time, beat_interval, read_record, Counters, StaleWatcher, WorkerRecord,
 };
-use super::manifest::Manifest;
-use super::share::{FlushPolicy, Share};
+use super::manifest::{FramePlan, Manifest};
+use super::plan::TileRect;
+use super::share::open_share;
 use super::task::{self, TaskState};
 use super::tile::{self, TileMeta};
 use super::{check_worker_id, default_worker_id, JobDir};
 use crate::ambient::Ambient;
-use crate::light::LightSet;
-use crate::render::{render_region, FrameSetup, RenderProgress, Tracer};
-use crate::scene::{read_scene_files, ReadOptions, Scene};
+use crate::render::RenderProgress;
+use crate::runinfo::process_cpu_seconds;
+use crate::scene::ReadOptions;
+use crate::session::store::{AmbientStore, FlushPolicy};
+use crate::session::{Region, SceneSource, Session};
 use anyhow::{anyhow, bail, Context, Result};
+use std::collections::HashMap;
+use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::{Arc, Mutex};
+use std::thread::JoinHandle;
 use std::time::{Duration, Instant};
 
 /// Worker settings (`tpiece` options).
@@ -69,17 +75,46 @@ pub struct WorkerSummary {
     pub reclaimed: u64,
 }
 
+/// What the heartbeat thread writes: the worker's record, its counters and those of its
+/// ambient calculation and store.
 struct Beat {
     job: JobDir,
     record: Mutex<WorkerRecord>,
     counters: Arc<Counters>,
     ambient: Option<Arc<Ambient>>,
-    share: Option<Arc<Share>>,
+    store: Option<Arc<AmbientStore>>,
     threads: usize,
     start_cpu: f64,
 }
 
 impl Beat {
+    fn new(job: &JobDir, worker_id: &str, owner: &str, session: &Session) -> Beat {
+        Beat {
+            job: job.clone(),
+            record: Mutex::new(WorkerRecord {
+                worker_id: worker_id.to_string(),
+                owner: owner.to_string(),
+                host: crate::runinfo::host_name(),
+                pid: std::process::id(),
+                state: "running".into(),
+                started_unix: super::unix_now(),
+                threads: session.threads,
+                ..WorkerRecord::default()
+            }),
+            counters: Arc::new(Counters::default()),
+            ambient: session.ambient.clone(),
+            store: session.store().cloned(),
+            threads: session.threads,
+            start_cpu: process_cpu_seconds().unwrap_or(0.0),
+        }
+    }
+
+    fn set_state(&self, state: &str) {
+        if let Ok(mut r) = self.record.lock() {
+            r.state = state.into();
+        }
+    }
+
     fn write(&self, state: Option<&str>, error: Option<String>) {
         let mut r = self.record.lock().unwrap_or_else(|e| e.into_inner());
         if let Some(s) = state {
@@ -95,10 +130,13 @@ impl Beat {
         r.tiles_done = c.tiles_done.load(Ordering::Relaxed);
         r.t_render = secs(&c.render_ns);
         r.t_idle = secs(&c.idle_ns);
-        r.t_sync = secs(&c.sync_ns);
-        r.shared_in = c.shared_in.load(Ordering::Relaxed);
-        r.shared_out = c.shared_out.load(Ordering::Relaxed);
-        r.amb_flush = c.amb_flush.load(Ordering::Relaxed);
+        if let Some(s) = &self.store {
+            let sc = s.counters();
+            r.t_sync = secs(&sc.sync_ns);
+            r.shared_in = sc.shared_in.load(Ordering::Relaxed);
+            r.shared_out = sc.shared_out.load(Ordering::Relaxed);
+            r.amb_flush = sc.flush_every.load(Ordering::Relaxed);
+        }
         r.reclaimed = c.reclaimed.load(Ordering::Relaxed);
         r.rays = c.rays.load(Ordering::Relaxed);
         if let Some(a) = &self.ambient {
@@ -106,13 +144,79 @@ impl Beat {
             r.t_amb = secs(&a.stats.amb_nanos) / self.threads as f64;
         }
         r.t_spec = (r.t_render - r.t_amb).max(0.0);
-        r.cpu_seconds = crate::tpict::process_cpu_seconds()
+        r.cpu_seconds = process_cpu_seconds()
             .map(|c| c - self.start_cpu)
             .unwrap_or(0.0);
         if let Ok(json) = serde_json::to_vec_pretty(&*r) {
             let _ = super::write_file_atomic(&self.job.worker_file(&r.owner), &json);
         }
     }
+
+    /// Start the heartbeat thread: it writes the record every beat and syncs the ambient
+    /// store twice per beat even when this worker makes no values.
+    fn spawn(self: &Arc<Self>, interval: Duration) -> Beater {
+        let stop = Arc::new(AtomicBool::new(false));
+        let (beat, stop2) = (self.clone(), stop.clone());
+        let handle = std::thread::spawn(move || {
+            let half = interval / 2;
+            let mut last_beat = Instant::now();
+            while !stop2.load(Ordering::Relaxed) {
+                std::thread::park_timeout(half);
+                if stop2.load(Ordering::Relaxed) {
+                    break;
+                }
+                if let Some(s) = &beat.store {
+                    s.sync();
+                }
+                if last_beat.elapsed() >= interval {
+                    last_beat = Instant::now();
+                    beat.write(None, None);
+                }
+            }
+        });
+        Beater { stop, handle }
+    }
+}
+
+/// The running heartbeat thread.
+struct Beater {
+    stop: Arc<AtomicBool>,
+    handle: JoinHandle<()>,
+}
+
+impl Beater {
+    fn stop(self) {
+        self.stop.store(true, Ordering::Relaxed);
+        self.handle.thread().unpark();
+        let _ = self.handle.join();
+    }
+}
+
+/// Read the job's flattened scene, refuse it if the scene or the manifest's parameters no
+/// longer give the manifest's fingerprint, and start the render session (with ambient
+/// sharing when the values are cached).
+fn start_session(job: &JobDir, m: &Manifest, owner: &str, wo: &WorkerOptions) -> Result<Session> {
+    let scene_path = job.file(&m.scene_file);
+    let ro = ReadOptions {
+        allow_commands: false,
+        raypath: vec![job.root().to_path_buf()],
+    };
+    let source = SceneSource::read(&[scene_path.display().to_string()], &ro, &m.params)?;
+    if source.fingerprint != m.fingerprint_bytes() {
+        bail!(
+            "{}: the scene or the manifest's options changed since the job was planned \
+             (fingerprint {} instead of {}); plan a new job",
+            scene_path.display(),
+            super::hex32(&source.fingerprint),
+            m.fingerprint
+        );
+    }
+    let mut session = Session::start(m.params.clone(), source, wo.threads)?;
+    if session.cached_ambient().is_some() {
+        let store = open_share(job, owner, &session, wo.amb_flush)?;
+        session.attach_store(store);
+    }
+    Ok(session)
 }
 
 /// Run a worker on a job until every tile is done (or, without `wait`, until nothing is
@@ -122,106 +226,31 @@ pub fn run_worker(job: &JobDir, wo: &WorkerOptions) -> Result<WorkerSummary> {
     let worker_id = wo.worker_id.clone().unwrap_or_else(default_worker_id);
     check_worker_id(&worker_id)?;
     let owner = format!("{worker_id}.{:08x}", super::merge::rand_u32());
-    let tasks_dir = job.tasks();
-    // Scene, checked against the manifest.
-    let scene_path = job.file(&m.scene_file);
-    let ro = ReadOptions {
-        allow_commands: false,
-        raypath: vec![job.root().to_path_buf()],
-    };
-    let prims = read_scene_files(&[scene_path.display().to_string()], &ro)?;
-    let fp = crate::ambient::fingerprint::fingerprint(&prims, &m.options.params);
-    if fp != m.fingerprint_bytes() {
-        bail!(
-            "{}: the scene or the manifest's options changed since the job was planned \
-             (fingerprint {} instead of {}); plan a new job",
-            scene_path.display(),
-            super::hex32(&fp),
-            m.fingerprint
-        );
-    }
-    let scene = Scene::build(&prims)?;
-    let lights = LightSet::collect(&scene, m.options.params.dr);
-    let threads = crate::tpict::thread_count(wo.threads);
-    let pool = rayon::ThreadPoolBuilder::new()
-        .num_threads(threads)
-        .build()
-        .context("cannot start render threads")?;
-    let origin_id = crate::tpict::process_origin_id();
-    let ambient = Ambient::new(&m.options.params, scene.size, origin_id).map(Arc::new);
-    let counters = Arc::new(Counters::default());
-    let share = match &ambient {
-        Some(a) if a.cached() => Some(Share::open(
-            job,
-            &owner,
-            fp,
-            &crate::ambient::fingerprint::options_text(&m.options.params),
-            scene.origin,
-            a.clone(),
-            wo.amb_flush,
-            counters.clone(),
-        )?),
-        _ => None,
-    };
-    if let Some(s) = &share {
-        s.install();
-    }
-    let host = std::fs::read_to_string("/proc/sys/kernel/hostname")
-        .map(|h| h.trim().to_string())
-        .unwrap_or_default();
-    let beat = Arc::new(Beat {
-        job: job.clone(),
-        record: Mutex::new(WorkerRecord {
-            worker_id: worker_id.clone(),
-            owner: owner.clone(),
-            host,
-            pid: std::process::id(),
-            state: "running".into(),
-            started_unix: super::unix_now(),
-            threads,
-            ..WorkerRecord::default()
-        }),
-        counters: counters.clone(),
-        ambient: ambient.clone(),
-        share: share.clone(),
-        threads,
-        start_cpu: crate::tpict::process_cpu_seconds().unwrap_or(0.0),
-    });
+    let session = start_session(job, &m, &owner, wo)?;
+    let beat = Arc::new(Beat::new(job, &worker_id, &owner, &session));
     beat.write(None, None);
-    let stop = Arc::new(AtomicBool::new(false));
-    let interval = beat_interval(m.lease_seconds);
-    let beater = {
-        let (beat, stop) = (beat.clone(), stop.clone());
-        std::thread::spawn(move || {
-            // Sync ambient values twice per beat even when this worker makes none.
-            let half = interval / 2;
-            let mut last_beat = Instant::now();
-            while !stop.load(Ordering::Relaxed) {
-                std::thread::park_timeout(half);
-                if stop.load(Ordering::Relaxed) {
-                    break;
-                }
-                if let Some(s) = &beat.share {
-                    s.sync();
-                }
-                if last_beat.elapsed() >= interval {
-                    last_beat = Instant::now();
-                    beat.write(None, None);
-                }
-            }
-        })
+    let beater = beat.spawn(beat_interval(m.lease_seconds));
+    let mut worker = Worker {
+        job,
+        m: &m,
+        tasks_dir: job.tasks(),
+        owner: &owner,
+        worker_id: &worker_id,
+        session: &session,
+        wo,
+        beat: &beat,
+        all: m.tasks(),
+        cursor: 0,
+        first_scan: true,
+        idle_since: None,
+        watcher: StaleWatcher::new(m.lease_seconds),
+        summary: WorkerSummary {
+            owner: owner.clone(),
+            ..WorkerSummary::default()
+        },
     };
-    let result = work(
-        job, &m, &owner, &worker_id, &tasks_dir, &scene, &lights, &ambient, &share, &counters,
-        &pool, wo, &beat,
-    );
-    let result = result.and_then(|s| match &share {
-        Some(sh) => sh.finish().map(|()| s),
-        None => Ok(s),
-    });
-    stop.store(true, Ordering::Relaxed);
-    beater.thread().unpark();
-    let _ = beater.join();
+    let result = worker.work().and_then(|s| session.finish().map(|()| s));
+    beater.stop();
     match &result {
         Ok(_) => beat.write(Some("finished"), None),
         Err(e) => beat.write(Some("failed"), Some(format!("{e:#}"))),
@@ -229,242 +258,315 @@ pub fn run_worker(job: &JobDir, wo: &WorkerOptions) -> Result<WorkerSummary> {
     result
 }
 
-#[allow(clippy::too_many_arguments)]
-fn work(
-    job: &JobDir,
-    m: &Manifest,
-    owner: &str,
-    worker_id: &str,
-    tasks_dir: &std::path::Path,
-    scene: &Scene,
-    lights: &LightSet,
-    ambient: &Option<Arc<Ambient>>,
-    share: &Option<Arc<Share>>,
-    counters: &Arc<Counters>,
-    pool: &rayon::ThreadPool,
-    wo: &WorkerOptions,
-    beat: &Beat,
-) -> Result<WorkerSummary> {
-    let all = m.tasks();
-    let mut summary = WorkerSummary {
-        owner: owner.to_string(),
-        ..WorkerSummary::default()
-    };
-    let mut watcher = StaleWatcher::new(m.lease_seconds);
-    let poll = Duration::from_secs_f64((m.lease_seconds / 10.0).clamp(0.02, 0.25));
-    let tracer = Tracer::new(scene, &m.options.params, lights).with_ambient(ambient.as_deref());
-    let mut cursor = 0usize;
-    let mut idle_since: Option<Instant> = None;
-    let mut first_scan = true;
-    loop {
-        // Next todo tile in plan order (todo entries never come back, so the cursor only
-        // moves forward).
-        let mut mine: Option<(String, u32, usize, bool)> = None;
-        while cursor < all.len() {
-            let (name, f, t) = &all[cursor];
-            cursor += 1;
-            if task::claim(tasks_dir, name, owner)
-                .with_context(|| format!("cannot claim {name} in {}", tasks_dir.display()))?
+/// A claimed task.
+struct Claim {
+    name: String,
+    frame: u32,
+    tile: usize,
+    /// Taken over from a stale owner.
+    reclaimed: bool,
+}
+
+/// What to do next.
+enum Next {
+    /// Render this tile.
+    Tile(Claim),
+    /// Every tile is done.
+    Done,
+    /// A released tile is back in `todo`: claim again from the start.
+    Retry,
+    /// Other workers hold every remaining tile.
+    Wait,
+}
+
+/// One worker's state while it takes tiles.
+struct Worker<'a> {
+    job: &'a JobDir,
+    m: &'a Manifest,
+    tasks_dir: PathBuf,
+    owner: &'a str,
+    worker_id: &'a str,
+    session: &'a Session,
+    wo: &'a WorkerOptions,
+    beat: &'a Beat,
+    /// Every task in plan order.
+    all: Vec<(String, u32, usize)>,
+    /// The next task to try to claim (todo entries never come back unless released, so the
+    /// cursor only moves forward until then).
+    cursor: usize,
+    first_scan: bool,
+    idle_since: Option<Instant>,
+    watcher: StaleWatcher,
+    summary: WorkerSummary,
+}
+
+impl Worker<'_> {
+    fn work(&mut self) -> Result<WorkerSummary> {
+        let poll = Duration::from_secs_f64((self.m.lease_seconds / 10.0).clamp(0.02, 0.25));
+        loop {
+            let claim = match self.next()? {
+                Next::Tile(c) => c,
+                Next::Done => break,
+                Next::Retry => continue,
+                Next::Wait => {
+                    if !self.wo.wait {
+                        break;
+                    }
+                    self.idle_since.get_or_insert_with(Instant::now);
+                    self.beat.set_state("idle");
+                    std::thread::sleep(poll);
+                    continue;
+                }
+            };
+            if self.end_idle() {
+                self.beat.set_state("running");
+            }
+            self.do_tile(&claim)?;
+        }
+        self.end_idle();
+        Ok(std::mem::take(&mut self.summary))
+    }
+
+    /// Count the idle time that ends now; whether the worker was idle.
+    fn end_idle(&mut self) -> bool {
+        match self.idle_since.take() {
+            Some(since) => {
+                add_time(&self.beat.counters.idle_ns, since.elapsed());
+                true
+            }
+            None => false,
+        }
+    }
+
+    /// The next tile to render: a `todo` tile in plan order, else one re-claimed from a stale
+    /// owner.
+    fn next(&mut self) -> Result<Next> {
+        while self.cursor < self.all.len() {
+            let (name, f, t) = &self.all[self.cursor];
+            self.cursor += 1;
+            if task::claim(&self.tasks_dir, name, self.owner)
+                .with_context(|| format!("cannot claim {name} in {}", self.tasks_dir.display()))?
             {
-                mine = Some((name.clone(), *f, *t, false));
-                break;
+                return Ok(Next::Tile(Claim {
+                    name: name.clone(),
+                    frame: *f,
+                    tile: *t,
+                    reclaimed: false,
+                }));
             }
         }
-        if mine.is_none() {
-            // A directory listing made while other workers rename entries may miss an entry
-            // (POSIX leaves renamed entries unspecified during readdir): list again before
-            // concluding that entries are really missing.
-            let mut states = task::scan(tasks_dir)
-                .with_context(|| format!("cannot list {}", tasks_dir.display()))?;
-            let missing = |st: &std::collections::HashMap<String, TaskState>| {
-                all.iter().filter(|(n, _, _)| !st.contains_key(n)).count()
-            };
-            // Back off from 20 ms up to about 5 s in all: on NFS a client's cached listing
-            // may lag the server for a while.
-            for attempt in 0..8 {
-                if missing(&states) == 0 {
-                    break;
-                }
-                std::thread::sleep(Duration::from_millis(20 << attempt));
-                states = task::scan(tasks_dir)
-                    .with_context(|| format!("cannot list {}", tasks_dir.display()))?;
-            }
-            let lost = missing(&states);
-            if lost > 0 {
-                bail!(
-                    "{}: {lost} of {} task entries are missing (was the job directory edited?)",
-                    tasks_dir.display(),
-                    all.len()
-                );
-            }
-            if all
+        let states = self.scan()?;
+        if self
+            .all
+            .iter()
+            .all(|(n, _, _)| states.get(n) == Some(&TaskState::Done))
+        {
+            return Ok(Next::Done);
+        }
+        // A todo entry can reappear only when a worker released its tile.
+        if self
+            .all
+            .iter()
+            .any(|(n, _, _)| states.get(n) == Some(&TaskState::Todo))
+        {
+            self.cursor = 0;
+            return Ok(Next::Retry);
+        }
+        let reclaimed = self.reclaim_stale(&states)?;
+        self.first_scan = false;
+        Ok(reclaimed.map_or(Next::Wait, Next::Tile))
+    }
+
+    /// The state of every task. A directory listing made while other workers rename entries
+    /// may miss an entry (POSIX leaves renamed entries unspecified during readdir): list
+    /// again before concluding that entries are really missing.
+    fn scan(&self) -> Result<HashMap<String, TaskState>> {
+        let dir = &self.tasks_dir;
+        let list = || task::scan(dir).with_context(|| format!("cannot list {}", dir.display()));
+        let missing = |st: &HashMap<String, TaskState>| {
+            self.all
                 .iter()
-                .all(|(n, _, _)| states.get(n) == Some(&TaskState::Done))
-            {
+                .filter(|(n, _, _)| !st.contains_key(n))
+                .count()
+        };
+        let mut states = list()?;
+        // Back off from 20 ms up to about 5 s in all: on NFS a client's cached listing
+        // may lag the server for a while.
+        for attempt in 0..8 {
+            if missing(&states) == 0 {
                 break;
             }
-            // A todo entry can reappear only when a worker released its tile.
-            if all
-                .iter()
-                .any(|(n, _, _)| states.get(n) == Some(&TaskState::Todo))
-            {
-                cursor = 0;
+            std::thread::sleep(Duration::from_millis(20 << attempt));
+            states = list()?;
+        }
+        let lost = missing(&states);
+        if lost > 0 {
+            bail!(
+                "{}: {lost} of {} task entries are missing (was the job directory edited?)",
+                dir.display(),
+                self.all.len()
+            );
+        }
+        Ok(states)
+    }
+
+    /// Re-claim a tile whose owner is stale (or an earlier incarnation of this worker id,
+    /// at the first scan).
+    fn reclaim_stale(&mut self, states: &HashMap<String, TaskState>) -> Result<Option<Claim>> {
+        for (name, f, t) in &self.all {
+            let Some(TaskState::Claimed(o)) = states.get(name) else {
+                continue;
+            };
+            if o == self.owner {
                 continue;
             }
-            for (name, f, t) in &all {
-                let Some(TaskState::Claimed(o)) = states.get(name) else {
-                    continue;
-                };
-                if o == owner {
-                    continue;
+            let same_id = o.rsplit_once('.').map(|(id, _)| id) == Some(self.worker_id);
+            let stale = (self.first_scan && same_id)
+                || self
+                    .watcher
+                    .is_stale(o, read_record(&self.job.worker_file(o)).as_ref());
+            if stale && task::reclaim(&self.tasks_dir, name, o, self.owner)? {
+                self.summary.reclaimed += 1;
+                self.beat.counters.reclaimed.fetch_add(1, Ordering::Relaxed);
+                if self.wo.verbose {
+                    eprintln!("tpiece {}: re-claimed {name} from {o}", self.owner);
                 }
-                let same_id = o.rsplit_once('.').map(|(id, _)| id) == Some(worker_id);
-                let stale = (first_scan && same_id)
-                    || watcher.is_stale(o, read_record(&job.worker_file(o)).as_ref());
-                if stale && task::reclaim(tasks_dir, name, o, owner)? {
-                    mine = Some((name.clone(), *f, *t, true));
-                    summary.reclaimed += 1;
-                    counters.reclaimed.fetch_add(1, Ordering::Relaxed);
-                    if wo.verbose {
-                        eprintln!("tpiece {owner}: re-claimed {name} from {o}");
-                    }
-                    break;
-                }
+                return Ok(Some(Claim {
+                    name: name.clone(),
+                    frame: *f,
+                    tile: *t,
+                    reclaimed: true,
+                }));
             }
-            first_scan = false;
         }
-        let Some((name, frame, ti, reclaimed)) = mine else {
-            if !wo.wait {
-                break;
-            }
-            idle_since.get_or_insert_with(Instant::now);
-            beat.record.lock().map(|mut r| r.state = "idle".into()).ok();
-            std::thread::sleep(poll);
-            continue;
-        };
-        if let Some(since) = idle_since.take() {
-            add_time(&counters.idle_ns, since.elapsed());
-            beat.record
-                .lock()
-                .map(|mut r| r.state = "running".into())
-                .ok();
-        }
-        let fp = m
-            .frame(frame)
-            .ok_or_else(|| anyhow!("task {name}: no frame {frame}"))?;
+        Ok(None)
+    }
+
+    /// Render a claimed tile, write its result and mark it done.
+    fn do_tile(&mut self, c: &Claim) -> Result<()> {
+        let name = &c.name;
+        let fp = self
+            .m
+            .frame(c.frame)
+            .ok_or_else(|| anyhow!("task {name}: no frame {}", c.frame))?;
         let rect = *fp
             .tiles
-            .get(ti)
-            .ok_or_else(|| anyhow!("task {name}: no tile {ti}"))?;
-        let out = job.tile_file(&name);
+            .get(c.tile)
+            .ok_or_else(|| anyhow!("task {name}: no tile {}", c.tile))?;
+        let out = self.job.tile_file(name);
         // A re-claimed tile whose result was written before its owner died needs no render.
-        if reclaimed {
-            if let Ok((meta, _)) = tile::read(&out) {
-                if meta.fingerprint == m.fingerprint
-                    && (meta.x0, meta.y0, meta.w, meta.h) == (rect.x0, rect.y0, rect.w, rect.h)
-                {
-                    task::complete(tasks_dir, &name, owner)?;
-                    continue;
-                }
-            }
+        if c.reclaimed && self.result_exists(&out, &rect) {
+            task::complete(&self.tasks_dir, name, self.owner)?;
+            return Ok(());
         }
-        let vf = fp
-            .view
-            .frame()
-            .map_err(|e| anyhow!("frame {frame}: bad view: {e}"))?;
-        let fs = FrameSetup {
-            view: &vf,
-            xres: fp.xres,
-            yres: fp.yres,
-            pj: m.options.pj,
-            ps: m.options.ps,
-            pt: m.options.pt,
-            frame: fp.index,
-            irradiance: m.options.params.i,
-            overture: m.options.overture_step(),
-        };
-        let amb_before = ambient
-            .as_ref()
-            .map(|a| (a.stats.made(), a.stats.amb_nanos.load(Ordering::Relaxed)));
-        let cpu0 = crate::tpict::process_cpu_seconds().unwrap_or(0.0);
-        let t0 = Instant::now();
-        let progress = RenderProgress::default();
-        let pixels = pool.install(|| {
-            render_region(
-                &tracer,
-                &fs,
-                rect.x0,
-                rect.y0,
-                rect.x0 + rect.w,
-                rect.y0 + rect.h,
-                &progress,
-            )
-        });
-        let wall = t0.elapsed();
-        add_time(&counters.render_ns, wall);
-        let rays = progress.rays.load(Ordering::Relaxed);
-        counters.rays.fetch_add(rays, Ordering::Relaxed);
-        let (new_values, amb_secs) = match (ambient, amb_before) {
-            (Some(a), Some((n0, t0))) => (
-                a.stats.made() - n0,
-                (a.stats.amb_nanos.load(Ordering::Relaxed) - t0) as f64 * 1e-9,
-            ),
-            _ => (0, 0.0),
-        };
-        let meta = TileMeta {
-            task: name.clone(),
-            frame,
-            tile: ti,
-            x0: rect.x0,
-            y0: rect.y0,
-            w: rect.w,
-            h: rect.h,
-            fingerprint: m.fingerprint.clone(),
-            owner: owner.to_string(),
-            wall_seconds: wall.as_secs_f64(),
-            cpu_seconds: (crate::tpict::process_cpu_seconds().unwrap_or(0.0) - cpu0).max(0.0),
-            rays,
-            new_values,
-            ambient_seconds: amb_secs,
-        };
+        let (meta, pixels) = self.render_tile(c, fp, &rect)?;
         // Values made for this tile go out before it counts as done.
-        if let Some(s) = share {
+        if let Some(s) = self.session.store() {
             s.sync();
             if let Some(e) = s.error() {
-                let _ = task::release(tasks_dir, &name, owner);
+                let _ = task::release(&self.tasks_dir, name, self.owner);
                 bail!("ambient log: {e} (tile {name} released)");
             }
         }
         if let Err(e) = tile::write(&out, &meta, &pixels) {
-            let _ = task::release(tasks_dir, &name, owner);
+            let _ = task::release(&self.tasks_dir, name, self.owner);
             return Err(e.context(format!("tile {name} released for another worker")));
         }
-        let completed = task::complete(tasks_dir, &name, owner)?;
-        counters.tiles_done.fetch_add(1, Ordering::Relaxed);
-        summary.tiles += 1;
-        if wo.verbose {
-            eprintln!(
-                "tpiece {owner}: {name} {}x{} at {},{} in {:.2}s{}{}",
-                rect.w,
-                rect.h,
-                rect.x0,
-                rect.y0,
-                wall.as_secs_f64(),
-                if new_values > 0 {
-                    format!(", {new_values} new ambient values")
-                } else {
-                    String::new()
-                },
-                if completed {
-                    ""
-                } else {
-                    " (re-claimed meanwhile by another worker; result kept)"
-                }
-            );
+        let completed = task::complete(&self.tasks_dir, name, self.owner)?;
+        self.beat
+            .counters
+            .tiles_done
+            .fetch_add(1, Ordering::Relaxed);
+        self.summary.tiles += 1;
+        if self.wo.verbose {
+            self.report(&meta, completed);
+        }
+        Ok(())
+    }
+
+    /// Whether `out` holds this job's result for the tile `rect`.
+    fn result_exists(&self, out: &Path, rect: &TileRect) -> bool {
+        match tile::read(out) {
+            Ok((meta, _)) => {
+                meta.fingerprint == self.m.fingerprint
+                    && (meta.x0, meta.y0, meta.w, meta.h) == (rect.x0, rect.y0, rect.w, rect.h)
+            }
+            Err(_) => false,
         }
     }
-    if let Some(since) = idle_since.take() {
-        add_time(&counters.idle_ns, since.elapsed());
+
+    /// Render the tile `rect` of frame `fp`: its pixels and the result's metadata.
+    fn render_tile(
+        &self,
+        c: &Claim,
+        fp: &FramePlan,
+        rect: &TileRect,
+    ) -> Result<(TileMeta, Vec<[f32; 3]>)> {
+        let vf = fp
+            .view
+            .frame()
+            .map_err(|e| anyhow!("frame {}: bad view: {e}", c.frame))?;
+        let fs = self
+            .m
+            .picture
+            .frame_setup(&self.m.params, &vf, (fp.xres, fp.yres), fp.index);
+        let (made0, nanos0) = self.session.ambient_work();
+        let cpu0 = process_cpu_seconds().unwrap_or(0.0);
+        let t0 = Instant::now();
+        let progress = RenderProgress::default();
+        let region = Region {
+            x0: rect.x0,
+            y0: rect.y0,
+            x1: rect.x0 + rect.w,
+            y1: rect.y0 + rect.h,
+        };
+        let pixels = self.session.render(&fs, region, &progress);
+        let wall = t0.elapsed();
+        let counters = &self.beat.counters;
+        add_time(&counters.render_ns, wall);
+        let rays = progress.rays.load(Ordering::Relaxed);
+        counters.rays.fetch_add(rays, Ordering::Relaxed);
+        let (made1, nanos1) = self.session.ambient_work();
+        let meta = TileMeta {
+            task: c.name.clone(),
+            frame: c.frame,
+            tile: c.tile,
+            x0: rect.x0,
+            y0: rect.y0,
+            w: rect.w,
+            h: rect.h,
+            fingerprint: self.m.fingerprint.clone(),
+            owner: self.owner.to_string(),
+            wall_seconds: wall.as_secs_f64(),
+            cpu_seconds: (process_cpu_seconds().unwrap_or(0.0) - cpu0).max(0.0),
+            rays,
+            new_values: made1 - made0,
+            ambient_seconds: (nanos1 - nanos0) as f64 * 1e-9,
+        };
+        Ok((meta, pixels))
     }
-    Ok(summary)
+
+    /// One line about a finished tile.
+    fn report(&self, meta: &TileMeta, completed: bool) {
+        eprintln!(
+            "tpiece {}: {} {}x{} at {},{} in {:.2}s{}{}",
+            self.owner,
+            meta.task,
+            meta.w,
+            meta.h,
+            meta.x0,
+            meta.y0,
+            meta.wall_seconds,
+            if meta.new_values > 0 {
+                format!(", {} new ambient values", meta.new_values)
+            } else {
+                String::new()
+            },
+            if completed {
+                ""
+            } else {
+                " (re-claimed meanwhile by another worker; result kept)"
+            }
+        );
+    }
 }

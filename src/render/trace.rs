@@ -9,8 +9,8 @@ use crate::light::direct::direct;
 use crate::light::source::LightSet;
 use crate::material::emitter::EmitterKind;
 use crate::material::{MatId, Material};
-use crate::radopt::RenderParams;
-use crate::scene::Scene;
+use crate::options::render::RenderParams;
+use crate::scene::build::Scene;
 use crate::FTINY;
 use glam::DVec3;
 

@@ -55,7 +55,7 @@ pub enum ArgError {
 }
 
 fn num(what: &str, w: &str) -> Result<f64, ArgError> {
-    if !super::reader::is_real(w) {
+    if !super::lexer::is_real(w) {
         return Err(ArgError::Bad(format!(
             "genbox: {what} '{w}' is not a number"
         )));

@@ -235,6 +235,51 @@ pub fn split_command_words(cmd: &str) -> Result<Option<Vec<String>>, String> {
     Ok(Some(words))
 }
 
+/// Whether `w` is a Radiance real number: optional sign, digits with an optional point
+/// (at least one digit), optional exponent.
+pub fn is_real(w: &str) -> bool {
+    let b = w.as_bytes();
+    let mut i = 0;
+    if matches!(b.first(), Some(b'+' | b'-')) {
+        i += 1;
+    }
+    let mut digits = 0;
+    while i < b.len() && b[i].is_ascii_digit() {
+        i += 1;
+        digits += 1;
+    }
+    if i < b.len() && b[i] == b'.' {
+        i += 1;
+        while i < b.len() && b[i].is_ascii_digit() {
+            i += 1;
+            digits += 1;
+        }
+    }
+    if digits == 0 {
+        return false;
+    }
+    if i < b.len() && matches!(b[i], b'e' | b'E') {
+        i += 1;
+        if matches!(b.get(i), Some(b'+' | b'-')) {
+            i += 1;
+        }
+        let s = i;
+        while i < b.len() && b[i].is_ascii_digit() {
+            i += 1;
+        }
+        if i == s {
+            return false;
+        }
+    }
+    i == b.len()
+}
+
+/// Whether `w` is an integer (optional sign, digits).
+pub fn is_int(w: &str) -> bool {
+    let d = w.strip_prefix(['+', '-']).unwrap_or(w);
+    !d.is_empty() && d.bytes().all(|c| c.is_ascii_digit())
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -313,5 +358,16 @@ mod tests {
             Some(vec!["xform".to_string(), "a|b".to_string()])
         );
         assert!(split_command_words("xform 'a").is_err());
+    }
+
+    #[test]
+    fn numbers() {
+        for ok in [".5", "1e-3", "+2", "-1.", "3", "1E+10", "0.0"] {
+            assert!(is_real(ok), "{ok}");
+        }
+        for bad in ["", ".", "e3", "1e", "nan", "inf", "1x", "--1", "+"] {
+            assert!(!is_real(bad), "{bad}");
+        }
+        assert!(is_int("-3") && is_int("+0") && !is_int("1.0") && !is_int("-"));
     }
 }

@@ -19,7 +19,7 @@ use std::sync::Arc;
 
 use super::error::SceneError;
 use super::genbox;
-use super::lexer::{split_command_words, Lexer, Token, TokenKind};
+use super::lexer::{is_int, is_real, split_command_words, Lexer, Token, TokenKind};
 use super::primitive::{Location, Primitive};
 use super::xform::{parse_xform_args, XformArgError};
 
@@ -116,51 +116,6 @@ impl ReadOptions {
             raypath,
         }
     }
-}
-
-/// Whether `w` is a Radiance real number: optional sign, digits with an optional point
-/// (at least one digit), optional exponent.
-pub fn is_real(w: &str) -> bool {
-    let b = w.as_bytes();
-    let mut i = 0;
-    if matches!(b.first(), Some(b'+' | b'-')) {
-        i += 1;
-    }
-    let mut digits = 0;
-    while i < b.len() && b[i].is_ascii_digit() {
-        i += 1;
-        digits += 1;
-    }
-    if i < b.len() && b[i] == b'.' {
-        i += 1;
-        while i < b.len() && b[i].is_ascii_digit() {
-            i += 1;
-            digits += 1;
-        }
-    }
-    if digits == 0 {
-        return false;
-    }
-    if i < b.len() && matches!(b[i], b'e' | b'E') {
-        i += 1;
-        if matches!(b.get(i), Some(b'+' | b'-')) {
-            i += 1;
-        }
-        let s = i;
-        while i < b.len() && b[i].is_ascii_digit() {
-            i += 1;
-        }
-        if i == s {
-            return false;
-        }
-    }
-    i == b.len()
-}
-
-/// Whether `w` is an integer (optional sign, digits).
-pub fn is_int(w: &str) -> bool {
-    let d = w.strip_prefix(['+', '-']).unwrap_or(w);
-    !d.is_empty() && d.bytes().all(|c| c.is_ascii_digit())
 }
 
 /// Read scene files in order ("-" = stdin) into the flat list of primitives, expanding
@@ -530,20 +485,4 @@ fn run_xform(
         }
     }
     Ok(())
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn numbers() {
-        for ok in [".5", "1e-3", "+2", "-1.", "3", "1E+10", "0.0"] {
-            assert!(is_real(ok), "{ok}");
-        }
-        for bad in ["", ".", "e3", "1e", "nan", "inf", "1x", "--1", "+"] {
-            assert!(!is_real(bad), "{bad}");
-        }
-        assert!(is_int("-3") && is_int("+0") && !is_int("1.0") && !is_int("-"));
-    }
 }

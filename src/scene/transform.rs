@@ -73,7 +73,7 @@ pub fn is_surface(ptype: &str) -> bool {
 
 fn parse_num(opt: &str, w: Option<&String>) -> Result<f64, String> {
     let w = w.ok_or_else(|| format!("missing argument for {opt}"))?;
-    if !super::reader::is_real(w) {
+    if !super::lexer::is_real(w) {
         return Err(format!("bad argument for {opt}: '{w}' is not a number"));
     }
     w.parse::<f64>()

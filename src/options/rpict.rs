@@ -1,0 +1,155 @@
+//! rpict's (tpict's) command line: the three kinds of parameters plus the scene files, parsed
+//! in one pass (`@file`/`$VAR` expanded first, options before scene files), and printed back
+//! as words.
+
+use super::picture::PictureParams;
+use super::render::RenderParams;
+use super::run::RunParams;
+use super::words::{expand_args, unsupported, OptError};
+
+/// Everything rpict's (and tpict's) command line can say.
+#[derive(Clone, Debug, Default, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct RpictOptions {
+    /// Rendering parameters (the light transport).
+    pub params: RenderParams,
+    /// Picture parameters (view, resolution, pixel sampling).
+    pub picture: PictureParams,
+    /// Run parameters (threads, files, reports).
+    pub run: RunParams,
+    /// Scene files (after the options); `-` is stdin. Empty input means `["-"]`.
+    pub scene_files: Vec<String>,
+}
+
+/// What a tpict command line asks for.
+#[derive(Clone, Debug, PartialEq)]
+pub enum Command {
+    /// Render with these options.
+    Render(Box<RpictOptions>),
+    /// `-defaults`/`-help`: print [`super::defaults_text`] of the options given before it.
+    PrintDefaults(Box<RpictOptions>),
+    /// `-version`.
+    PrintVersion,
+}
+
+/// Apply one rpict option at `words[0]` (not a scene file). Returns the words consumed, or a
+/// finished command for `-defaults`/`-version`.
+fn apply_rpict_option(
+    o: &mut RpictOptions,
+    words: &[String],
+) -> Result<Result<usize, Command>, OptError> {
+    if let Some(n) = o.picture.view.apply_option(words)? {
+        return Ok(Ok(n));
+    }
+    if let Some(n) = o.params.apply_option(words)? {
+        return Ok(Ok(n));
+    }
+    if let Some(n) = o.picture.apply_option(words)? {
+        return Ok(Ok(n));
+    }
+    if let Some(n) = o.run.apply_option(words)? {
+        return Ok(Ok(n));
+    }
+    let w = words[0].as_str();
+    match w {
+        "-version" => Ok(Err(Command::PrintVersion)),
+        "-defaults" | "-help" => Ok(Err(Command::PrintDefaults(Box::new(o.clone())))),
+        "-z" => Err(unsupported(w, "depth buffer output is not implemented")),
+        "-P" | "-PP" => Err(unsupported(
+            w,
+            "persistent server mode is not implemented; use -n for threads",
+        )),
+        "-r" | "-ro" => Err(unsupported(w, "picture recovery is not implemented")),
+        "-f" => Err(unsupported(w, "function files are not supported")),
+        "-features" => Err(unsupported(w, "feature queries are not implemented")),
+        _ => Err(OptError::Unknown(w.to_string())),
+    }
+}
+
+/// Parse tpict's arguments (without argv[0]): expands `@file`/`$VAR`, applies `-vf` files
+/// in order (later view options override, like rpict), validates numbers and ranges,
+/// rejects unknown options (the error names the option) and unsupported ones with a reason.
+/// Options come first, then scene files (`-` is stdin; none given means stdin).
+/// `-defaults`/`-help` and `-version` end parsing at once, like rpict.
+pub fn parse_rpict_args(args: &[String]) -> Result<Command, OptError> {
+    let words = expand_args(args)?;
+    let mut o = RpictOptions::default();
+    let mut i = 0;
+    while i < words.len() {
+        let w = &words[i];
+        let is_option = w.len() > 1 && w.starts_with('-');
+        if !is_option {
+            o.scene_files.push(w.clone());
+            i += 1;
+            continue;
+        }
+        if let Some(scene) = o.scene_files.first() {
+            return Err(OptError::OptionAfterScene {
+                option: w.clone(),
+                scene: scene.clone(),
+            });
+        }
+        match apply_rpict_option(&mut o, &words[i..])? {
+            Ok(n) => i += n,
+            Err(cmd) => return Ok(cmd),
+        }
+    }
+    if o.scene_files.is_empty() {
+        o.scene_files.push("-".to_string());
+    }
+    if o.run.sequence_start.is_some() && o.scene_files.iter().any(|s| s == "-") {
+        return Err(OptError::BadValue {
+            option: "-S".into(),
+            reason: "views are read from stdin, so the scene cannot come from stdin".into(),
+        });
+    }
+    o.picture.view.frame()?;
+    Ok(Command::Render(Box::new(o)))
+}
+
+/// Options as command-line words that [`parse_rpict_args`] parses back to the same value
+/// (scene files excluded).
+pub fn to_args(opts: &RpictOptions) -> Vec<String> {
+    let mut w = opts.picture.to_words();
+    w.extend(opts.params.to_words());
+    w.extend(opts.run.to_words());
+    w
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn words(s: &str) -> Vec<String> {
+        s.split_whitespace().map(String::from).collect()
+    }
+
+    #[test]
+    fn overture_runs_only_for_cached_ambient_and_can_be_turned_off() {
+        let parse = |a: &str| match parse_rpict_args(&words(a)).unwrap() {
+            Command::Render(o) => *o,
+            c => panic!("{c:?}"),
+        };
+        let step = |a: &str| {
+            let o = parse(a);
+            o.picture.overture_step(&o.params)
+        };
+        assert_eq!(step("-ab 1 s.rad"), 4);
+        assert_eq!(step("-ab 1 -ps 1 s.rad"), 1);
+        assert_eq!(step("-ab 1 -ps 8 s.rad"), 8);
+        // No cache: nothing to fill.
+        assert_eq!(step("-ab 0 s.rad"), 0);
+        assert_eq!(step("-ab 1 -aa 0 s.rad"), 0);
+        assert_eq!(step("-ab 1 -aa 1e-7 s.rad"), 0);
+        assert_eq!(step("-ab 1 -ad 0 s.rad"), 0);
+        let off = parse("-ab 1 --no-overture s.rad");
+        assert_eq!(off.picture.overture_step(&off.params), 0);
+        // The option survives the round trip through words (job manifests, `-defaults`).
+        let w = to_args(&off);
+        assert!(w.contains(&"--no-overture".to_string()), "{w:?}");
+        // A manifest written before the option existed reads as on.
+        let mut json = serde_json::to_value(parse("-ab 1 s.rad").picture).unwrap();
+        json.as_object_mut().unwrap().remove("overture");
+        let back: PictureParams = serde_json::from_value(json).unwrap();
+        assert!(back.overture);
+    }
+}

@@ -1,0 +1,273 @@
+//! One render session, the same for `tpict` and `tpiece`: the scene (read, fingerprinted,
+//! built), its lights, the render threads, the ambient calculation with this process's
+//! origin id, and the ambient stores its values go to (a Radiance ambient file `-af`, an
+//! ambient log under one flush policy: [`store`]). The front ends only decide what to render
+//! (whole views, or a job's tiles) and where the pixels go.
+//!
+//! ```text
+//! SceneSource::read(files, params)   primitives + ambient fingerprint
+//!   -> Session::start(params, source, threads)   scene, lights, pool, Ambient
+//!   -> open_log / attach_store / load_ambient_file   (optional ambient stores)
+//!   -> render(frame setup, region)      pixels, on the session's threads
+//!   -> finish / save_ambient_file      flush the stores
+//! ```
+
+pub mod store;
+
+use crate::ambient::cache::CachedValue;
+use crate::ambient::log::{LogHeader, LogReader, LogWriter};
+use crate::ambient::Ambient;
+use crate::light::LightSet;
+use crate::options::RenderParams;
+use crate::render::{render_region, FrameSetup, RenderProgress, Tracer};
+use crate::runinfo::{process_origin_id, thread_count};
+use crate::scene::{read_scene_files, Primitive, ReadOptions, Scene};
+use anyhow::{Context, Result};
+use std::path::Path;
+use std::sync::atomic::Ordering;
+use std::sync::Arc;
+use store::{AmbientStore, FlushPolicy};
+
+/// The header variable recording Tessera's ambient settings in pictures.
+pub const AMBIENT_HEADER_VAR: &str = "TESSERA_AMBIENT";
+
+/// A scene as read: its primitives and the fingerprint of them with the ambient options.
+pub struct SceneSource {
+    /// The primitives, inline commands and `xform` expanded.
+    pub prims: Vec<Primitive>,
+    /// [`crate::ambient::fingerprint::fingerprint`] of the primitives and the parameters.
+    pub fingerprint: [u8; 32],
+}
+
+impl SceneSource {
+    /// Read scene files (`-` is standard input) and fingerprint them with `params`.
+    pub fn read(files: &[String], ro: &ReadOptions, params: &RenderParams) -> Result<SceneSource> {
+        let prims = read_scene_files(files, ro)?;
+        let fingerprint = crate::ambient::fingerprint::fingerprint(&prims, params);
+        Ok(SceneSource { prims, fingerprint })
+    }
+}
+
+/// A pixel region `[x0, x1) × [y0, y1)` of a picture (y from the top).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Region {
+    /// Left column.
+    pub x0: usize,
+    /// Top row.
+    pub y0: usize,
+    /// Column after the right edge.
+    pub x1: usize,
+    /// Row after the bottom edge.
+    pub y1: usize,
+}
+
+/// What rendering shares across frames and tiles (see the module docs).
+pub struct Session {
+    /// The rendering parameters.
+    pub params: RenderParams,
+    /// The scene.
+    pub scene: Scene,
+    /// Its light sources.
+    pub lights: LightSet,
+    /// The scene's and parameters' ambient fingerprint.
+    pub fingerprint: [u8; 32],
+    /// The ambient calculation (`-ab` > 0), kept across frames and tiles.
+    pub ambient: Option<Arc<Ambient>>,
+    /// Render threads.
+    pub threads: usize,
+    /// Warnings met while building the scene and collecting its lights.
+    pub warnings: Vec<String>,
+    origin_id: u64,
+    pool: rayon::ThreadPool,
+    store: Option<Arc<AmbientStore>>,
+}
+
+impl Session {
+    /// Build the scene and its lights, start `threads` render threads (see
+    /// [`thread_count`]) and the ambient calculation.
+    pub fn start(
+        params: RenderParams,
+        source: SceneSource,
+        threads: Option<usize>,
+    ) -> Result<Session> {
+        let scene = Scene::build(&source.prims)?;
+        let mut warnings = scene.warnings.clone();
+        let lights = LightSet::collect(&scene, params.dr);
+        warnings.extend(lights.warnings.iter().cloned());
+        if lights.sources.is_empty() {
+            warnings.push("no light sources found".into());
+        }
+        let origin_id = process_origin_id();
+        let ambient = Ambient::new(&params, scene.size, origin_id).map(Arc::new);
+        let threads = thread_count(threads);
+        let pool = rayon::ThreadPoolBuilder::new()
+            .num_threads(threads)
+            .build()
+            .context("cannot start render threads")?;
+        Ok(Session {
+            params,
+            scene,
+            lights,
+            fingerprint: source.fingerprint,
+            ambient,
+            threads,
+            warnings,
+            origin_id,
+            pool,
+            store: None,
+        })
+    }
+
+    /// The ambient calculation when it caches its values (stores apply only then).
+    pub fn cached_ambient(&self) -> Option<&Arc<Ambient>> {
+        self.ambient.as_ref().filter(|a| a.cached())
+    }
+
+    /// The header of ambient logs written for this session.
+    pub fn log_header(&self) -> LogHeader {
+        LogHeader::new(
+            self.fingerprint,
+            &crate::ambient::fingerprint::options_text(&self.params),
+        )
+    }
+
+    /// Use a Tessera ambient log shared with other processes (`--amb-log`): refuse it when
+    /// its fingerprint does not match (unless `force`), load its values, and append this
+    /// session's new values to it every `flush` values. Needs a cached ambient calculation.
+    pub fn open_log(&mut self, path: &Path, force: bool, flush: usize) -> Result<()> {
+        let Some(a) = self.cached_ambient().cloned() else {
+            return Ok(());
+        };
+        if path.exists() {
+            let mut r = LogReader::open(path, Some(&self.fingerprint), force)?;
+            for rec in r.read_available()? {
+                a.cache
+                    .insert(CachedValue::from_record(&rec, self.scene.origin));
+            }
+        }
+        let writer = LogWriter::open(path, &self.log_header(), force)?;
+        let origin = self.scene.origin;
+        let policy = FlushPolicy::Fixed(flush);
+        self.attach_store(Arc::new(AmbientStore::new(a, writer, origin, policy, None)));
+        Ok(())
+    }
+
+    /// Send this session's new ambient values to `store` from now on.
+    pub fn attach_store(&mut self, store: Arc<AmbientStore>) {
+        store.install();
+        self.store = Some(store);
+    }
+
+    /// The ambient store, if one is attached.
+    pub fn store(&self) -> Option<&Arc<AmbientStore>> {
+        self.store.as_ref()
+    }
+
+    /// Flush the ambient store and report its first write error.
+    pub fn finish(&self) -> Result<()> {
+        match &self.store {
+            Some(s) => s.finish(),
+            None => Ok(()),
+        }
+    }
+
+    /// A tracer over the session's scene, lights and ambient calculation.
+    pub fn tracer(&self) -> Tracer<'_> {
+        Tracer::new(&self.scene, &self.params, &self.lights).with_ambient(self.ambient.as_deref())
+    }
+
+    /// Render a region of a frame on the session's threads.
+    pub fn render(&self, fs: &FrameSetup, r: Region, progress: &RenderProgress) -> Vec<[f32; 3]> {
+        let tracer = self.tracer();
+        self.pool
+            .install(|| render_region(&tracer, fs, r.x0, r.y0, r.x1, r.y1, progress))
+    }
+
+    /// New ambient values made so far and the nanoseconds spent making them.
+    pub fn ambient_work(&self) -> (u64, u64) {
+        self.ambient
+            .as_ref()
+            .map(|a| (a.stats.made(), a.stats.amb_nanos.load(Ordering::Relaxed)))
+            .unwrap_or((0, 0))
+    }
+
+    /// The picture header's record of Tessera's ambient settings (`TESSERA_AMBIENT=` with
+    /// every setting as an option), when the ambient calculation runs.
+    pub fn ambient_header(&self) -> Vec<(String, String)> {
+        self.ambient
+            .as_ref()
+            .map(|a| {
+                vec![(
+                    AMBIENT_HEADER_VAR.to_string(),
+                    format!(" {}", a.settings().to_text()),
+                )]
+            })
+            .unwrap_or_default()
+    }
+
+    /// Load the values of a Radiance ambient file (`-af`) into the cache, if the file
+    /// exists; returns a warning about invalid records or trailing bytes.
+    pub fn load_ambient_file(&self, path: &Path) -> Result<Option<String>> {
+        let Some(a) = self.cached_ambient() else {
+            return Ok(None);
+        };
+        if !path.exists() {
+            return Ok(None);
+        }
+        let (_, records, report) = crate::ambient::radfile::read_file(path)
+            .with_context(|| format!("cannot read ambient file {}", path.display()))?;
+        for r in &records {
+            a.cache
+                .insert(CachedValue::from_record(r, self.scene.origin));
+        }
+        Ok((report.invalid > 0 || report.trailing_bytes > 0).then(|| {
+            format!(
+                "ambient file {}: ignored {} invalid records and {} trailing bytes",
+                path.display(),
+                report.invalid,
+                report.trailing_bytes
+            )
+        }))
+    }
+
+    /// Append this session's new values to a Radiance ambient file (`-af`), creating it
+    /// with a header when it does not exist. The new values go out in one write.
+    pub fn save_ambient_file(&self, path: &Path) -> Result<()> {
+        use crate::ambient::radfile;
+        use std::io::Write;
+        let Some(a) = self.cached_ambient() else {
+            return Ok(());
+        };
+        let mine: Vec<_> = a
+            .cache
+            .all()
+            .into_iter()
+            .filter(|v| v.id.origin == self.origin_id)
+            .map(|v| v.to_record(self.scene.origin))
+            .collect();
+        let mut bytes = Vec::with_capacity(mine.len() * radfile::RECORD_SIZE);
+        for r in &mine {
+            radfile::write_record(&mut bytes, r)?;
+        }
+        if path.exists() {
+            let mut f = std::fs::OpenOptions::new()
+                .append(true)
+                .open(path)
+                .with_context(|| format!("cannot append to ambient file {}", path.display()))?;
+            f.write_all(&bytes)
+                .with_context(|| format!("cannot append to ambient file {}", path.display()))?;
+        } else {
+            let p = &self.params;
+            let line = format!(
+                "tpict -av {} {} {} -aw {} -ab {} -aa {} -ad {} -as {} -ar {}",
+                p.av[0], p.av[1], p.av[2], p.aw, p.ab, p.aa, p.ad, p.as_, p.ar
+            );
+            let mut out = Vec::new();
+            radfile::write_header(&mut out, &line, crate::runinfo::SOFTWARE)?;
+            out.extend_from_slice(&bytes);
+            crate::image::output::write_atomic(path, |f| f.write_all(&out))
+                .with_context(|| format!("cannot write ambient file {}", path.display()))?;
+        }
+        Ok(())
+    }
+}
