@@ -141,7 +141,9 @@ fn open_stores(session: &mut Session, run: &RunParams, log: &Log) -> Result<Opti
     match &run.amb_log {
         Some(_) if uncached => log.warn("-aa 0 disables the cache: the ambient log is not used"),
         Some(path) if session.ambient.is_some() => {
-            session.open_log(Path::new(path), run.amb_force, run.amb_flush)?
+            if let Some(w) = session.open_log(Path::new(path), run.amb_force, run.amb_flush)? {
+                log.warn(&w);
+            }
         }
         Some(_) => log.warn("--amb-log has no effect without -ab > 0"),
         None => {}
@@ -425,6 +427,9 @@ pub struct AmbientReport {
     pub leak_rejects: u64,
     /// Shadow rays at sample hits answered from their footprint's cube, not traced.
     pub shadows_reused: u64,
+    /// Values the cache refused (non-finite or absurd values from a damaged store; records
+    /// that fail validation when read are counted in the warnings).
+    pub refused_values: u64,
 }
 
 impl AmbientReport {
@@ -440,6 +445,7 @@ impl AmbientReport {
         }
         AmbientReport {
             settings: a.settings().to_text(),
+            refused_values: a.cache.refused(),
             lookups: s.lookups.load(Ordering::Relaxed),
             hits: s.hits.load(Ordering::Relaxed),
             new_values_by_level: levels,

@@ -20,6 +20,7 @@ fn bin(name: &str) -> PathBuf {
         "tpiece" => PathBuf::from(env!("CARGO_BIN_EXE_tpiece")),
         "tmerge" => PathBuf::from(env!("CARGO_BIN_EXE_tmerge")),
         "tassemble" => PathBuf::from(env!("CARGO_BIN_EXE_tassemble")),
+        "tstat" => PathBuf::from(env!("CARGO_BIN_EXE_tstat")),
         _ => unreachable!(),
     }
 }
@@ -119,7 +120,17 @@ fn poisoned_logs_are_skipped_by_workers_and_tmerge() {
             })
             .collect();
         std::fs::write(job.join("amb/crafted.log"), encode_log(&header, &bad)).unwrap();
-        work(&job);
+        let err = work(&job);
+        // Skipped records are counted: a warning and tstat's aggregate.
+        if what != "huge radii" {
+            assert!(err.contains("invalid records skipped"), "{what}: {err}");
+        }
+        let st: serde_json::Value =
+            serde_json::from_slice(&run_ok(cmd("tstat").arg(&job).arg("--json"))).unwrap();
+        let rejected = st["aggregate"]["rejected"].as_u64().unwrap();
+        assert_eq!(rejected, bad.len() as u64, "{what}");
+        let text = String::from_utf8(run_ok(cmd("tstat").arg(&job))).unwrap();
+        assert!(text.contains("invalid ambient records skipped"), "{text}");
         let out = job.join("out.hdr");
         run_ok(cmd("tassemble").arg(&job).arg("-o").arg(&out));
         let img = read_picture(&out).unwrap();

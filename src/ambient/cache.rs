@@ -133,6 +133,8 @@ pub struct AmbientCache {
     sink: OnceLock<Box<dyn ValueSink>>,
     /// Values refused by [`AmbientCache::insert`].
     refused: AtomicU64,
+    /// Largest radius accepted ([`AmbientCache::with_max_radius`]).
+    max_rad: f64,
 }
 
 /// The shard of a grid cell: cells of a level are grouped in blocks of 8×8×8 per shard, so
@@ -162,7 +164,15 @@ impl AmbientCache {
             max_level_seen: AtomicU32::new(0),
             sink: OnceLock::new(),
             refused: AtomicU64::new(0),
+            max_rad: f64::INFINITY,
         }
+    }
+
+    /// Refuse values with a radius above `r` (the calculation passes a bound from the scene's
+    /// size: no renderer makes larger radii, so a larger one comes from a damaged store).
+    pub fn with_max_radius(mut self, r: f64) -> AmbientCache {
+        self.max_rad = r;
+        self
     }
 
     /// Send every value this process computes from now on to `sink` (set once).
@@ -222,9 +232,10 @@ impl AmbientCache {
     /// touches (at most 2×2×2, as the cells are at least twice the reach), so a lookup reads
     /// one cell per level.
     ///
-    /// A value whose reach is not finite or exceeds the largest level's cells (a radius a
-    /// renderer never makes: a damaged or crafted store's) or whose position or light is
-    /// not finite is refused and counted ([`AmbientCache::refused`]): filing it would touch
+    /// A value whose reach is not finite or exceeds the largest level's cells, whose radius
+    /// exceeds the bound of [`AmbientCache::with_max_radius`] (radii a renderer never makes:
+    /// a damaged or crafted store's) or whose position or light is not finite is refused and
+    /// counted ([`AmbientCache::refused`]): filing it would touch
     /// unboundedly many cells.
     pub fn insert(&self, v: CachedValue) {
         let r = v.rad[1].max(v.rad[0]) * v.reach.max(1.0) * v.share.max(1.0);
@@ -233,6 +244,7 @@ impl AmbientCache {
         let s = self.cell_size(l);
         let sane = rr.is_finite()
             && rr > 0.0
+            && v.rad[0].max(v.rad[1]) <= self.max_rad
             && rr <= 0.5 * s
             && v.pos.is_finite()
             && v.val.is_finite()
@@ -399,9 +411,10 @@ mod tests {
     /// unboundedly many cells.
     #[test]
     fn absurd_values_are_refused() {
-        let c = AmbientCache::new(0.01, 0.2, 1);
+        let c = AmbientCache::new(0.01, 0.2, 1).with_max_radius(20.0);
         c.insert(value(DVec3::ZERO, 0.5, 1.0, 1));
         for (i, v) in [
+            value(DVec3::ZERO, 21.0, 1.0, 7),
             value(DVec3::ZERO, f64::INFINITY, 1.0, 2),
             value(DVec3::ZERO, 1e300, 1.0, 3),
             value(DVec3::ZERO, f64::NAN, 1.0, 4),

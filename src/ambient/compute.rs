@@ -110,7 +110,9 @@ impl Ambient {
         let settings = params.amb.clone();
         let (ad, as_) = split_divisions(params);
         Some(Ambient {
-            cache: AmbientCache::new(minarad, aa.max(0.01), origin_id),
+            // Radii never exceed maxarad (a fifth of the scene's size); twice the size leaves
+            // room for other renderers' stores (rpict's octree cube is larger).
+            cache: AmbientCache::new(minarad, aa.max(0.01), origin_id).with_max_radius(2.0 * size),
             stats: AmbientStats::default(),
             ab: params.ab as u32,
             aa,

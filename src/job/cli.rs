@@ -246,6 +246,9 @@ fn tmerge(a: TmergeArgs) -> Result<i32> {
         for c in &r.refused {
             eprintln!("tmerge: warning - log refused: {c}");
         }
+        for (name, n) in &r.invalid {
+            eprintln!("tmerge: warning - {name}: {n} invalid records skipped");
+        }
     }
     if let Some(path) = &a.export_radiance {
         let store = super::merge::load_store(&job, &fp, false)?;

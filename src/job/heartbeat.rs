@@ -57,6 +57,10 @@ pub struct WorkerRecord {
     /// Tiles this worker took over from a stale (or earlier) owner.
     #[serde(default)]
     pub reclaimed: u64,
+    /// Ambient records read from other workers' logs or the merged store and skipped as
+    /// invalid, and values the cache refused (docs/robustness.md).
+    #[serde(default)]
+    pub rejected: u64,
     /// Rays traced.
     pub rays: u64,
     /// CPU seconds of the process.

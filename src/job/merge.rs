@@ -190,6 +190,9 @@ pub struct MergeReport {
     pub torn: Vec<String>,
     /// Logs with a damaged record (read up to it), with the reason.
     pub corrupt: Vec<String>,
+    /// Logs with whole records skipped as invalid (non-finite or absurd values), with the
+    /// count.
+    pub invalid: Vec<(String, u64)>,
     /// Logs refused (another fingerprint), with the reason.
     pub refused: Vec<String>,
     /// The store file now published (None when nothing changed).
@@ -252,6 +255,9 @@ pub fn merge(job: &JobDir, fingerprint: &[u8; 32], options: &str) -> Result<Merg
             } else {
                 report.duplicates += 1;
             }
+        }
+        if r.invalid() > 0 {
+            report.invalid.push((name.clone(), r.invalid()));
         }
         match r.tail() {
             LogTail::Clean => {}

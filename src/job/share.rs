@@ -21,12 +21,14 @@ use crate::session::Session;
 use anyhow::{anyhow, Result};
 use glam::DVec3;
 use std::collections::{HashMap, HashSet};
-use std::sync::atomic::Ordering;
+use std::sync::atomic::{AtomicU64, Ordering};
 use std::sync::{Arc, Mutex};
 use std::time::Instant;
 
 struct Readers {
     logs: HashMap<String, LogReader>,
+    /// Invalid records already counted, per log.
+    invalid: HashMap<String, u64>,
     refused: HashSet<String>,
     seen: HashSet<ValueId>,
 }
@@ -40,6 +42,8 @@ pub struct JobPeers {
     ambient: Arc<Ambient>,
     readers: Mutex<Readers>,
     warnings: Mutex<Vec<String>>,
+    /// Invalid records skipped in the peers' logs.
+    rejected: AtomicU64,
 }
 
 /// Open the worker's own log, load the merged store and every other log, and return the
@@ -65,9 +69,11 @@ pub fn open_share(
         readers: Mutex::new(Readers {
             logs: HashMap::new(),
             refused: HashSet::new(),
+            invalid: HashMap::new(),
             seen: HashSet::new(),
         }),
         warnings: Mutex::new(Vec::new()),
+        rejected: AtomicU64::new(0),
     };
     // The merged store first, then only the log tails after it.
     let mut n = peers.load_merged()?;
@@ -165,10 +171,20 @@ impl Peers for JobPeers {
             self.list_logs(rd);
         }
         let mut added = 0;
-        for r in rd.logs.values_mut() {
+        for (name, r) in rd.logs.iter_mut() {
             let Ok(records) = r.read_available() else {
                 continue;
             };
+            let counted = rd.invalid.entry(name.clone()).or_insert(0);
+            if r.invalid() > *counted {
+                let new = r.invalid() - *counted;
+                *counted = r.invalid();
+                self.rejected.fetch_add(new, Ordering::Relaxed);
+                self.warn(format!(
+                    "ambient log {name}: {} invalid records skipped",
+                    r.invalid()
+                ));
+            }
             for rec in records {
                 if rd.seen.insert(rec.id) {
                     self.ambient
@@ -179,5 +195,9 @@ impl Peers for JobPeers {
             }
         }
         added
+    }
+
+    fn rejected(&self) -> u64 {
+        self.rejected.load(Ordering::Relaxed)
     }
 }

@@ -58,6 +58,8 @@ pub struct Aggregate {
     pub shared_in: u64,
     /// Values written for others.
     pub shared_out: u64,
+    /// Invalid ambient records skipped (docs/robustness.md).
+    pub rejected: u64,
     /// Rays.
     pub rays: u64,
     /// From the first worker's start to the last heartbeat (seconds).
@@ -175,6 +177,7 @@ pub fn status(job: &JobDir) -> Result<JobStatus> {
         a.new_values += r.new_values;
         a.shared_in += r.shared_in;
         a.shared_out += r.shared_out;
+        a.rejected += r.rejected;
         a.rays += r.rays;
         first = first.min(r.started_unix);
         last = last.max(r.updated_unix);
@@ -302,6 +305,13 @@ pub fn render_text(st: &JobStatus) -> String {
         a.shared_out
     );
     let _ = writeln!(s, "  CPU {:.2} s, {} rays", a.cpu_seconds, a.rays);
+    if a.rejected > 0 {
+        let _ = writeln!(
+            s,
+            "  warning: {} invalid ambient records skipped (damaged or foreign logs in amb/)",
+            a.rejected
+        );
+    }
     if let Some(b) = &st.baseline {
         let _ = writeln!(
             s,

@@ -141,6 +141,7 @@ impl Beat {
         r.rays = c.rays.load(Ordering::Relaxed);
         if let Some(a) = &self.ambient {
             r.new_values = a.stats.made();
+            r.rejected = self.store.as_ref().map_or(0, |s| s.rejected()) + a.cache.refused();
             r.t_amb = secs(&a.stats.amb_nanos) / self.threads as f64;
         }
         r.t_spec = (r.t_render - r.t_amb).max(0.0);

@@ -134,22 +134,31 @@ impl Session {
     /// Use a Tessera ambient log shared with other processes (`--amb-log`): refuse it when
     /// its fingerprint does not match (unless `force`), load its values, and append this
     /// session's new values to it every `flush` values. Needs a cached ambient calculation.
-    pub fn open_log(&mut self, path: &Path, force: bool, flush: usize) -> Result<()> {
+    /// Returns a warning when the log held invalid records (skipped).
+    pub fn open_log(&mut self, path: &Path, force: bool, flush: usize) -> Result<Option<String>> {
         let Some(a) = self.cached_ambient().cloned() else {
-            return Ok(());
+            return Ok(None);
         };
+        let mut warning = None;
         if path.exists() {
             let mut r = LogReader::open(path, Some(&self.fingerprint), force)?;
             for rec in r.read_available()? {
                 a.cache
                     .insert(CachedValue::from_record(&rec, self.scene.origin));
             }
+            if r.invalid() > 0 {
+                warning = Some(format!(
+                    "ambient log {}: {} invalid records skipped",
+                    path.display(),
+                    r.invalid()
+                ));
+            }
         }
         let writer = LogWriter::open(path, &self.log_header(), force)?;
         let origin = self.scene.origin;
         let policy = FlushPolicy::Fixed(flush);
         self.attach_store(Arc::new(AmbientStore::new(a, writer, origin, policy, None)));
-        Ok(())
+        Ok(warning)
     }
 
     /// Send this session's new ambient values to `store` from now on.

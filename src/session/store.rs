@@ -66,6 +66,11 @@ pub trait Peers: Send + Sync {
     /// running elsewhere (otherwise that makes this a no-op); `list` also looks for new
     /// peers. Returns the number of values inserted.
     fn read(&self, wait: bool, list: bool) -> u64;
+
+    /// Records read from the peers and skipped as invalid (non-finite or absurd values).
+    fn rejected(&self) -> u64 {
+        0
+    }
 }
 
 /// A session's ambient log: its new values go out in batches (the cache's
@@ -120,6 +125,11 @@ impl AmbientStore {
     /// Send the cache's new values to this store from now on.
     pub fn install(self: &Arc<Self>) {
         self.ambient.cache.set_sink(Box::new(Sink(self.clone())));
+    }
+
+    /// Records the peers held and this store skipped as invalid.
+    pub fn rejected(&self) -> u64 {
+        self.peers.as_ref().map_or(0, |p| p.rejected())
     }
 
     /// Write out pending values and read the peers' (one sync).
