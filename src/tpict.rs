@@ -72,6 +72,10 @@ fn run_inner(args: &[String], mut log: Log) -> std::result::Result<(), (Log, any
             println!("{SOFTWARE} (Radiance 6.0a rpict compatible)");
             return Ok(());
         }
+        Command::PrintHelp => {
+            print!("{}", crate::options::rpict::help_text());
+            return Ok(());
+        }
         Command::Render(o) => *o,
     };
     log.warnings = opts.run.warnings;

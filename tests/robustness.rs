@@ -640,3 +640,28 @@ fn binary_and_endless_input_is_refused_early() {
         "{err}"
     );
 }
+
+/// `-n` beyond a few threads per core is cut down with a warning (`-n 10000` took 91 s
+/// for a 16×16 picture); the picture is the same.
+#[test]
+fn absurd_thread_counts_are_capped() {
+    let t = workdir();
+    let p = t.path();
+    let out = tpict_in(p)
+        .args(["-vf", "room.vf", "-x", "16", "-y", "16", "-n", "100000"])
+        .args(["-o", "many.hdr", "room.rad"])
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(out.status.success(), "{err}");
+    assert!(err.contains("100000 threads requested"), "{err}");
+    let one = render(
+        p,
+        &[
+            "-vf", "room.vf", "-x", "16", "-y", "16", "-n", "1", "room.rad",
+        ],
+        "one.hdr",
+    );
+    let many = read_picture(&p.join("many.hdr")).unwrap();
+    assert_eq!(one.pixels, many.pixels);
+}

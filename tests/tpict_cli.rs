@@ -1069,3 +1069,22 @@ fn sequence_without_view_lines_warns() {
     assert!(err.contains("warning - no output produced"), "{err}");
     assert!(!p.join("f1.hdr").exists());
 }
+
+/// `--help`, `-h` and `--version` answer (they were errors), and the help names Tessera's
+/// own options.
+#[test]
+fn help_and_version_answer() {
+    let t = tempfile::tempdir().unwrap();
+    for flag in ["--help", "-h"] {
+        let out = output(tpict_in(t.path()).arg(flag));
+        assert!(out.status.success(), "{flag}");
+        let text = String::from_utf8_lossy(&out.stdout);
+        assert!(
+            text.contains("usage: tpict") && text.contains("--amb-share-max"),
+            "{text}"
+        );
+    }
+    let out = output(tpict_in(t.path()).arg("--version"));
+    assert!(out.status.success());
+    assert!(String::from_utf8_lossy(&out.stdout).contains("Tessera tpict"));
+}

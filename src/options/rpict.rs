@@ -27,8 +27,80 @@ pub enum Command {
     Render(Box<RpictOptions>),
     /// `-defaults`/`-help`: print [`super::defaults_text`] of the options given before it.
     PrintDefaults(Box<RpictOptions>),
-    /// `-version`.
+    /// `-version`, `--version`.
     PrintVersion,
+    /// `--help`, `-h`: print [`help_text`].
+    PrintHelp,
+}
+
+/// tpict's usage: rpict's options in brief and Tessera's own options in full.
+pub fn help_text() -> String {
+    let mut s = String::from(
+        "usage: tpict [rpict options] [Tessera options] scene.rad [more.rad ...]\n\
+         \n\
+         Renders Radiance scene files (where rpict takes an octree; '-' or none: stdin) with\n\
+         rpict's options: views (-vt? -vp -vd -vu -vh -vv -vo -va -vs -vl -vf), picture\n\
+         (-x -y -pa -pj -ps -pt), direct light (-dt -dc -dj -ds -dr -dp -dv), specular\n\
+         (-ss -st), limits (-lr -lw), ambient (-av -aw -ab -aa -ar -ad -as -ae -ai -aE -aI\n\
+         -af), -i -u -bv -w -t -e -o -S, @file and $VAR. 'tpict -defaults' prints every\n\
+         value, as rpict does.\n\
+         \n\
+         Tessera's own options:\n\
+           -n N                    render threads (default: every core, or SLURM_CPUS_PER_TASK)\n\
+           -o FILE                 output: .hdr (Radiance), .exr or .png; -S n: a pattern\n\
+           --allow-commands        run a scene's !commands other than xform and genbox\n\
+           --stats FILE            write render statistics (JSON)\n\
+           --amb-log FILE          share ambient values through Tessera's append-only log\n\
+           --amb-flush N           values per log write (default 128)\n\
+           --amb-force             use a log made for another scene or other options\n\
+           --no-overture           no cache-filling pass before the picture's own\n\
+           --help, -h              this text; --version, -version: the version\n\
+         \n\
+         The ambient calculation's additions to Radiance's (docs/ambient.md):\n",
+    );
+    for (name, what) in [
+        (
+            "--amb-share-max F",
+            "largest share reach, 1..4 (1: Radiance's rule; default 3)",
+        ),
+        (
+            "--amb-as0-split F",
+            "-as 0 super-samples this share of -ad, 0..0.9 (0: rpict's)",
+        ),
+        ("--amb-hessian on|off", "radii from the irradiance Hessian"),
+        (
+            "--amb-reach on|off",
+            "a value's interpolation reach up to 2",
+        ),
+        (
+            "--amb-gradients on|off",
+            "extrapolate values with their gradients",
+        ),
+        (
+            "--amb-gradient-radii on|off",
+            "the gradient limits Hessian radii (off)",
+        ),
+        (
+            "--amb-glow-sampling on|off",
+            "glows beyond their radius sampled as sources",
+        ),
+        ("--amb-corral on|off", "the light-leak test"),
+        (
+            "--amb-shadow-reuse on|off",
+            "shadow rays reused within sample footprints",
+        ),
+        (
+            "--amb-hessian-cells N",
+            "cells of the Hessian's mesh at most (256)",
+        ),
+        (
+            "--amb-outlier-limit F",
+            "a cell brings at most F x the others' sum (2; 0: none)",
+        ),
+    ] {
+        s.push_str(&format!("  {name:<28} {what}\n"));
+    }
+    s
 }
 
 /// Apply one rpict option at `words[0]` (not a scene file). Returns the words consumed, or a
@@ -51,7 +123,8 @@ fn apply_rpict_option(
     }
     let w = words[0].as_str();
     match w {
-        "-version" => Ok(Err(Command::PrintVersion)),
+        "-version" | "--version" => Ok(Err(Command::PrintVersion)),
+        "--help" | "-h" => Ok(Err(Command::PrintHelp)),
         "-defaults" | "-help" => Ok(Err(Command::PrintDefaults(Box::new(o.clone())))),
         "-z" => Err(unsupported(w, "depth buffer output is not implemented")),
         "-P" | "-PP" => Err(unsupported(
@@ -117,6 +190,33 @@ pub fn to_args(opts: &RpictOptions) -> Vec<String> {
 
 #[cfg(test)]
 mod tests {
+
+    #[test]
+    fn help_names_every_tessera_option() {
+        let h = help_text();
+        for name in crate::ambient::settings::OPTION_NAMES {
+            assert!(h.contains(name), "{name} missing from the help");
+        }
+        for name in [
+            "--allow-commands",
+            "--stats",
+            "--amb-log",
+            "--amb-flush",
+            "--amb-force",
+            "--no-overture",
+            "-n N",
+        ] {
+            assert!(h.contains(name), "{name} missing from the help");
+        }
+        let w = |s: &str| vec![s.to_string()];
+        assert_eq!(parse_rpict_args(&w("--help")).unwrap(), Command::PrintHelp);
+        assert_eq!(parse_rpict_args(&w("-h")).unwrap(), Command::PrintHelp);
+        assert_eq!(
+            parse_rpict_args(&w("--version")).unwrap(),
+            Command::PrintVersion
+        );
+    }
+
     use super::*;
 
     fn words(s: &str) -> Vec<String> {

@@ -99,7 +99,8 @@ impl Session {
         }
         let origin_id = process_origin_id();
         let ambient = Ambient::new(&params, scene.size, origin_id).map(Arc::new);
-        let threads = thread_count(threads);
+        let (threads, cut) = thread_count(threads);
+        warnings.extend(cut);
         let pool = rayon::ThreadPoolBuilder::new()
             .num_threads(threads)
             .build()
