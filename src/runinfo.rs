@@ -38,6 +38,38 @@ pub fn thread_count(opt: Option<usize>) -> (usize, Option<String>) {
     (n, None)
 }
 
+/// Memory this machine can give a process now (`MemAvailable` of `/proc/meminfo`), if known.
+pub fn available_memory() -> Option<u64> {
+    let info = std::fs::read_to_string("/proc/meminfo").ok()?;
+    let line = info.lines().find(|l| l.starts_with("MemAvailable:"))?;
+    let kib: u64 = line.split_whitespace().nth(1)?.parse().ok()?;
+    kib.checked_mul(1024)
+}
+
+/// Bytes a single-process picture of `x`×`y` pixels holds at once: the rendered rows and
+/// the picture (12 bytes a pixel each) and its encoding, with room to spare.
+pub const PICTURE_BYTES_PER_PIXEL: u64 = 32;
+
+/// Refuse a picture that cannot fit in `available` bytes (None: unknown, then only an
+/// overflowing size is refused), with what to do instead.
+pub fn check_picture_memory(x: usize, y: usize, available: Option<u64>) -> Result<(), String> {
+    let need = (x as u64)
+        .checked_mul(y as u64)
+        .and_then(|p| p.checked_mul(PICTURE_BYTES_PER_PIXEL));
+    let gib = |b: u64| b as f64 / (1u64 << 30) as f64;
+    match (need, available) {
+        (None, _) => Err(format!("a {x}x{y} picture is too large to address")),
+        (Some(n), Some(a)) if n > a => Err(format!(
+            "a {x}x{y} picture needs about {:.1} GiB of memory and {:.1} GiB are available: \
+             lower -x/-y, or render it as a batch job (tplan splits it into tiles and \
+             tassemble writes it)",
+            gib(n),
+            gib(a)
+        )),
+        _ => Ok(()),
+    }
+}
+
 /// This machine's host name (empty when unknown).
 pub fn host_name() -> String {
     std::fs::read_to_string("/proc/sys/kernel/hostname")
@@ -132,6 +164,11 @@ mod tests {
         assert_eq!(thread_count(Some(1)), (1, None));
         assert_eq!(thread_count(Some(0)).0, 1);
         let (n, w) = thread_count(Some(10_000_000));
+        assert!(check_picture_memory(640, 480, Some(1 << 30)).is_ok());
+        let e = check_picture_memory(100_000, 100_000, Some(24 << 30)).unwrap_err();
+        assert!(e.contains("298.0 GiB") && e.contains("tplan"), "{e}");
+        assert!(check_picture_memory(usize::MAX, 3, None).is_err());
+        assert!(check_picture_memory(100_000, 100_000, None).is_ok());
         assert_eq!(n, cores * MAX_THREADS_PER_CORE);
         assert!(w.unwrap().contains("10000000 threads requested"));
     }

@@ -304,6 +304,8 @@ impl Run<'_> {
         if x == 0 || y == 0 {
             bail!("resolution {x}x{y} is empty");
         }
+        crate::runinfo::check_picture_memory(x, y, crate::runinfo::available_memory())
+            .map_err(|e| anyhow!(e))?;
         let fs = opts
             .picture
             .frame_setup(&session.params, &vf, (x, y), frame);

@@ -1088,3 +1088,22 @@ fn help_and_version_answer() {
     assert!(out.status.success());
     assert!(String::from_utf8_lossy(&out.stdout).contains("Tessera tpict"));
 }
+
+/// A picture that cannot fit in memory is refused up front with what to do instead (it
+/// aborted with "memory allocation of 82567200000 bytes failed").
+#[test]
+fn pictures_beyond_memory_are_refused() {
+    let t = tempfile::tempdir().unwrap();
+    std::fs::write(
+        t.path().join("s.rad"),
+        "void light l 0 0 3 1 1 1\nl sphere s 0 0 4 0 0 0 1\n",
+    )
+    .unwrap();
+    let err = fails(
+        tpict_in(t.path())
+            .args(["-x", "1000000", "-y", "1000000", "-vp", "0", "-5", "0"])
+            .args(["-vd", "0", "1", "0", "-o", "big.hdr", "s.rad"]),
+    );
+    assert!(err.contains("GiB") && err.contains("tplan"), "{err}");
+    assert!(!t.path().join("big.hdr").exists());
+}
