@@ -9,7 +9,8 @@ N="${1:-4}"
 OUT="${2:-demo.hdr}"
 JOB="${TESSERA_DEMO_JOB:-demo-job}"
 case "$N" in '' | *[!0-9]* | 0) echo "batch.sh: WORKERS must be a positive integer" >&2; exit 2 ;; esac
-cargo build --release --quiet --bins
+echo "batch.sh: building the toolkit (cargo build --release; a few minutes the first time)" >&2
+cargo build --release --bins
 B="$PWD/target/release"
 export RAYPATH=demo
 if [ -e "$JOB" ]; then

@@ -922,3 +922,46 @@ fn logs_of_other_ambient_settings_are_refused() {
     assert_eq!(other_in, 0, "{other_err}");
     assert!(other_err.contains("ignoring ambient log"), "{other_err}");
 }
+
+/// tplan suggests `--allow-commands` for a scene's inline commands and takes it before
+/// `--` (as its own option) as well as after it (as tpict's).
+#[test]
+fn tplan_takes_allow_commands_as_its_own_option() {
+    let d = tempfile::tempdir().unwrap();
+    let scene = d.path().join("cmd.rad");
+    std::fs::write(
+        &scene,
+        "!echo void light l 0 0 3 1 1 1\n!echo l sphere s 0 0 4 0 0 0 1\n",
+    )
+    .unwrap();
+    let args = |job: &str| {
+        let mut c = cmd("tplan");
+        c.arg("-o").arg(d.path().join(job));
+        c
+    };
+    let view = [
+        "-vp", "0", "-5", "0", "-vd", "0", "1", "0", "-x", "16", "-y", "16",
+    ];
+    let refused = args("refused")
+        .arg("--")
+        .args(view)
+        .arg(&scene)
+        .output()
+        .unwrap();
+    assert!(!refused.status.success());
+    assert!(String::from_utf8_lossy(&refused.stderr).contains("--allow-commands"));
+    run_ok(
+        args("before")
+            .arg("--allow-commands")
+            .arg("--")
+            .args(view)
+            .arg(&scene),
+    );
+    run_ok(
+        args("after")
+            .arg("--")
+            .arg("--allow-commands")
+            .args(view)
+            .arg(&scene),
+    );
+}

@@ -67,6 +67,10 @@ struct TplanArgs {
     /// Accept an ambient store made for another scene or other options.
     #[arg(long)]
     amb_force: bool,
+    /// Run a scene's inline commands other than xform and genbox through `sh` (as
+    /// `--allow-commands` after `--`).
+    #[arg(long)]
+    allow_commands: bool,
     /// The job directory to create (must not exist, or be empty).
     #[arg(short = 'o', long = "output", value_name = "JOBDIR")]
     output: PathBuf,
@@ -110,7 +114,13 @@ fn tplan(a: TplanArgs) -> Result<i32> {
         lease: a.lease,
         ambient: a.ambient.map(|p| p.display().to_string()),
         amb_force: a.amb_force,
-        args: a.rest,
+        args: if a.allow_commands {
+            std::iter::once("--allow-commands".to_string())
+                .chain(a.rest)
+                .collect()
+        } else {
+            a.rest
+        },
         command: command_line(),
     };
     let m = create_job(&a.output, &req)?;

@@ -19,6 +19,11 @@ pub fn radiance_bin() -> Option<PathBuf> {
     found
 }
 
+/// The folder holding Radiance's binaries, or None, without messages or panics.
+pub fn radiance_bin_quiet() -> Option<PathBuf> {
+    find_radiance()
+}
+
 fn find_radiance() -> Option<PathBuf> {
     if let Ok(d) = std::env::var("TESSERA_RADIANCE_BIN") {
         let p = PathBuf::from(d);
