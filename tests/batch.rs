@@ -965,3 +965,57 @@ fn tplan_takes_allow_commands_as_its_own_option() {
             .arg(&scene),
     );
 }
+
+/// A job whose directory is deleted under a running worker makes the worker fail (it must
+/// never report success), and `tstat` reports deleted task entries as damage, not as tiles
+/// to do, with a non-zero exit.
+#[test]
+fn damaged_jobs_are_reported_not_finished() {
+    let d = tempfile::tempdir().unwrap();
+    let job = d.path().join("job");
+    let args = view_args(160, 120, &["-ab", "1", "-ad", "64", "-as", "0"]);
+    plan(&job, &["--workers", "2"], &args);
+    // Entries deleted: tstat says so.
+    let first = std::fs::read_dir(job.join("tasks"))
+        .unwrap()
+        .next()
+        .unwrap()
+        .unwrap()
+        .path();
+    std::fs::remove_file(&first).unwrap();
+    let out = cmd("tstat").arg(&job).output().unwrap();
+    let text = String::from_utf8_lossy(&out.stdout);
+    assert!(!out.status.success());
+    assert!(text.contains("DAMAGED: 1 tiles"), "{text}");
+    let st: serde_json::Value = serde_json::from_slice(
+        &cmd("tstat")
+            .arg(&job)
+            .arg("--json")
+            .output()
+            .unwrap()
+            .stdout,
+    )
+    .unwrap();
+    assert_eq!(st["frames"][0]["missing"], 1);
+    // The whole directory deleted while a worker runs: the worker fails.
+    let job2 = d.path().join("job2");
+    // Several seconds of work on one thread: the deletion comes long before the end.
+    let long = view_args(320, 240, &["-ab", "1", "-ad", "256", "-as", "0"]);
+    plan(&job2, &["--workers", "2"], &long);
+    let w = worker(&job2, "w0", &[])
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    std::thread::sleep(Duration::from_millis(300));
+    let _ = std::fs::remove_dir_all(&job2);
+    let out = w.wait_with_output().unwrap();
+    let err = String::from_utf8_lossy(&out.stderr);
+    if job2.exists() {
+        // The worker recreated nothing; a leftover means rm raced a temporary file.
+        let _ = std::fs::remove_dir_all(&job2);
+    }
+    assert!(
+        !out.status.success(),
+        "a worker that lost its job reported success: {err}"
+    );
+}

@@ -402,5 +402,11 @@ fn tstat(a: TstatArgs) -> Result<i32> {
     } else {
         print!("{}", super::status::render_text(&st));
     }
+    // A damaged job (task entries deleted) is an error for scripts that poll tstat.
+    let missing: usize = st.frames.iter().map(|f| f.missing).sum();
+    if missing > 0 {
+        eprintln!("tstat: the job is damaged: {missing} task entries are missing from tasks/");
+        return Ok(1);
+    }
     Ok(0)
 }

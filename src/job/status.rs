@@ -26,6 +26,9 @@ pub struct FrameProgress {
     pub claimed: usize,
     /// Done.
     pub done: usize,
+    /// Tiles of the plan with no task entry at all: the job directory was damaged (an entry
+    /// is always in one of the three states).
+    pub missing: usize,
 }
 
 /// Aggregated metrics (sums over workers).
@@ -134,8 +137,12 @@ pub fn status(job: &JobDir) -> Result<JobStatus> {
                     p.claimed += 1;
                     remaining_px += r.area();
                 }
-                _ => {
+                Some(TaskState::Todo) => {
                     p.todo += 1;
+                    remaining_px += r.area();
+                }
+                None => {
+                    p.missing += 1;
                     remaining_px += r.area();
                 }
             }
@@ -251,11 +258,28 @@ pub fn render_text(st: &JobStatus) -> String {
     use std::fmt::Write;
     let mut s = String::new();
     let _ = writeln!(s, "job {}: {} of {} tiles done", st.job, st.done, st.tiles);
+    let missing: usize = st.frames.iter().map(|f| f.missing).sum();
+    if missing > 0 {
+        let _ = writeln!(
+            s,
+            "DAMAGED: {missing} tiles of the plan have no task entry in tasks/ (entries were \
+             deleted); the job cannot finish as it is"
+        );
+    }
     for f in &st.frames {
         let _ = writeln!(
             s,
-            "  frame {:>5}: {:>5} todo {:>5} claimed {:>5} done (of {})",
-            f.frame, f.todo, f.claimed, f.done, f.tiles
+            "  frame {:>5}: {:>5} todo {:>5} claimed {:>5} done (of {}){}",
+            f.frame,
+            f.todo,
+            f.claimed,
+            f.done,
+            f.tiles,
+            if f.missing > 0 {
+                format!(", {} MISSING", f.missing)
+            } else {
+                String::new()
+            }
         );
     }
     if let Some(e) = st.eta_seconds {
