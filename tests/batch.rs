@@ -400,7 +400,7 @@ fn stale_claims_are_reclaimed_after_the_lease() {
     assert_eq!(st["frames"][0]["claimed"], 1, "{st}");
     let t = Instant::now();
     let mut live = worker(&job, "live", &[])
-        .stderr(Stdio::null())
+        .stderr(Stdio::piped())
         .spawn()
         .unwrap();
     // A staleness test that trusted the ghost's clock (year 2100) would wait forever.
@@ -418,7 +418,61 @@ fn stale_claims_are_reclaimed_after_the_lease() {
     // Its clock in the future does not matter: staleness is judged by the lease only.
     assert!(t.elapsed() >= Duration::from_millis(500));
     assert!(tasks.join("f00000-t00000.done").exists());
+    // While it waited, it said what for.
+    let err = live.wait_with_output().unwrap().stderr;
+    let err = String::from_utf8_lossy(&err);
+    assert!(
+        err.contains("waiting for 1 tile(s) other workers hold (ghost.0000dead)"),
+        "{err}"
+    );
     assemble(&job);
+}
+
+/// tstat shows a worker whose heartbeat is late (three beat intervals) but within the
+/// lease as suspect, not live, and counts done tiles no heartbeat reports yet.
+#[test]
+fn tstat_shows_suspect_workers_and_unreported_tiles() {
+    let d = tempfile::tempdir().unwrap();
+    let job = d.path().join("job");
+    plan(
+        &job,
+        &["--tiles", "3", "--lease", "180"],
+        &view_args(48, 36, &["-ab", "0"]),
+    );
+    let tasks = job.join("tasks");
+    std::fs::rename(
+        tasks.join("f00000-t00000.todo"),
+        tasks.join("f00000-t00000.claim.quiet.00000001"),
+    )
+    .unwrap();
+    std::fs::rename(
+        tasks.join("f00000-t00001.todo"),
+        tasks.join("f00000-t00001.done"),
+    )
+    .unwrap();
+    let now = std::time::SystemTime::now()
+        .duration_since(std::time::UNIX_EPOCH)
+        .unwrap()
+        .as_secs_f64();
+    // Beats every 10 s at a lease of 180 s: silent for 45 s is suspect.
+    std::fs::write(
+        job.join("workers/quiet.00000001.json"),
+        format!(
+            r#"{{"worker_id":"quiet","owner":"quiet.00000001","host":"x","pid":1,"state":"running","beat":7,"started_unix":{},"updated_unix":{},"threads":1,"tiles_done":0,"t_render":0,"t_spec":0,"t_amb":0,"t_idle":0,"t_sync":0,"new_values":0,"shared_in":0,"shared_out":0,"amb_flush":0,"rays":0,"cpu_seconds":0,"error":null}}"#,
+            now - 100.0,
+            now - 45.0
+        ),
+    )
+    .unwrap();
+    let st = stat(&job);
+    assert_eq!(st["aggregate"]["suspect"], 1, "{st}");
+    assert_eq!(st["aggregate"]["live"], 0, "{st}");
+    assert_eq!(st["aggregate"]["unreported_tiles"], 1, "{st}");
+    let text = String::from_utf8(run_ok(cmd("tstat").arg(&job))).unwrap();
+    assert!(
+        text.contains("1 suspect") && text.contains("unreported"),
+        "{text}"
+    );
 }
 
 #[test]

@@ -41,6 +41,14 @@ pub struct Aggregate {
     /// Workers that have not ended but whose heartbeat is older than the lease (dead, or
     /// on a host whose clock disagrees: informational).
     pub stale: usize,
+    /// Workers that have not ended and whose heartbeat is late (more than three beat
+    /// intervals) but within the lease: perhaps dead, their tiles not yet re-claimable.
+    #[serde(default)]
+    pub suspect: usize,
+    /// Done tiles that no heartbeat counts yet (a worker died between finishing a tile and
+    /// its next beat): the plan's done entries minus the heartbeats' sum, when positive.
+    #[serde(default)]
+    pub unreported_tiles: u64,
     /// Tiles rendered.
     pub tiles_done: u64,
     /// Tiles re-claimed from stale (or earlier) owners.
@@ -84,6 +92,8 @@ pub struct JobStatus {
     pub done: usize,
     /// Estimated seconds left (None before the first tile).
     pub eta_seconds: Option<f64>,
+    /// The job's lease (seconds a silent worker keeps its tiles).
+    pub lease_seconds: f64,
     /// Per worker.
     pub workers: Vec<WorkerRecord>,
     /// Sums.
@@ -119,6 +129,7 @@ pub fn status(job: &JobDir) -> Result<JobStatus> {
         ..JobStatus::default()
     };
     st.frame_count = m.frames.len();
+    st.lease_seconds = m.lease_seconds;
     let mut remaining_px = 0usize;
     let mut done_px = 0usize;
     for f in &m.frames {
@@ -168,10 +179,14 @@ pub fn status(job: &JobDir) -> Result<JobStatus> {
         };
         a.workers += 1;
         if r.state == "running" || r.state == "idle" {
-            if now - r.updated_unix < m.lease_seconds {
-                a.live += 1;
-            } else {
+            let silent = now - r.updated_unix;
+            if silent >= m.lease_seconds {
                 a.stale += 1;
+            } else if silent > 3.0 * super::heartbeat::beat_interval(m.lease_seconds).as_secs_f64()
+            {
+                a.suspect += 1;
+            } else {
+                a.live += 1;
             }
         }
         a.tiles_done += r.tiles_done;
@@ -193,6 +208,7 @@ pub fn status(job: &JobDir) -> Result<JobStatus> {
     if first.is_finite() {
         a.wall_seconds = (last - first).max(0.0);
     }
+    a.unreported_tiles = (st.done as u64).saturating_sub(a.tiles_done);
     let busy = a.t_spec + a.t_amb;
     if done_px > 0 && busy > 0.0 {
         let per_px = busy / done_px as f64;
@@ -290,9 +306,17 @@ pub fn render_text(st: &JobStatus) -> String {
     let a = &st.aggregate;
     let _ = writeln!(
         s,
-        "workers: {} seen, {} live, {} stale; {} tiles re-claimed; wall {:.2} s",
-        a.workers, a.live, a.stale, a.reclaimed, a.wall_seconds
+        "workers: {} seen, {} live, {} suspect, {} stale; {} tiles re-claimed; wall {:.2} s",
+        a.workers, a.live, a.suspect, a.stale, a.reclaimed, a.wall_seconds
     );
+    if a.suspect > 0 {
+        let _ = writeln!(
+            s,
+            "  {} worker(s) silent for more than three heartbeats: perhaps dead; their tiles \
+             are re-claimed when the lease ({:.0} s) runs out",
+            a.suspect, st.lease_seconds
+        );
+    }
     let _ = writeln!(
         s,
         "  {:<28} {:>8} {:>5} {:>8} {:>8} {:>8} {:>8} {:>7} {:>7} {:>7}",
@@ -328,6 +352,13 @@ pub fn render_text(st: &JobStatus) -> String {
         a.shared_in,
         a.shared_out
     );
+    if a.unreported_tiles > 0 {
+        let _ = writeln!(
+            s,
+            "  {:<28} {:>8} {:>5}   (done, in no heartbeat yet: a worker died before its next beat)",
+            "unreported", "", a.unreported_tiles
+        );
+    }
     let _ = writeln!(s, "  CPU {:.2} s, {} rays", a.cpu_seconds, a.rays);
     if a.rejected > 0 {
         let _ = writeln!(

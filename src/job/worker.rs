@@ -313,6 +313,9 @@ impl Worker<'_> {
                     if !self.wo.wait {
                         break;
                     }
+                    if self.idle_since.is_none() {
+                        self.say_waiting();
+                    }
                     self.idle_since.get_or_insert_with(Instant::now);
                     self.beat.set_state("idle");
                     std::thread::sleep(poll);
@@ -326,6 +329,29 @@ impl Worker<'_> {
         }
         self.end_idle();
         Ok(std::mem::take(&mut self.summary))
+    }
+
+    /// Say (once per wait) which tiles this worker waits for and when it may take them over.
+    fn say_waiting(&self) {
+        let Ok(states) = task::scan(&self.tasks_dir) else {
+            return;
+        };
+        let mut owners: Vec<&str> = states
+            .values()
+            .filter_map(|s| match s {
+                TaskState::Claimed(o) if o != self.owner => Some(o.as_str()),
+                _ => None,
+            })
+            .collect();
+        let held = owners.len();
+        owners.sort_unstable();
+        owners.dedup();
+        eprintln!(
+            "tpiece: waiting for {held} tile(s) other workers hold ({}); a worker silent for \
+             the lease ({:.0} s) loses its tiles to the waiting ones",
+            owners.join(", "),
+            self.m.lease_seconds
+        );
     }
 
     /// Count the idle time that ends now; whether the worker was idle.
