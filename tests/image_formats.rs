@@ -977,3 +977,14 @@ fn big_picture_speed() {
     assert_eq!(back.width, 4096);
     // Timing depends on the machine and its load: printed, not asserted.
 }
+
+/// Inputs the fuzzer (`tests/fuzz.rs`) found, kept as regression tests: each is refused
+/// with an error, none aborts or panics.
+#[test]
+fn fuzz_findings_are_refused() {
+    let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/fuzz-regressions");
+    // An EXR header declaring a layer of about 2.5e9 pixels: the reader aborted allocating
+    // 29 GB.
+    let e = tessera::image::exr::read_exr(&dir.join("exr-huge-layer.exr")).unwrap_err();
+    assert!(e.to_string().contains("OpenEXR"), "{e}");
+}

@@ -162,9 +162,45 @@ fn attr_text(v: &AttributeValue) -> Option<String> {
     }
 }
 
+/// Refuse a file whose layers declare more pixels than memory can hold (48 bytes a pixel,
+/// the pixels and the decoder's buffers, against `MemAvailable`; 2^30 pixels when that is
+/// unknown) before any pixel buffer is
+/// allocated: a damaged header made the reader abort allocating 29 GB (found by
+/// `tests/fuzz.rs`).
+fn check_exr_size(path: &Path) -> Result<(), ImageError> {
+    let meta = ::exr::meta::MetaData::read_from_file(path, false).map_err(|e| match e {
+        x::Error::Io(source) => ImageError::Io {
+            path: Some(path.to_path_buf()),
+            source,
+        },
+        other => ImageError::Format {
+            path: Some(path.to_path_buf()),
+            reason: format!("OpenEXR: {other}"),
+        },
+    })?;
+    let limit = crate::runinfo::available_memory()
+        .map(|b| b / 48)
+        .unwrap_or(1 << 30);
+    for h in meta.headers.iter() {
+        let px = (h.layer_size.width() as u64).saturating_mul(h.layer_size.height() as u64);
+        if px > limit {
+            return Err(ImageError::Format {
+                path: Some(path.to_path_buf()),
+                reason: format!(
+                    "OpenEXR: a layer of {}x{} pixels is larger than memory can hold",
+                    h.layer_size.width(),
+                    h.layer_size.height()
+                ),
+            });
+        }
+    }
+    Ok(())
+}
+
 /// Read an OpenEXR file: the first layer with R, G and B channels, top row first; the header
 /// from the attributes (see the module docs).
 pub fn read_exr(path: &Path) -> Result<Image, ImageError> {
+    check_exr_size(path)?;
     type Px = (usize, Vec<[f32; 3]>);
     let read = x::read()
         .no_deep_data()
