@@ -71,7 +71,7 @@ impl Tracer<'_> {
     /// face (shaded with the antimatter's first listed material) skips the surface's chain.
     pub fn shade_hit(&self, ray: &Ray, hit: &Hit, rng: &mut Sampler) -> Color {
         let obj = &self.scene.objects[hit.obj];
-        let mut sp = ShadingPoint::new(ray, hit);
+        let mut sp = ShadingPoint::new(ray, hit, self.scene.origin);
         if hit.material != obj.material {
             return match hit.material {
                 Some(m) => self.shade_material(ray, &sp, m, rng),
@@ -132,7 +132,7 @@ impl Tracer<'_> {
     pub(super) fn shadow_through(&self, hit: &Hit, dir: DVec3) -> Color {
         let obj = &self.scene.objects[hit.obj];
         let ray = Ray::shadow(hit.point, dir);
-        let mut sp = ShadingPoint::new(&ray, hit);
+        let mut sp = ShadingPoint::new(&ray, hit, self.scene.origin);
         if hit.material != obj.material {
             return match hit.material {
                 Some(m) => self.shadow_material(&sp, m),

@@ -35,11 +35,14 @@ pub struct ShadingPoint<'s> {
     /// The hit object's own transform (an instance's or a mesh's), or None for surfaces
     /// given in the scene's own frame. Patterns evaluate in the frame it defines.
     pub transform: Option<&'s Transform>,
+    /// The scene origin: `hit.point + origin` is the hit in the scene file's coordinates.
+    pub origin: DVec3,
 }
 
 impl<'s> ShadingPoint<'s> {
-    /// The shading point of `hit` along `ray`, before any modifier.
-    pub fn new(ray: &Ray, hit: &Hit) -> ShadingPoint<'s> {
+    /// The shading point of `hit` along `ray`, before any modifier; `origin` is the scene
+    /// origin the hit's coordinates are relative to.
+    pub fn new(ray: &Ray, hit: &Hit, origin: DVec3) -> ShadingPoint<'s> {
         ShadingPoint {
             hit: *hit,
             dir: ray.dir,
@@ -48,7 +51,13 @@ impl<'s> ShadingPoint<'s> {
             pcol: Color::ONE,
             uv: None,
             transform: None,
+            origin,
         }
+    }
+
+    /// The hit point in the scene file's coordinates (world, not relative to the origin).
+    pub fn world_point(&self) -> DVec3 {
+        self.hit.point + self.origin
     }
 
     /// Multiply the pattern colour (a pattern's effect).
@@ -122,7 +131,7 @@ mod tests {
     #[test]
     fn patterns_multiply_and_textures_add() {
         let ray = Ray::primary(DVec3::new(0.0, 0.0, 1.0), -DVec3::Z, f64::INFINITY);
-        let mut sp = ShadingPoint::new(&ray, &hit(DVec3::Z));
+        let mut sp = ShadingPoint::new(&ray, &hit(DVec3::Z), DVec3::ZERO);
         assert_eq!(sp.normal, DVec3::Z);
         assert!(!sp.is_perturbed());
         sp.scale_colour(Color::new(0.5, 1.0, 2.0));
