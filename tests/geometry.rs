@@ -574,7 +574,7 @@ fn no_cracks_between_adjacent_polygons() {
         (true, DVec3::new(1e6, -1e6, 1e6), DVec3::ZERO),
     ] {
         let surfs = grid_scene(6, tris, origin, base);
-        let bvh = Bvh::build(&surfs.iter().map(|s| s.bounds()).collect::<Vec<_>>());
+        let bvh = Bvh::build(&surfs.iter().map(|s| s.bounds()).collect::<Vec<_>>(), FTINY);
         let rel = base - origin;
         let mut rng = Rng(11);
         let mut n = 0;
@@ -696,9 +696,9 @@ fn far_from_origin_scene() {
     let near = room_scene(DVec3::ZERO, DVec3::new(2.0, 1.5, 1.25));
     let far = room_scene(shift, shift + DVec3::new(2.0, 1.5, 1.25));
     let far0 = room_scene(shift, DVec3::ZERO);
-    let bn = Bvh::build(&near.iter().map(|s| s.bounds()).collect::<Vec<_>>());
-    let bf = Bvh::build(&far.iter().map(|s| s.bounds()).collect::<Vec<_>>());
-    let bf0 = Bvh::build(&far0.iter().map(|s| s.bounds()).collect::<Vec<_>>());
+    let bn = Bvh::build(&near.iter().map(|s| s.bounds()).collect::<Vec<_>>(), FTINY);
+    let bf = Bvh::build(&far.iter().map(|s| s.bounds()).collect::<Vec<_>>(), FTINY);
+    let bf0 = Bvh::build(&far0.iter().map(|s| s.bounds()).collect::<Vec<_>>(), FTINY);
     let start_rel = DVec3::new(0.5, -0.8, 0.3); // relative to the room centre
     for seed in 1..30 {
         let pn = walk(&near, &bn, start_rel, seed);
@@ -727,7 +727,7 @@ fn far_from_origin_scene() {
 #[test]
 fn rays_along_edges_and_grazing() {
     let room = room_scene(DVec3::ZERO, DVec3::ZERO);
-    let bvh = Bvh::build(&room.iter().map(|s| s.bounds()).collect::<Vec<_>>());
+    let bvh = Bvh::build(&room.iter().map(|s| s.bounds()).collect::<Vec<_>>(), FTINY);
     // Rays from inside aimed exactly at room edges and corners must hit a wall.
     let mut rng = Rng(3);
     let corners = [0.0, 4.0];
@@ -866,7 +866,7 @@ fn bvh_matches_brute_force() {
     let mut rng = Rng(2024);
     let surfs = random_scene(&mut rng, 600);
     let bounds: Vec<_> = surfs.iter().map(|s| s.bounds()).collect();
-    let bvh = Bvh::build(&bounds);
+    let bvh = Bvh::build(&bounds, FTINY);
     assert_eq!(bvh.len(), surfs.len());
     let prefs: [fn(usize, usize) -> bool; 3] = [|a, b| a > b, |a, b| a < b, |_, _| false];
     let mut hits = 0;
@@ -959,7 +959,7 @@ fn duplicates_resolved_by_prefer() {
         &[0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 1.0, 1.0, 0.0, 0.0, 1.0, 0.0],
     );
     let surfs = [a.clone(), a.clone(), a];
-    let bvh = Bvh::build(&surfs.iter().map(|s| s.bounds()).collect::<Vec<_>>());
+    let bvh = Bvh::build(&surfs.iter().map(|s| s.bounds()).collect::<Vec<_>>(), FTINY);
     let o = DVec3::new(0.5, 0.5, 1.0);
     let d = -DVec3::Z;
     let f = |i: usize| surfs[i].intersect(o, d, 1e10);
@@ -1047,7 +1047,7 @@ fn compare_with_rtrace() {
     let text = String::from_utf8(out.stdout).unwrap();
     let lines: Vec<&str> = text.lines().collect();
     assert_eq!(lines.len(), rays.len());
-    let bvh = Bvh::build(&surfs.iter().map(|s| s.bounds()).collect::<Vec<_>>());
+    let bvh = Bvh::build(&surfs.iter().map(|s| s.bounds()).collect::<Vec<_>>(), FTINY);
     let mut compared = 0;
     for ((o, d), line) in rays.iter().zip(lines) {
         let v: Vec<f64> = line
@@ -1101,7 +1101,7 @@ fn many_identical_and_nested_boxes() {
     // Pathological inputs for the builder: identical boxes and deeply nested boxes.
     // (Kept small: obvhs's PLOC builder is quadratic-ish on such input, ~1 s here in debug.)
     let same = vec![(DVec3::ZERO, DVec3::ONE); 1000];
-    let bvh = Bvh::build(&same);
+    let bvh = Bvh::build(&same, FTINY);
     let mut n = 0;
     bvh.candidates(DVec3::splat(0.5), DVec3::X, 1e10, |_| n += 1);
     assert_eq!(n, 1000);
@@ -1119,7 +1119,7 @@ fn many_identical_and_nested_boxes() {
             (DVec3::splat(-s), DVec3::splat(s))
         })
         .collect();
-    let bvh = Bvh::build(&nested);
+    let bvh = Bvh::build(&nested, FTINY);
     let mut n = 0;
     bvh.candidates(DVec3::ZERO, DVec3::Y, 1e10, |_| n += 1);
     assert_eq!(n, 1000);

@@ -14,7 +14,6 @@ use crate::options::render::RenderParams;
 use crate::render::ray::{Hit, Ray};
 use crate::render::sampler::Sampler;
 use crate::render::trace::{DirectPlan, IndirectLight, IndirectRequest, Tracer};
-use crate::FTINY;
 use glam::DVec3;
 use std::collections::HashSet;
 use std::sync::atomic::{AtomicU64, Ordering};
@@ -99,7 +98,7 @@ impl Ambient {
         if !computes(params.ab, params.ad) {
             return None;
         }
-        let size = scene_size.max(FTINY);
+        let size = scene_size.max(f64::MIN_POSITIVE);
         let (minarad, maxarad) = if params.ar > 0 {
             let min = size / params.ar as f64;
             (min, (64.0 * min).min(0.2 * size))

@@ -4,7 +4,6 @@
 
 use super::cache::CachedValue;
 use super::compute::Ambient;
-use crate::FTINY;
 use glam::DVec3;
 use std::f64::consts::PI;
 use std::sync::atomic::Ordering;
@@ -176,7 +175,7 @@ impl Ambient {
         let q = corral_target(p, n, v.pos, v.n, 0.05 * dist);
         let to = q - p;
         let len = to.length();
-        if !(len > FTINY && len.is_finite()) {
+        if !(len > 0.0 && len.is_finite()) {
             return false;
         }
         self.stats.leak_tests.fetch_add(1, Ordering::Relaxed);

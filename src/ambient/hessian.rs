@@ -268,7 +268,7 @@ impl<'a> Mesh<'a> {
             return None;
         }
         let dmin = pts.iter().map(|p| p.length()).fold(f64::INFINITY, f64::min);
-        if !(dmin > FTINY && dmin.is_finite()) {
+        if !(dmin > 0.0 && dmin.is_finite()) {
             return None;
         }
         let bmean = b.iter().sum::<f64>() / nc as f64;

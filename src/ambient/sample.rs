@@ -13,7 +13,6 @@ use crate::material::MatId;
 use crate::render::ray::{Hit, Ray, RayKind, SamplePath, MAX_ANTIMATTER};
 use crate::render::sampler::Sampler;
 use crate::render::trace::Tracer;
-use crate::FTINY;
 use glam::DVec3;
 use std::f64::consts::PI;
 use std::sync::atomic::Ordering;
@@ -77,7 +76,7 @@ impl Hemisphere<'_, '_> {
         };
         self.traced += 1;
         let (c, t) = tr.trace_dist(&r, rng);
-        Some((c, t.clamp(FTINY, self.max_dist), dir))
+        Some((c, t.clamp(tr.scene.eps, self.max_dist), dir))
     }
 
     /// One jittered sample in every cell.

@@ -35,8 +35,8 @@ use crate::FTINY;
 
 /// Relative box padding (times the largest coordinate magnitude).
 const PAD_REL: f64 = 4e-6;
-/// Absolute box padding (covers the polygon edge tolerance).
-const PAD_ABS: f64 = 4.0 * FTINY;
+/// Box padding in the scene's length tolerance (covers the polygon edge tolerance).
+const PAD_EPS: f64 = 4.0;
 /// How far before the scene-box entry the `f32` ray starts (obvhs culls boxes exiting before
 /// `t = 1e-4`).
 const MARGIN: f64 = 1e-3;
@@ -208,35 +208,39 @@ pub struct Bvh {
     hi: DVec3,
     /// Padding applied to every box.
     pad: f64,
+    /// The scene's length tolerance (minimum hit distance, tie window).
+    eps: f64,
     /// Number of input boxes.
     count: usize,
 }
 
-/// Hits within `FTINY` of the closest one (fixed capacity, no allocation).
+/// Hits within `eps` of the closest one (fixed capacity, no allocation).
 struct Window {
     buf: [(usize, f64); WINDOW],
     len: usize,
     tmin: f64,
+    eps: f64,
 }
 
 impl Window {
-    fn new() -> Self {
+    fn new(eps: f64) -> Self {
         Window {
             buf: [(0, 0.0); WINDOW],
             len: 0,
             tmin: f64::INFINITY,
+            eps,
         }
     }
 
     /// Add a hit; returns true when it lowered the closest distance.
     fn push(&mut self, i: usize, t: f64) -> bool {
-        if t > self.tmin + FTINY {
+        if t > self.tmin + self.eps {
             return false;
         }
         let lowered = t < self.tmin;
         if lowered {
             self.tmin = t;
-            let lim = t + FTINY;
+            let lim = t + self.eps;
             let mut k = 0;
             for j in 0..self.len {
                 if self.buf[j].1 <= lim {
@@ -288,13 +292,14 @@ fn beats(c: (usize, f64), w: (usize, f64), prefer: &impl Fn(usize, usize) -> boo
 }
 
 /// Reference implementation of [`Bvh::closest`]'s selection over an explicit list of hits
-/// `(index, t)` (hits outside `(FTINY, tmax)` are ignored). Useful for brute-force checks.
+/// `(index, t)` for a BVH built with `eps = FTINY` (hits outside `(FTINY, tmax)` are
+/// ignored). Useful for brute-force checks.
 pub fn select_closest(
     hits: impl IntoIterator<Item = (usize, f64)>,
     tmax: f64,
     prefer: impl Fn(usize, usize) -> bool,
 ) -> Option<(usize, f64)> {
-    let mut win = Window::new();
+    let mut win = Window::new(FTINY);
     for (i, t) in hits {
         if t > FTINY && t < tmax {
             win.push(i, t);
@@ -306,7 +311,7 @@ pub fn select_closest(
 impl Bvh {
     /// Build from f64 bounds (relative frame). Empty input is fine (every query misses).
     /// Boxes with non-finite coordinates are never candidates; `min > max` is reordered.
-    pub fn build(bounds: &[(DVec3, DVec3)]) -> Bvh {
+    pub fn build(bounds: &[(DVec3, DVec3)], eps: f64) -> Bvh {
         let mut s: f64 = 0.0;
         let mut boxes: Vec<(DVec3, DVec3)> = Vec::with_capacity(bounds.len());
         let mut ids = Vec::with_capacity(bounds.len());
@@ -324,7 +329,7 @@ impl Bvh {
             boxes.push((lo, hi));
             ids.push(i as u32);
         }
-        let pad = PAD_REL * s + PAD_ABS;
+        let pad = PAD_REL * (s + MARGIN) + PAD_EPS * eps;
         let mut tlo = DVec3::splat(f64::INFINITY);
         let mut thi = DVec3::splat(f64::NEG_INFINITY);
         let prims: Vec<BoxPrim> = boxes
@@ -351,6 +356,7 @@ impl Bvh {
             lo: tlo,
             hi: thi,
             pad,
+            eps,
             count: bounds.len(),
         }
     }
@@ -376,7 +382,7 @@ impl Bvh {
         if !(org.is_finite() && dir.is_finite())
             || dir == DVec3::ZERO
             || tmax.is_nan()
-            || tmax <= FTINY
+            || tmax <= self.eps
         {
             return None;
         }
@@ -435,12 +441,12 @@ impl Bvh {
         prefer: impl Fn(usize, usize) -> bool,
     ) -> Option<(usize, f64)> {
         let (ray, shift) = self.setup(org, dir, tmax)?;
-        let mut win = Window::new();
+        let mut win = Window::new(self.eps);
         let pad2 = 2.0 * self.pad;
         self.traverse(ray, |i| match intersect(i) {
-            Some(t) if t > FTINY && t < tmax && win.push(i, t) => {
-                // A new closest distance: prune (conservatively) beyond it plus FTINY.
-                f32_up((t + FTINY - shift) * (1.0 + 1e-6) + pad2)
+            Some(t) if t > self.eps && t < tmax && win.push(i, t) => {
+                // A new closest distance: prune (conservatively) beyond it plus eps.
+                f32_up((t + self.eps - shift) * (1.0 + 1e-6) + pad2)
             }
             _ => f32::INFINITY,
         });
@@ -493,12 +499,12 @@ mod tests {
 
     #[test]
     fn empty_and_bad_input() {
-        let b = Bvh::build(&[]);
+        let b = Bvh::build(&[], FTINY);
         assert!(b.is_empty());
         assert!(b
             .closest(DVec3::ZERO, DVec3::X, 1e10, |_| Some(1.0), |_, _| false)
             .is_none());
-        let b = Bvh::build(&[(DVec3::splat(f64::NAN), DVec3::ONE)]);
+        let b = Bvh::build(&[(DVec3::splat(f64::NAN), DVec3::ONE)], FTINY);
         assert_eq!(b.len(), 1);
         let mut n = 0;
         b.candidates(DVec3::ZERO, DVec3::X, 1e10, |_| n += 1);
@@ -514,7 +520,7 @@ mod tests {
                 (DVec3::splat(-s), DVec3::splat(s))
             })
             .collect();
-        let bvh = Bvh::build(&nested);
+        let bvh = Bvh::build(&nested, FTINY);
         let cw = bvh.cw.as_ref().unwrap();
         let parents = cw.compute_parents();
         let depth = (0..parents.len())

@@ -8,6 +8,7 @@ use glam::DVec3;
 
 use super::{disk_bounds, perp_frame, pick_root, quadratic_half, turn_fraction, vec_at};
 use crate::scene::primitive::Primitive;
+use crate::FTINY;
 
 /// Which of the four cone-family types a [`Cone`] is.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -62,6 +63,8 @@ pub struct Cone {
     /// Perpendicular frame for the `u` coordinate.
     e1: DVec3,
     e2: DVec3,
+    /// The scene's length tolerance: hits at `t <= eps` are ignored.
+    pub(crate) eps: f64,
 }
 
 impl Cone {
@@ -132,10 +135,11 @@ impl Cone {
             mid: (p0 + p1) * 0.5,
             e1,
             e2,
+            eps: FTINY,
         })
     }
 
-    /// Nearest intersection distance in `(FTINY, tmax)` with the open lateral surface.
+    /// Nearest intersection distance in `(eps, tmax)` with the open lateral surface.
     #[inline]
     pub fn intersect(&self, org: DVec3, dir: DVec3, tmax: f64) -> Option<f64> {
         let dd = dir.length_squared();
@@ -157,7 +161,7 @@ impl Cone {
         let c = orad.length_squared() - rz * rz;
         let roots = quadratic_half(a, b, c)?;
         let len = self.len;
-        pick_root((t0 + roots.0, t0 + roots.1), tmax, |t| {
+        pick_root((t0 + roots.0, t0 + roots.1), self.eps, tmax, |t| {
             let z = oz + (t - t0) * dz;
             (0.0..=len).contains(&z)
         })

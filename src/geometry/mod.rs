@@ -26,7 +26,6 @@
 use glam::DVec3;
 
 use crate::scene::primitive::Primitive;
-use crate::FTINY;
 
 pub mod bvh;
 pub mod cone;
@@ -114,15 +113,16 @@ pub(crate) fn quadratic_half(a: f64, b: f64, c: f64) -> Option<(f64, f64)> {
     Some((lo, hi))
 }
 
-/// Pick the first root in `(FTINY, tmax)` from an ascending pair that also passes `ok`.
+/// Pick the first root in `(eps, tmax)` from an ascending pair that also passes `ok`.
 pub(crate) fn pick_root(
     roots: (f64, f64),
+    eps: f64,
     tmax: f64,
     mut ok: impl FnMut(f64) -> bool,
 ) -> Option<f64> {
     [roots.0, roots.1]
         .into_iter()
-        .find(|&t| t > FTINY && t < tmax && ok(t))
+        .find(|&t| t > eps && t < tmax && ok(t))
 }
 
 /// A unit vector perpendicular to the unit vector `n` (the tangent frame's first axis,
@@ -202,7 +202,19 @@ impl Surface {
         }
     }
 
-    /// Nearest intersection distance t with FTINY < t < tmax, or None.
+    /// Use the scene's length tolerance `eps` (FTINY until set): the minimum hit distance
+    /// and the polygons' edge tolerance.
+    pub fn set_eps(&mut self, eps: f64) {
+        match self {
+            Surface::Polygon(s) => s.set_eps(eps),
+            Surface::Sphere(s) => s.eps = eps,
+            Surface::Cone(s) => s.eps = eps,
+            Surface::Ring(s) => s.eps = eps,
+        }
+    }
+
+    /// Nearest intersection distance t with eps < t < tmax, or None (eps: the scene's length
+    /// tolerance, [`Surface::set_eps`]).
     #[inline]
     pub fn intersect(&self, org: DVec3, dir: DVec3, tmax: f64) -> Option<f64> {
         match self {

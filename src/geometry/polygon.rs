@@ -53,9 +53,14 @@ pub struct Polygon {
     /// 2-D bounding box of the projection, grown by `FTINY`.
     lo2: [f64; 2],
     hi2: [f64; 2],
+    /// The projected bounds before that padding.
+    raw2: [[f64; 2]; 2],
     /// 3-D bounds.
     lo: DVec3,
     hi: DVec3,
+    /// The scene's length tolerance: hits at `t <= eps` are ignored and points within `eps`
+    /// of an edge are inside.
+    pub(crate) eps: f64,
 }
 
 impl Polygon {
@@ -89,7 +94,15 @@ impl Polygon {
         if verts.iter().any(|v| !v.is_finite()) {
             return Err("non-finite vertex".to_string());
         }
-        if verts.len() > 3 && verts[0].distance(verts[verts.len() - 1]) <= FTINY {
+        // A last vertex repeating the first closes the polygon explicitly: drop it. "Repeats"
+        // is within FTINY, relative to the polygon's extent below a unit, so that a scene
+        // scaled down keeps its shapes.
+        let (lo, hi) = verts.iter().fold(
+            (DVec3::splat(f64::INFINITY), DVec3::splat(f64::NEG_INFINITY)),
+            |(lo, hi), v| (lo.min(*v), hi.max(*v)),
+        );
+        let close = FTINY * (hi - lo).max_element().min(1.0);
+        if verts.len() > 3 && verts[0].distance(verts[verts.len() - 1]) <= close {
             verts.pop();
         }
         let n = verts.len();
@@ -175,6 +188,7 @@ impl Polygon {
                 hi2[k] = hi2[k].max(a[k]);
             }
         }
+        let raw2 = [lo2, hi2];
         for k in 0..2 {
             lo2[k] -= FTINY;
             hi2[k] += FTINY;
@@ -193,8 +207,10 @@ impl Polygon {
                 convex,
                 lo2,
                 hi2,
+                raw2,
                 lo,
                 hi,
+                eps: FTINY,
             },
             warn,
         ))
@@ -209,7 +225,7 @@ impl Polygon {
             return None;
         }
         let t = (self.offset - self.normal.dot(org)) / denom;
-        if !(t > FTINY && t < tmax) {
+        if !(t > self.eps && t < tmax) {
             return None;
         }
         let p = org + dir * t;
@@ -217,6 +233,15 @@ impl Polygon {
             Some(t)
         } else {
             None
+        }
+    }
+
+    /// Use the scene's length tolerance `eps` (instead of `FTINY`).
+    pub(crate) fn set_eps(&mut self, eps: f64) {
+        self.eps = eps;
+        for k in 0..2 {
+            self.lo2[k] = self.raw2[0][k] - eps;
+            self.hi2[k] = self.raw2[1][k] + eps;
         }
     }
 
@@ -237,7 +262,7 @@ impl Polygon {
         match self.convex {
             Some(s) => self.edges.iter().all(|ed| {
                 let cross = ed.e[0] * (p[1] - ed.a[1]) - ed.e[1] * (p[0] - ed.a[0]);
-                s * cross >= -FTINY * ed.len
+                s * cross >= -self.eps * ed.len
             }),
             None => self.contains_crossing(p),
         }
@@ -253,13 +278,13 @@ impl Polygon {
             let s = rx * ed.e[0] + ry * ed.e[1];
             let cross = ed.e[0] * ry - ed.e[1] * rx;
             if ed.len2 > 0.0 {
-                if s >= -FTINY * ed.len
-                    && s <= ed.len2 + FTINY * ed.len
-                    && cross.abs() <= FTINY * ed.len
+                if s >= -self.eps * ed.len
+                    && s <= ed.len2 + self.eps * ed.len
+                    && cross.abs() <= self.eps * ed.len
                 {
                     return true;
                 }
-            } else if rx * rx + ry * ry <= FTINY * FTINY {
+            } else if rx * rx + ry * ry <= self.eps * self.eps {
                 return true;
             }
             // Crossing test with a half-open rule on y: edge spans p.y, crossing right of p.

@@ -21,6 +21,8 @@ pub struct Ring {
     /// Perpendicular frame for the `u` coordinate.
     e1: DVec3,
     e2: DVec3,
+    /// The scene's length tolerance: hits at `t <= eps` are ignored.
+    pub(crate) eps: f64,
 }
 
 impl Ring {
@@ -56,10 +58,11 @@ impl Ring {
             r1,
             e1,
             e2,
+            eps: FTINY,
         })
     }
 
-    /// Nearest intersection distance in `(FTINY, tmax)`; `|n·d| <= FTINY` is a miss.
+    /// Nearest intersection distance in `(eps, tmax)`; `|n·d| <= FTINY` is a miss.
     #[inline]
     pub fn intersect(&self, org: DVec3, dir: DVec3, tmax: f64) -> Option<f64> {
         let denom = self.normal.dot(dir);
@@ -68,7 +71,7 @@ impl Ring {
         }
         let oc = org - self.center;
         let t = -self.normal.dot(oc) / denom;
-        if !(t > FTINY && t < tmax) {
+        if !(t > self.eps && t < tmax) {
             return None;
         }
         let d2 = (oc + dir * t).length_squared();

@@ -4,6 +4,7 @@ use glam::DVec3;
 
 use super::{pick_root, quadratic_half, vec_at};
 use crate::scene::primitive::Primitive;
+use crate::FTINY;
 
 /// A sphere (outward normal) or bubble (`inward`, normal toward the centre).
 #[derive(Clone, Debug)]
@@ -14,6 +15,8 @@ pub struct Sphere {
     pub radius: f64,
     /// True for a bubble: the front side is the inside.
     pub inward: bool,
+    /// The scene's length tolerance: hits at `t <= eps` are ignored.
+    pub(crate) eps: f64,
 }
 
 impl Sphere {
@@ -42,12 +45,13 @@ impl Sphere {
                 center: vec_at(&p.rargs, 0) - origin,
                 radius: r,
                 inward,
+                eps: FTINY,
             },
             warn,
         ))
     }
 
-    /// Nearest intersection distance in `(FTINY, tmax)`.
+    /// Nearest intersection distance in `(eps, tmax)`.
     ///
     /// The origin is first moved along the ray to the point closest to the centre, and the
     /// discriminant is computed from the distance between that point and the centre, which
@@ -64,7 +68,7 @@ impl Sphere {
         let b = l.dot(dir); // ~0, kept for exactness
         let c = l.length_squared() - self.radius * self.radius;
         let roots = quadratic_half(a, b, c)?;
-        pick_root((t0 + roots.0, t0 + roots.1), tmax, |_| true)
+        pick_root((t0 + roots.0, t0 + roots.1), self.eps, tmax, |_| true)
     }
 
     /// Front normal at a point on the surface.

@@ -206,7 +206,7 @@ impl LightSet {
                         .verts
                         .windows(2)
                         .map(|w| w[1] - w[0])
-                        .find(|d| d.length_squared() > FTINY * FTINY)
+                        .find(|d| d.length_squared() > scene.eps * scene.eps)
                         .unwrap_or_else(|| any_perpendicular(n));
                     let u = (eu0 - eu0.dot(n) * n).normalize();
                     let v = n.cross(u);
@@ -331,7 +331,7 @@ impl LightSet {
                 // Only sources in front of the mirror are reflected.
                 let in_front = match s.shape {
                     SourceShape::Distant { dir, .. } => dir.dot(normal) > FTINY,
-                    _ => normal.dot(s.center) - offset > FTINY,
+                    _ => normal.dot(s.center) - offset > scene.eps,
                 };
                 if !in_front {
                     continue;
@@ -416,7 +416,7 @@ impl LightSet {
         let (q, relay) = match &src.relay {
             Some(r) => {
                 let h = r.normal.dot(p) - r.offset;
-                if h <= FTINY {
+                if h <= scene.eps {
                     return;
                 }
                 (p - 2.0 * h * r.normal, Some(r))
@@ -460,7 +460,7 @@ impl LightSet {
                 ev,
             } => {
                 let c = *corner + (*eu + *ev) * 0.5;
-                let d = (c - q).length().max(FTINY);
+                let d = (c - q).length().max(scene.eps);
                 let (nu, nv) = partitions(eu.length() / d, ev.length() / d, ds, weight);
                 let rect_area = eu.cross(*ev).length();
                 let cell = rect_area / (nu * nv) as f64;
@@ -473,13 +473,14 @@ impl LightSet {
                 for i in 0..nu {
                     for j in 0..nv {
                         let s = *corner + *eu * strat(i, nu, dj, rng) + *ev * strat(j, nv, dj, rng);
-                        let Some((dir, dist, cos_s)) = toward_front(q, s, *normal) else {
+                        let Some((dir, dist, cos_s)) = toward_front(q, s, *normal, scene.eps)
+                        else {
                             continue;
                         };
                         // Keep only aim points that lie on the polygon.
                         if let Some(surf) = obj {
-                            match surf.intersect(q, dir, dist * (1.0 + 1e-9) + FTINY) {
-                                Some(t) if (t - dist).abs() <= 1e-7 * dist + FTINY => {}
+                            match surf.intersect(q, dir, dist * (1.0 + 1e-9) + scene.eps) {
+                                Some(t) if (t - dist).abs() <= 1e-7 * dist + scene.eps => {}
                                 _ => continue,
                             }
                         }
@@ -493,7 +494,7 @@ impl LightSet {
                 r0,
                 r1,
             } => {
-                let d = (*center - q).length().max(FTINY);
+                let d = (*center - q).length().max(scene.eps);
                 let (nr, nphi) = partitions(2.0 * r1 / d, 2.0 * r1 / d, ds, weight);
                 let u = any_perpendicular(*normal);
                 let v = normal.cross(u);
@@ -511,7 +512,8 @@ impl LightSet {
                             (1.0, 0.0)
                         };
                         let s = *center + u * (r * c) + v * (r * sn);
-                        let Some((dir, dist, cos_s)) = toward_front(q, s, *normal) else {
+                        let Some((dir, dist, cos_s)) = toward_front(q, s, *normal, scene.eps)
+                        else {
                             continue;
                         };
                         push(dir, dist, cell * cos_s / (dist * dist), s);
@@ -554,7 +556,7 @@ impl LightSet {
                     return;
                 }
                 let b = a.cross(wperp).normalize();
-                let d = w.length().max(FTINY);
+                let d = w.length().max(scene.eps);
                 let (na, nb) = partitions(len / d, 2.0 * radius / d, ds, weight);
                 let cell = 2.0 * radius * len / (na * nb) as f64;
                 for i in 0..na {
@@ -564,7 +566,7 @@ impl LightSet {
                         let s = *p0 + axis * t + b * (2.0 * radius * u);
                         let v = s - q;
                         let dist = v.length();
-                        if dist <= FTINY {
+                        if dist <= scene.eps {
                             continue;
                         }
                         let dir = v / dist;
@@ -619,12 +621,13 @@ impl LightSet {
 }
 
 /// Direction and distance from `q` to a point `s` of a flat emitter with front normal
-/// `normal`, and the cosine at the emitter; None when `s` is at `q` or seen from behind.
+/// `normal`, and the cosine at the emitter; None when `s` is within `eps` of `q` or seen
+/// from behind.
 #[inline]
-fn toward_front(q: DVec3, s: DVec3, normal: DVec3) -> Option<(DVec3, f64, f64)> {
+fn toward_front(q: DVec3, s: DVec3, normal: DVec3, eps: f64) -> Option<(DVec3, f64, f64)> {
     let w = s - q;
     let dist = w.length();
-    if dist <= FTINY {
+    if dist <= eps {
         return None;
     }
     let dir = w / dist;

@@ -11,7 +11,6 @@ use crate::material::emitter::EmitterKind;
 use crate::material::{MatId, Material};
 use crate::options::render::RenderParams;
 use crate::scene::build::Scene;
-use crate::FTINY;
 use glam::DVec3;
 
 /// Everything a ray needs to be traced.
@@ -34,11 +33,12 @@ pub struct Tracer<'a> {
 /// How far a shadow ray toward a sample at distance `dist` needs to look: the sample lies on
 /// (or, for cylinders, behind) the source surface, so nothing beyond it can matter; the slack
 /// covers rounding. Bounding the ray lets the BVH prune everything behind the source.
-/// Distant sources (`dist` infinite) keep an unbounded ray.
+/// Distant sources (`dist` infinite) keep an unbounded ray. `eps` is the scene's length
+/// tolerance.
 #[inline]
-fn shadow_reach(dist: f64) -> f64 {
+fn shadow_reach(dist: f64, eps: f64) -> f64 {
     if dist.is_finite() {
-        dist * (1.0 + 1e-6) + 16.0 * FTINY
+        dist * (1.0 + 1e-6) + 16.0 * eps
     } else {
         f64::INFINITY
     }
@@ -165,7 +165,7 @@ impl<'a> Tracer<'a> {
         let mut am = ray.antimatter;
         for _ in 0..256 {
             let tmax = ray.tmax - travelled;
-            if tmax <= FTINY {
+            if tmax <= scene.eps {
                 return None;
             }
             let (i, t) = scene.bvh.closest(
@@ -408,7 +408,7 @@ impl<'a> Tracer<'a> {
         r.tmax = ray.tmax - hit.t;
         r.antimatter = hit.antimatter;
         r.gain = 1.0;
-        if r.tmax <= FTINY {
+        if r.tmax <= self.scene.eps {
             return Color::ZERO;
         }
         // Not a reflection, but bound endless chains of invisible surfaces all the same.
@@ -615,7 +615,7 @@ impl<'a> Tracer<'a> {
     ) -> (Color, Option<Hit>) {
         let mut ray = Ray::shadow(org, dir);
         ray.antimatter = am;
-        ray.tmax = shadow_reach(dist);
+        ray.tmax = shadow_reach(dist, self.scene.eps);
         let mut t = Color::ONE;
         for _ in 0..64 {
             rng.rays += 1;

@@ -9,6 +9,7 @@ use crate::geometry::Surface;
 use crate::material::{MatId, Material, MaterialLookup, MATERIAL_TYPES};
 use crate::modifier::{ModRef, ModifierDef, ModifierKind, ModifierLookup, ModifierTypes};
 use crate::scene::reader::KNOWN_TYPES;
+use crate::FTINY;
 use glam::DVec3;
 use std::collections::HashMap;
 
@@ -82,12 +83,26 @@ fn surface_counts_ok(p: &Primitive) -> bool {
     }
 }
 
+/// The length tolerance of a scene of size `size`: Radiance's `FTINY` for scenes of a unit
+/// and larger, `FTINY · size` below, so that a scene scaled down renders the same picture
+/// (an absolute 1e-6 is a tenth of a scene of 1e-5).
+pub fn length_tolerance(size: f64) -> f64 {
+    if size.is_finite() && size > 0.0 {
+        FTINY * size.min(1.0)
+    } else {
+        FTINY
+    }
+}
+
 /// A scene ready for rendering.
 pub struct Scene {
     /// Scene origin: every coordinate in geometry is relative to it.
     pub origin: DVec3,
     /// Size of the scene's bounding cube (like the octree cube of oconv).
     pub size: f64,
+    /// The scene's length tolerance ([`length_tolerance`]): the minimum hit distance, the
+    /// polygons' edge tolerance and the slack of shadow rays.
+    pub eps: f64,
     /// Materials, indexed by [`MatId`].
     pub materials: Vec<MaterialDef>,
     /// Patterns, textures and mixtures, indexed by [`crate::modifier::ModId`].
@@ -279,6 +294,7 @@ impl Scene {
         } else {
             (DVec3::ZERO, 1.0)
         };
+        let eps = length_tolerance(size);
 
         let mut mods = Modifiers {
             current: HashMap::new(),
@@ -311,10 +327,11 @@ impl Scene {
                     });
                 } else {
                     let surface = match Surface::from_primitive_warn(p, origin) {
-                        Ok((s, w)) => {
+                        Ok((mut s, w)) => {
                             if let Some(w) = w {
                                 warnings.push(format!("{}: {w}", p.loc));
                             }
+                            s.set_eps(eps);
                             s
                         }
                         Err(m) if !surface_counts_ok(p) => {
@@ -385,10 +402,11 @@ impl Scene {
             return Err(err(p, format!("unknown primitive type '{t}'")));
         }
         let bounds: Vec<(DVec3, DVec3)> = objects.iter().map(|o| o.surface.bounds()).collect();
-        let bvh = Bvh::build(&bounds);
+        let bvh = Bvh::build(&bounds, eps);
         Ok(Scene {
             origin,
             size,
+            eps,
             materials,
             modifiers: mods.defs,
             objects,
