@@ -7,6 +7,7 @@ use super::ray::Ray;
 use super::sampler::Sampler;
 use super::trace::Tracer;
 use crate::color::{bright, sanitize, Color};
+use crate::material::normal::NormalKind;
 use crate::material::Material;
 use crate::view::ViewFrame;
 use glam::DVec3;
@@ -82,21 +83,38 @@ fn sample_pixel(tr: &Tracer, fs: &FrameSetup, px: usize, py_top: usize, rays: &m
     }
 }
 
-/// `-i`: irradiance at the first non-emitting surface, as if it were white and Lambertian.
+/// `-i`: irradiance at the first opaque, non-emitting surface, as if it were white and
+/// Lambertian. As in rpict, rays pass straight through transparent materials (`trans`,
+/// `glass`, `dielectric`, `interface`) and surfaces without a material, and the irradiance
+/// is that of the surface behind them; light sources show their radiance.
 fn irradiance(tr: &Tracer, ray: &Ray, rng: &mut Sampler) -> Color {
-    let Some(hit) = tr.intersect(ray) else {
-        return tr.trace(ray, rng);
-    };
-    if let Some(m) = hit.material {
-        if matches!(
-            tr.scene.material(m),
-            Material::Emitter(_) | Material::Antimatter(_)
-        ) {
-            return tr.trace(ray, rng);
+    let mut ray = *ray;
+    let mut hit = None;
+    // Bound the walk through stacked transparent surfaces, as pass_through does.
+    for _ in 0..1000 {
+        let Some(h) = tr.intersect(&ray) else {
+            return tr.trace(&ray, rng);
+        };
+        let through = match h.material.map(|m| tr.scene.material(m)) {
+            None => true,
+            Some(Material::Emitter(_) | Material::Antimatter(_)) => return tr.trace(&ray, rng),
+            Some(m) => irradiance_ignores(m),
+        };
+        if !through {
+            hit = Some(h);
+            break;
         }
-    } else {
-        return tr.trace(ray, rng);
+        ray.org = h.point;
+        ray.tmax -= h.t;
+        ray.antimatter = h.antimatter;
+        if ray.tmax <= tr.scene.eps {
+            return Color::ZERO;
+        }
     }
+    let Some(hit) = hit else {
+        return Color::ZERO;
+    };
+    let ray = &ray;
     let n = if hit.back { -hit.normal } else { hit.normal };
     let coef = move |l: DVec3, omega: f64| -> Color {
         let c = n.dot(l);
@@ -109,6 +127,15 @@ fn irradiance(tr: &Tracer, ray: &Ray, rng: &mut Sampler) -> Color {
     let d = tr.direct(ray, &hit, n, &coef, rng);
     let l = d + tr.ambient(ray, &hit, Color::ONE, n, bright(d), rng);
     l * std::f64::consts::PI
+}
+
+/// Materials an irradiance ray passes straight through (rpict's rule for `-i`).
+fn irradiance_ignores(m: &Material) -> bool {
+    match m {
+        Material::Normal(n) => n.kind == NormalKind::Trans,
+        Material::Glass(_) | Material::Dielectric(_) => true,
+        Material::Mirror(_) | Material::Emitter(_) | Material::Antimatter(_) => false,
+    }
 }
 
 fn bigdiff(a: &Sample, b: &Sample, pt: f64) -> bool {
