@@ -9,6 +9,8 @@
 //! own chain) shades it. Adding a pattern type is one new file here with a parser and a
 //! [`Pattern`] implementation, and one line in [`ModifierTypes::standard`].
 
+pub mod frame;
+
 use crate::color::Color;
 use crate::material::MatId;
 use crate::render::shading::ShadingPoint;

@@ -12,7 +12,6 @@ use crate::color::{sanitize, Color};
 use crate::material::MatId;
 use crate::modifier::{MixCoefficient, ModRef, ModifierKind};
 use crate::FTINY;
-use glam::DVec3;
 
 /// Where a walk over patterns and textures stopped.
 enum End<'s> {
@@ -129,10 +128,9 @@ impl Tracer<'_> {
 
     /// What a shadow ray keeps when it crosses `hit` (not its target), through the hit
     /// surface's chain.
-    pub(super) fn shadow_through(&self, hit: &Hit, dir: DVec3) -> Color {
+    pub(super) fn shadow_through(&self, ray: &Ray, hit: &Hit) -> Color {
         let obj = &self.scene.objects[hit.obj];
-        let ray = Ray::shadow(hit.point, dir);
-        let mut sp = ShadingPoint::new(&ray, hit, self.scene.origin);
+        let mut sp = ShadingPoint::new(ray, hit, self.scene.origin);
         if hit.material != obj.material {
             return match hit.material {
                 Some(m) => self.shadow_material(&sp, m),

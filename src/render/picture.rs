@@ -107,6 +107,7 @@ fn irradiance(tr: &Tracer, ray: &Ray, rng: &mut Sampler) -> Color {
         ray.org = h.point;
         ray.tmax -= h.t;
         ray.antimatter = h.antimatter;
+        ray.prior += h.t;
         if ray.tmax <= tr.scene.eps {
             return Color::ZERO;
         }

@@ -96,6 +96,9 @@ pub struct Ray {
     pub sample: SamplePath,
     /// Antimatter materials whose volumes contain the ray origin.
     pub antimatter: [Option<MatId>; MAX_ANTIMATTER],
+    /// Length of the path before this ray's origin (its ancestors', from the eye): with the
+    /// hit distance, the pattern variable `T`.
+    pub prior: f64,
 }
 
 impl Ray {
@@ -113,6 +116,7 @@ impl Ray {
             gain: 1.0,
             sample: SamplePath::NONE,
             antimatter: [None; MAX_ANTIMATTER],
+            prior: 0.0,
         }
     }
 

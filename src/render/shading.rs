@@ -8,7 +8,7 @@
 //! then shades with the colour (which multiplies the material's colour, emission,
 //! transmission or reflectance) and the perturbed normal.
 
-use super::ray::{Hit, Ray};
+use super::ray::{Hit, Ray, RayKind};
 use crate::color::Color;
 use crate::scene::transform::Transform;
 use crate::FTINY;
@@ -37,6 +37,11 @@ pub struct ShadingPoint<'s> {
     pub transform: Option<&'s Transform>,
     /// The scene origin: `hit.point + origin` is the hit in the scene file's coordinates.
     pub origin: DVec3,
+    /// Length of the whole path from the eye to the hit (pattern variable `T`).
+    pub path_len: f64,
+    /// Length of this ray to the hit; for shadow rays crossing transmitters, from the
+    /// shadow ray's origin (pattern variable `Ts`).
+    pub ray_len: f64,
 }
 
 impl<'s> ShadingPoint<'s> {
@@ -52,6 +57,12 @@ impl<'s> ShadingPoint<'s> {
             uv: None,
             transform: None,
             origin,
+            path_len: ray.prior + hit.t,
+            ray_len: if ray.kind == RayKind::Shadow {
+                ray.prior + hit.t
+            } else {
+                hit.t
+            },
         }
     }
 

@@ -407,6 +407,7 @@ impl<'a> Tracer<'a> {
         r.org = hit.point;
         r.tmax = ray.tmax - hit.t;
         r.antimatter = hit.antimatter;
+        r.prior += hit.t;
         r.gain = 1.0;
         if r.tmax <= self.scene.eps {
             return Color::ZERO;
@@ -471,6 +472,7 @@ impl<'a> Tracer<'a> {
             gain,
             sample: parent.sample.spawned(hit.t),
             antimatter: hit.antimatter,
+            prior: parent.prior + hit.t,
         })
     }
 
@@ -625,7 +627,7 @@ impl<'a> Tracer<'a> {
             if is_target(&hit) {
                 return (t, Some(hit));
             }
-            let tr = self.shadow_through(&hit, dir);
+            let tr = self.shadow_through(&ray, &hit);
             if tr.max_element() <= 0.0 {
                 return (Color::ZERO, None);
             }
@@ -633,6 +635,7 @@ impl<'a> Tracer<'a> {
             ray.org = hit.point;
             ray.antimatter = hit.antimatter;
             ray.tmax -= hit.t;
+            ray.prior += hit.t;
         }
         (Color::ZERO, None)
     }

@@ -1,0 +1,233 @@
+//! The pattern frame: where a pattern, texture or mixture evaluates its expressions.
+//!
+//! A modifier's optional transform (`-t -rx -ry -rz -s -mx -my -mz -i`, after its
+//! expressions) places pattern coordinates in the world; the renderer maps each hit the
+//! other way, world → pattern. The ray variables (`$1..$27`: `Dx Dy Dz Nx Ny Nz Px Py Pz T
+//! Rdot S Tx Ty Tz Ix..Kz Ts Lu Lv`) are the hit seen in that frame
+//! (radiance-formats.md §1.8): directions are unit vectors, lengths are multiplied by the
+//! world → pattern scale `S`. A hit through an instance or mesh is first taken into that
+//! object's own frame ([`ShadingPoint::transform`]).
+
+use crate::render::shading::ShadingPoint;
+use crate::scene::transform::{parse_transform, Transform};
+use glam::{DMat4, DVec3};
+
+/// Number of ray channels (`$1..$27`).
+pub const CHANNELS: usize = 27;
+
+/// A modifier's world → pattern mapping.
+#[derive(Clone, Debug, PartialEq)]
+pub struct PatternFrame {
+    /// Pattern → world (the transform as written), None for the identity.
+    forward: Option<DMat4>,
+    /// World → pattern.
+    inverse: DMat4,
+    /// World → pattern scale (`-s 2` gives 0.5).
+    scale: f64,
+}
+
+impl Default for PatternFrame {
+    fn default() -> Self {
+        PatternFrame::identity()
+    }
+}
+
+impl PatternFrame {
+    /// No transform: pattern coordinates are world coordinates.
+    pub fn identity() -> PatternFrame {
+        PatternFrame {
+            forward: None,
+            inverse: DMat4::IDENTITY,
+            scale: 1.0,
+        }
+    }
+
+    /// The frame of a transform (pattern → world as `xf` maps).
+    pub fn from_transform(xf: &Transform) -> Result<PatternFrame, String> {
+        let m = xf.matrix();
+        let inverse = m.inverse();
+        if !(inverse.is_finite() && xf.scale().is_finite() && xf.scale() > 0.0) {
+            return Err("singular transform".to_string());
+        }
+        Ok(PatternFrame {
+            forward: Some(m),
+            inverse,
+            scale: 1.0 / xf.scale(),
+        })
+    }
+
+    /// The frame given by a primitive's string arguments after its fixed ones: empty → the
+    /// identity; otherwise every remaining word must belong to the transform (Radiance's
+    /// "bad transform" otherwise).
+    pub fn from_words(words: &[String]) -> Result<PatternFrame, String> {
+        if words.is_empty() {
+            return Ok(PatternFrame::identity());
+        }
+        let (xf, used) = parse_transform(words)?;
+        if used != words.len() {
+            return Err(format!("bad transform at word '{}'", words[used]));
+        }
+        PatternFrame::from_transform(&xf)
+    }
+
+    /// The world → pattern scale `S`.
+    pub fn scale(&self) -> f64 {
+        self.scale
+    }
+
+    /// The world → pattern matrix and scale at a shading point (through the hit object's
+    /// own transform first, when it has one).
+    fn to_pattern(&self, sp: &ShadingPoint) -> (DMat4, f64) {
+        match sp.transform {
+            None => (self.inverse, self.scale),
+            Some(obj) => {
+                let local = obj.matrix().inverse();
+                (self.inverse * local, self.scale / obj.scale())
+            }
+        }
+    }
+
+    /// The ray channels `$1..$27` at `sp` (index 0 is `$1`).
+    pub fn channels(&self, sp: &ShadingPoint) -> [f64; CHANNELS] {
+        let (m, s) = self.to_pattern(sp);
+        let unit = |v: DVec3| m.transform_vector3(v) / s;
+        let d = unit(sp.dir);
+        let n = unit(sp.hit.normal);
+        let p = m.transform_point3(sp.world_point());
+        let t0 = m.transform_point3(DVec3::ZERO);
+        let axis = |v: DVec3| m.transform_vector3(v).normalize_or_zero();
+        let (i, j, k) = (axis(DVec3::X), axis(DVec3::Y), axis(DVec3::Z));
+        let rdot = (-sp.dir.dot(sp.hit.normal)).clamp(-1.0, 1.0);
+        let (lu, lv) = sp.uv.map(|[u, v]| (u, v)).unwrap_or((0.0, 0.0));
+        [
+            d.x,
+            d.y,
+            d.z,
+            n.x,
+            n.y,
+            n.z,
+            p.x,
+            p.y,
+            p.z,
+            sp.path_len * s,
+            rdot,
+            s,
+            t0.x,
+            t0.y,
+            t0.z,
+            i.x,
+            i.y,
+            i.z,
+            j.x,
+            j.y,
+            j.z,
+            k.x,
+            k.y,
+            k.z,
+            sp.ray_len * s,
+            lu,
+            lv,
+        ]
+    }
+
+    /// A vector given in the pattern frame (a texture's perturbation) in world
+    /// coordinates: the forward transform divided by its scale (through the hit object's
+    /// transform, when it has one).
+    pub fn vector_to_world(&self, sp: &ShadingPoint, v: DVec3) -> DVec3 {
+        let w = match self.forward {
+            None => v,
+            Some(f) => f.transform_vector3(v) * self.scale,
+        };
+        match sp.transform {
+            None => w,
+            Some(obj) => obj.vector(w) / obj.scale(),
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::render::ray::{Hit, Ray, MAX_ANTIMATTER};
+
+    /// The verified case of radiance-formats.md §1.8: a plane z = 0, a ray from
+    /// (0.5, 0.25, 1) straight down.
+    fn channels(words: &str) -> [f64; CHANNELS] {
+        let words: Vec<String> = words.split_whitespace().map(String::from).collect();
+        let f = PatternFrame::from_words(&words).unwrap();
+        let ray = Ray::primary(DVec3::new(0.5, 0.25, 1.0), -DVec3::Z, f64::INFINITY);
+        let hit = Hit {
+            obj: 0,
+            t: 1.0,
+            point: DVec3::new(0.5, 0.25, 0.0),
+            normal: DVec3::Z,
+            back: false,
+            flat: true,
+            material: None,
+            antimatter: [None; MAX_ANTIMATTER],
+        };
+        f.channels(&ShadingPoint::new(&ray, &hit, DVec3::ZERO))
+    }
+
+    fn near(a: [f64; 3], b: [f64; 3]) -> bool {
+        (0..3).all(|i| (a[i] - b[i]).abs() < 1e-4)
+    }
+
+    #[test]
+    fn the_verified_pattern_frames() {
+        let p = |c: [f64; CHANNELS], add: f64| [c[6] + add, c[7] + add, c[8] + add];
+        assert!(near(p(channels("-t 1 2 3"), 5.0), [4.5, 3.25, 2.0]));
+        assert!(near(p(channels("-rz 90 -t 1 2 3"), 5.0), [3.25, 5.5, 2.0]));
+        assert!(near(p(channels("-t 1 2 3 -rz 90"), 5.0), [4.25, 2.5, 2.0]));
+        let c = channels("-rz 90 -t 1 2 3");
+        assert!(near(
+            [c[12] + 5.0, c[13] + 5.0, c[14] + 5.0],
+            [3.0, 6.0, 2.0]
+        ));
+        let c = channels("-rz 90 -t 1 2 3 -s 2");
+        assert!(near([c[11], c[15] + 2.0, c[16] + 2.0], [0.5, 2.0, 1.0]));
+        assert!(near(p(channels("-s 2"), 0.0), [0.25, 0.125, 0.0]));
+        assert!(near(p(channels("-mx"), 10.0), [9.5, 10.25, 10.0]));
+        let c = channels("-rx 90");
+        assert!(near([c[0] + 2.0, c[1] + 2.0, c[2] + 2.0], [2.0, 1.0, 2.0]));
+        let c = channels("-s 3");
+        assert!(near(
+            [c[9], c[10] + 2.0, c[24] + 3.0],
+            [1.0 / 3.0, 3.0, 1.0 / 3.0 + 3.0]
+        ));
+        let c = channels("");
+        assert!(near([c[6] + 1.0, c[7] + 1.0, c[8] + 1.0], [1.5, 1.25, 1.0]));
+    }
+
+    #[test]
+    fn bad_transforms_are_refused() {
+        let w = |s: &str| s.split_whitespace().map(String::from).collect::<Vec<_>>();
+        assert!(PatternFrame::from_words(&w("-t 1 2")).is_err());
+        assert!(PatternFrame::from_words(&w("-rz 90 junk")).is_err());
+        assert_eq!(
+            PatternFrame::from_words(&[]).unwrap(),
+            PatternFrame::identity()
+        );
+    }
+
+    #[test]
+    fn texture_vectors_go_back_to_the_world() {
+        let w: Vec<String> = "-rz 90 -s 2".split_whitespace().map(String::from).collect();
+        let f = PatternFrame::from_words(&w).unwrap();
+        let ray = Ray::primary(DVec3::Z, -DVec3::Z, f64::INFINITY);
+        let hit = Hit {
+            obj: 0,
+            t: 1.0,
+            point: DVec3::ZERO,
+            normal: DVec3::Z,
+            back: false,
+            flat: true,
+            material: None,
+            antimatter: [None; MAX_ANTIMATTER],
+        };
+        let sp = ShadingPoint::new(&ray, &hit, DVec3::ZERO);
+        // A unit x in the pattern frame is the world's y, still unit length.
+        let v = f.vector_to_world(&sp, DVec3::X);
+        assert!((v - DVec3::Y).length() < 1e-12, "{v}");
+    }
+}
