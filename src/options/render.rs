@@ -3,7 +3,7 @@
 //! `--amb-*`). Kept in job manifests and hashed (in part) into the ambient fingerprint.
 
 use super::words::{
-    arg, bool_option, f1, f3, i1, nonneg3, nonneg_i32, range, split_words, OptError,
+    arg, bool_option, f1, f3, i1, nonneg3, nonneg_i32, range, split_words, unsupported, OptError,
 };
 use crate::ambient::settings::AmbientSettings;
 
@@ -239,7 +239,16 @@ impl RenderParams {
                 2
             }
             "-me" => {
-                self.me = nonneg3(o, f3(words)?)?;
+                let me = nonneg3(o, f3(words)?)?;
+                if me.iter().any(|&c| c > 0.0) {
+                    // Never ignore a medium: rpict's picture would differ completely.
+                    return Err(unsupported(
+                        o,
+                        "a participating medium (mist) is not implemented; rpict would \
+                         render one. Remove -me or give -me 0 0 0",
+                    ));
+                }
+                self.me = me;
                 4
             }
             "-ma" => {
