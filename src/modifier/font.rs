@@ -36,6 +36,9 @@ use std::path::Path;
 /// Size of a glyph cell in font units.
 pub const CELL: i64 = 255;
 
+/// Where glyph extents start (see [`Glyph::new`]).
+pub const CENTRE: i32 = 128;
+
 /// Most vertices of one glyph.
 pub const MAX_VERTS: i64 = 32000;
 
@@ -58,12 +61,11 @@ pub struct Glyph {
 }
 
 impl Glyph {
-    /// A glyph from its vertices (extents computed).
+    /// A glyph from its vertices. Its extents start at the cell's centre (128, 128) and
+    /// grow to hold every vertex: as in Radiance (measured with rtrace 6.0a), a glyph
+    /// entirely left of x = 128 still reaches 128 on the right, and so on.
     pub fn new(verts: Vec<[i32; 2]>) -> Glyph {
-        let (mut l, mut r, mut b, mut t) = (0, 0, 0, 0);
-        if let Some(&[x, y]) = verts.first() {
-            (l, r, b, t) = (x, x, y, y);
-        }
+        let (mut l, mut r, mut b, mut t) = (CENTRE, CENTRE, CENTRE, CENTRE);
         for &[x, y] in &verts {
             l = l.min(x);
             r = r.max(x);
@@ -242,13 +244,18 @@ impl Font {
         self.mheight
     }
 
-    /// The origins of the characters of `line` with `spacing` (module docs).
+    /// The origins of the characters of `line` with `spacing` (module docs): uniform when
+    /// c = trunc(spacing·255) is 0, squeezed by |c| when negative, proportional when
+    /// positive.
     pub fn layout(&self, line: &[u8], spacing: f64) -> LineLayout {
-        if spacing < 0.0 {
-            let c = (-spacing * CELL as f64) as i64;
-            self.squeezed(line, c)
-        } else if spacing > 0.0 {
-            let c = (spacing * CELL as f64) as i64;
+        let c = (spacing * CELL as f64) as i64;
+        if c < 0 {
+            let sq = self.squeezed(line, -c);
+            LineLayout {
+                width: sq.end + sq.half,
+                origins: sq.origins,
+            }
+        } else if c > 0 {
             self.proportional(line, c)
         } else {
             let mut origins = Vec::with_capacity(line.len());
@@ -269,31 +276,43 @@ impl Font {
         }
     }
 
-    /// Squeezed spacing with a gap of `c` units: origins, and the width (the end of the last
-    /// ink box or space plus half a gap).
-    fn squeezed(&self, line: &[u8], c: i64) -> LineLayout {
+    /// Squeezed spacing with a gap of `c` units (module docs).
+    fn squeezed(&self, line: &[u8], c: i64) -> Squeezed {
         let half = c / 2;
         let mut origins = Vec::with_capacity(line.len());
         // Where the last ink box (or space) ended.
         let mut end = 0i64;
+        let mut first = None;
+        let mut last_space = false;
         for &ch in line {
             match self.glyph(ch) {
                 None => origins.push(None),
                 Some(g) if g.is_empty() => {
-                    let o = end + half;
-                    origins.push(Some(o));
-                    end = o + self.mwidth;
+                    origins.push(Some(end));
+                    first.get_or_insert(half);
+                    end += self.mwidth;
+                    last_space = true;
                 }
                 Some(g) => {
                     let o = end + 2 * half - g.left as i64;
                     origins.push(Some(o));
+                    first.get_or_insert(g.left as i64);
                     end = o + g.right as i64;
+                    last_space = false;
                 }
             }
         }
-        LineLayout {
+        Squeezed {
             origins,
-            width: end + half,
+            end,
+            half,
+            // The width proportional spacing stretches (fitted to Radiance 6.0a, module
+            // docs).
+            width: if last_space {
+                end
+            } else {
+                end + first.unwrap_or(0)
+            },
         }
     }
 
@@ -302,6 +321,7 @@ impl Font {
         let column = self.mwidth + c;
         let mut origins = Vec::with_capacity(line.len());
         let mut start = 0usize;
+        let mut width = line.len() as i64 * column;
         while start < line.len() {
             let end = segment_end(line, start);
             let seg = &line[start..end];
@@ -309,21 +329,31 @@ impl Font {
             let n = seg.len() as i64;
             let base = start as i64 * column;
             let extra = n * column - sq.width;
-            // Character k of the segment moves by the share of the difference given to
-            // characters 0..=k.
-            let (each, rest) = (extra.div_euclid(n), extra.rem_euclid(n));
+            // Gap k (before character k, k = 1..n; gap n trails) gets extra/n, truncated;
+            // the last |remainder| gaps get one unit more.
+            let (each, rest) = (extra / n, extra % n);
+            let mut shift = 0;
             for (k, o) in sq.origins.iter().enumerate() {
                 let k = k as i64;
-                let shift = each * (k + 1) + (k + 1).min(rest);
+                if k > 0 {
+                    shift += each + if k > n - rest.abs() { rest.signum() } else { 0 };
+                }
                 origins.push(o.map(|o| base + o + shift));
             }
+            width = width.max(base + sq.end + shift + sq.half);
             start = end;
         }
-        LineLayout {
-            origins,
-            width: line.len() as i64 * column,
-        }
+        LineLayout { origins, width }
     }
+}
+
+/// A squeezed line: origins, where its last ink box or space ends, half the gap, and the
+/// width that proportional spacing stretches.
+struct Squeezed {
+    origins: Vec<Option<i64>>,
+    end: i64,
+    half: i64,
+    width: i64,
 }
 
 /// The end (exclusive) of the proportional-spacing segment starting at `start`: after the
@@ -405,22 +435,51 @@ mod tests {
         let sp = f.layout(b"I IBI", -0.2);
         let o: Vec<Option<i64>> = sp.origins.clone();
         assert_eq!(o[0], Some(-52));
-        assert_eq!(o[1], Some(101 + 25));
+        assert_eq!(o[1], Some(101));
         assert_eq!(o[3], None);
-        assert_eq!(o[2].unwrap() + 102, 101 + 25 + f.mwidth() + 50);
+        assert_eq!(o[2].unwrap() + 102, 101 + f.mwidth() + 50);
         assert_eq!(o[4].unwrap() + 102, o[2].unwrap() + 153 + 50);
     }
 
     #[test]
-    fn proportional_spacing_keeps_columns() {
-        let f = Font::parse(FONT, "t.fnt").unwrap();
-        let col = f.mwidth() + 51;
-        let p = f.layout(b"II   AI", 0.2);
-        assert_eq!(p.width, 7 * col);
-        // The second segment starts at column 5.
-        let a = f.layout(b"AI", -0.2);
-        let shift = p.origins[5].unwrap() - a.origins[0].unwrap();
-        assert!((shift - 5 * col).abs() < col, "{shift}");
+    fn glyph_extents_start_at_the_cell_centre() {
+        // Measured with rtrace 6.0a: a glyph left of x = 128 still reaches 128.
+        let g = Glyph::new(vec![[10, 10], [60, 10], [60, 110], [10, 110]]);
+        assert_eq!((g.left, g.right, g.bottom, g.top), (10, 128, 10, 128));
+        let f = Font::parse(b"65 4 10 10 60 10 60 110 10 110", "f").unwrap();
+        assert_eq!(f.mwidth(), 118);
+    }
+
+    /// Ink starts (origin + left of the drawn outline) of `text` in a font of one glyph
+    /// `A` drawn at x 10..60 (extents 10..128, mwidth 118) and a space.
+    fn ink(text: &[u8], spacing: f64) -> Vec<i64> {
+        let f = Font::parse(b"32 0\n65 4 10 10 60 10 60 110 10 110", "f").unwrap();
+        let l = f.layout(text, spacing);
+        text.iter()
+            .zip(&l.origins)
+            .filter(|(&c, _)| c == b'A')
+            .map(|(_, o)| o.unwrap() + 10)
+            .collect()
+    }
+
+    #[test]
+    fn squeezed_and_proportional_spacing_as_measured_with_rtrace() {
+        // Ink positions (font units) measured with rtrace 6.0a.
+        assert_eq!(ink(b"AAAA", -0.2), vec![50, 218, 386, 554]);
+        assert_eq!(ink(b"A  A", -0.2), vec![50, 454]);
+        assert_eq!(ink(b" A", -0.2), vec![168]);
+        assert_eq!(ink(b"AAAA", 0.2), vec![50, 217, 384, 550]);
+        assert_eq!(ink(b"AAAAAA", 0.2), vec![50, 218, 386, 553, 720, 887]);
+        assert_eq!(ink(b"A A", 0.2), vec![50, 364]);
+        assert_eq!(ink(b"A  A", 0.2), vec![50, 524]);
+        assert_eq!(ink(b"A   A", 0.2), vec![50, 726]);
+        assert_eq!(ink(b"AA   AA", 0.2), vec![50, 249, 895, 1059]);
+        assert_eq!(ink(b"AAA    AA", 0.2), vec![50, 247, 444, 1233, 1397]);
+        assert_eq!(ink(b"A A    A", 0.2), vec![50, 408, 1233]);
+        assert_eq!(ink(b" A", 0.2), vec![181]);
+        assert_eq!(ink(b"  AA", 0.2), vec![325, 513]);
+        // A spacing below one font unit is uniform.
+        assert_eq!(ink(b"AA", -0.0001), vec![10, 265]);
         assert_eq!(segment_end(b"II   AI", 0), 5);
         assert_eq!(segment_end(b"I  I", 0), 4);
     }

@@ -57,7 +57,7 @@ impl Text {
         o: DVec3,
         r: DVec3,
         d: DVec3,
-        spacing: f64,
+        spacing: Option<f64>,
     ) -> Result<Text, String> {
         let n = r.cross(d);
         let rs = d.cross(n);
@@ -66,15 +66,16 @@ impl Text {
         if n.length_squared() == 0.0 || !(rd.is_normal() && dd.is_normal()) {
             return Err("illegal motion vector".into());
         }
-        let hscale = if spacing == 0.0 {
-            CELL as f64
-        } else {
-            font.mwidth() as f64 + CELL as f64 * spacing.abs()
+        // With a spacing argument (even 0) the scale is mwidth + 255·|spacing| (Radiance
+        // 6.0a, measured), without one 255.
+        let hscale = match spacing {
+            None => CELL as f64,
+            Some(s) => font.mwidth() as f64 + CELL as f64 * s.abs(),
         };
         let lines = lines
             .into_iter()
             .map(|l| {
-                let lay = font.layout(&l, spacing);
+                let lay = font.layout(&l, spacing.unwrap_or(0.0));
                 (l, lay)
             })
             .collect();
@@ -243,7 +244,7 @@ fn parse_text(
             p.rargs.len()
         ));
     }
-    let spacing = p.rargs.get(n).copied().unwrap_or(0.0);
+    let spacing = p.rargs.get(n).copied();
     let (font, lines) = font_and_lines(strings, files)?;
     let (o, r, d) = frame(&p.rargs);
     Text::new(font, lines, o, r, d, spacing)
@@ -289,7 +290,7 @@ mod tests {
     const FONT: &[u8] = b"32 0\n73 5 153 222 153 48 102 48 102 222 153 222\n\
         65 3 20 40 230 40 125 230\n";
 
-    fn text(words: &str, spacing: f64) -> Text {
+    fn text(words: &str, spacing: Option<f64>) -> Text {
         let f = Arc::new(Font::parse(FONT, "t.fnt").unwrap());
         Text::new(
             f,
@@ -304,7 +305,7 @@ mod tests {
 
     #[test]
     fn the_reference_points_of_ai() {
-        let t = text("AI", 0.0);
+        let t = text("AI", None);
         let p = |x: f64, y: f64| t.inside(DVec3::new(x, y, 0.0));
         assert!(p(1.502, 0.5294)); // in I
         assert!(!p(1.3, 0.5294));
@@ -317,7 +318,7 @@ mod tests {
 
     #[test]
     fn squeezed_ink_ranges_of_ii() {
-        let t = text("II", -0.2);
+        let t = text("II", Some(-0.2));
         let hs = t.font.mwidth() as f64 + 0.2 * 255.0;
         // A point at font unit h along the line, in the middle of the glyph height.
         let at = |h: f64| t.inside(DVec3::new((h + 0.5) / hs, 1.0 - 135.0 / 255.0, 0.0));
@@ -337,10 +338,10 @@ mod tests {
             DVec3::new(1.0, 0.0, 0.0),
             DVec3::new(0.5, -1.0, 0.0),
         );
-        let t = Text::new(f.clone(), vec![b"AI".to_vec()], o, r, d, 0.0).unwrap();
+        let t = Text::new(f.clone(), vec![b"AI".to_vec()], o, r, d, None).unwrap();
         assert!(t.inside(o + 1.5 * r + 0.5 * d + DVec3::new(0.0, 0.0, 3.0)));
         assert!(!t.inside(o + 1.3 * r + 0.5 * d));
-        let e = Text::new(f, vec![], o, r, 2.0 * r, 0.0).unwrap_err();
+        let e = Text::new(f, vec![], o, r, 2.0 * r, None).unwrap_err();
         assert_eq!(e, "illegal motion vector");
     }
 
