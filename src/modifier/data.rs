@@ -16,7 +16,8 @@
 //! Values are kept as `f32`, as Radiance does. Errors name the file, the line and the
 //! reason: a token that is not a number, a file that ends early, a dimension count or size
 //! out of range, explicit coordinates that are not strictly monotonic, more than
-//! [`MAX_VALUES`] values, a value that is not finite, or data after the last value.
+//! [`MAX_VALUES`] values, or a value that is not finite (or too large for `f32`). Anything
+//! after the last value is ignored, as Radiance does.
 //!
 //! # Interpolation ([`DataArray::interp`])
 //! Per dimension with coordinate p, the fractional index is x = (p − beg)/(end − beg)·(n − 1)
@@ -281,12 +282,7 @@ impl DataArray {
             }
             values.push(f);
         }
-        if let Some(w) = t.next_word() {
-            return Err(t.err(format!(
-                "extra data '{}' after the {total} values",
-                String::from_utf8_lossy(w)
-            )));
-        }
+        // Anything after the last value is ignored, as Radiance does.
         Ok(DataArray {
             name: name.to_string(),
             axes,
@@ -430,6 +426,12 @@ mod tests {
     }
 
     #[test]
+    fn trailing_data_is_ignored() {
+        let d = DataArray::parse(b"1 0 1 2  1 2  3 x", "t").unwrap();
+        assert_eq!(d.values(), &[1.0, 2.0]);
+    }
+
+    #[test]
     fn comments_and_numbers() {
         let d = DataArray::parse(b"# head\n1#dims\n0 1 2 # axis\n12#x\n1.5e1", "t").unwrap();
         assert_eq!(d.values(), &[12.0, 15.0]);
@@ -465,10 +467,6 @@ mod tests {
                 "t.dat:3: value 2 of 2 (1e39) is out of the range",
             ),
             (b"1\n0 1 2\n1 inf", "t.dat:3: bad value 2 of 2 'inf'"),
-            (
-                b"1\n0 1 2\n1 2\n3",
-                "t.dat:4: extra data '3' after the 2 values",
-            ),
             (b"2\n0 1 65536\n0 1 65536\n", "t.dat:3: too many values"),
             (b"1\n0 1 2.5\n", "t.dat:2: bad size of dimension 1 '2.5'"),
         ];
