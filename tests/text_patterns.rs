@@ -337,7 +337,7 @@ const RES: &str = "160";
 fn lit_scene(pattern: &str) -> String {
     format!(
         "void light lampmat 0 0 3 60 60 60\n\
-         lampmat sphere lamp 0 0 4 1.5 0.5 2.5 0.25\n\
+         lampmat sphere lamp 0 0 4 1.5 -1.6 2.6 0.25\n\
          void plastic white 0 0 5 .75 .75 .75 0 0\n\
          void plastic red 0 0 5 .8 .15 .1 0 0\n\
          void plastic blue 0 0 5 .1 .2 .7 .04 .05\n\
