@@ -460,3 +460,202 @@ fn mixtext_with_a_void_side_and_zero_spacing_against_rpict() {
     render_case(3, "0");
     render_case(3, "1");
 }
+
+// ---------------------------------------------------------------------------------------
+// Parsers and Radiance's own font
+
+mod parsers {
+    use proptest::prelude::*;
+    use tessera::modifier::data::DataArray;
+    use tessera::modifier::font::Font;
+    use tessera::modifier::picdata::PictData;
+
+    proptest! {
+        #[test]
+        fn data_parser_never_panics(bytes in proptest::collection::vec(any::<u8>(), 0..300)) {
+            let _ = DataArray::parse(&bytes, "fuzz.dat");
+        }
+
+        #[test]
+        fn data_like_text_never_panics(
+            words in proptest::collection::vec(
+                prop_oneof![
+                    Just("1".to_string()), Just("2".to_string()), Just("0".to_string()),
+                    Just("#".to_string()), Just("\n".to_string()), Just("-3".to_string()),
+                    Just("1e308".to_string()), Just("nan".to_string()), Just("6".to_string()),
+                    (-5.0f64..5.0).prop_map(|v| v.to_string()),
+                ],
+                0..40,
+            )
+        ) {
+            let text = words.join(" ");
+            if let Ok(d) = DataArray::parse(text.as_bytes(), "fuzz.dat") {
+                let c = vec![0.3; d.dims()];
+                prop_assert!(d.interp(&c).is_finite());
+            }
+        }
+
+        #[test]
+        fn font_parser_never_panics(bytes in proptest::collection::vec(any::<u8>(), 0..300)) {
+            if let Ok(f) = Font::parse(&bytes, "fuzz.fnt") {
+                let l = f.layout(&bytes, -0.3);
+                prop_assert_eq!(l.origins.len(), bytes.len());
+                let _ = f.layout(&bytes, 0.3);
+            }
+        }
+
+        #[test]
+        fn font_like_text_never_panics(
+            nums in proptest::collection::vec(0i64..300, 0..60),
+            spacing in -1.0f64..1.0,
+        ) {
+            let text: Vec<String> = nums.iter().map(|n| n.to_string()).collect();
+            if let Ok(f) = Font::parse(text.join(" ").as_bytes(), "fuzz.fnt") {
+                let line: Vec<u8> = nums.iter().map(|&n| (n % 256) as u8).collect();
+                let l = f.layout(&line, spacing);
+                prop_assert_eq!(l.origins.len(), line.len());
+                for c in 1..=255u8 {
+                    if let Some(g) = f.glyph(c) {
+                        let _ = g.contains(100.5, 100.5);
+                    }
+                }
+            }
+        }
+
+        #[test]
+        fn picture_reader_never_panics(bytes in proptest::collection::vec(any::<u8>(), 0..200)) {
+            let mut v = b"#?RADIANCE\nFORMAT=32-bit_rle_rgbe\n\n-Y 2 +X 3\n".to_vec();
+            v.extend_from_slice(&bytes);
+            if let Ok(p) = PictData::read(&mut &v[..], "fuzz.hdr") {
+                let _ = p.lookup(0.5, 0.5);
+            }
+        }
+
+        /// A data file written from an array reads back to the same values and
+        /// interpolates the same.
+        #[test]
+        fn data_files_round_trip(
+            n1 in 2usize..5, n2 in 2usize..5,
+            vals in proptest::collection::vec(-1e3f32..1e3, 16),
+            beg in -5.0f64..5.0, len in 0.5f64..4.0,
+            p in proptest::collection::vec(-10.0f64..10.0, 2),
+        ) {
+            let values: Vec<f32> = vals.iter().cycle().take(n1 * n2).copied().collect();
+            let coords: Vec<String> = (0..n2).map(|k| (beg + k as f64 * len).to_string()).collect();
+            let text = format!(
+                "2\n{beg} {} {n1}\n0 0 {n2} {}\n{}\n",
+                beg + len,
+                coords.join(" "),
+                values.iter().map(|v| format!("{v:e}")).collect::<Vec<_>>().join(" ")
+            );
+            let d = DataArray::parse(text.as_bytes(), "rt.dat").unwrap();
+            prop_assert_eq!(d.values(), &values[..]);
+            prop_assert_eq!(d.dims(), 2);
+            let again = DataArray::from_parts("rt.dat", d.axes().to_vec(), values).unwrap();
+            prop_assert_eq!(d.interp(&p), again.interp(&p));
+        }
+    }
+}
+
+/// Radiance's helvet.fnt, where Radiance's library folder has it (the pyradiance wheel
+/// does not ship fonts: the test then skips).
+fn helvet() -> Option<std::path::PathBuf> {
+    let lib = radiance_bin_quiet()?
+        .parent()?
+        .join("lib")
+        .join("helvet.fnt");
+    if lib.is_file() {
+        Some(lib)
+    } else {
+        eprintln!("skipping: no helvet.fnt in Radiance's lib folder");
+        None
+    }
+}
+
+#[test]
+fn helvet_values_of_the_reference() {
+    let Some(path) = helvet() else { return };
+    let f = Arc::new(Font::load(&path).unwrap());
+    assert_eq!(f.count(), 91);
+    assert_eq!((f.mwidth(), f.mheight()), (171, 163));
+    let i = f.glyph(b'I').unwrap();
+    assert_eq!((i.left, i.right, i.bottom, i.top), (102, 153, 48, 222));
+    // brighttext helvet.fnt . AI, reals 0 1 0 1 0 0 0 -1 0 2 0.5 on z = 0.
+    let o = DVec3::new(0.0, 1.0, 0.0);
+    let t = Text::new(
+        f.clone(),
+        vec![b"AI".to_vec()],
+        o,
+        DVec3::X,
+        -DVec3::Y,
+        None,
+    )
+    .unwrap();
+    let inside = |x: f64, y: f64| t.inside(DVec3::new(x, y, 0.0));
+    assert!(inside(1.502, 0.5294));
+    assert!(!inside(1.3, 0.5294));
+    assert!(inside(0.502, 0.8));
+    assert!(!inside(0.502, 0.3));
+    assert!(!inside(-0.1, 0.5) && !inside(0.5, 1.1));
+    // Spacing -0.2 on II: ink at [50, 101) and [151, 202).
+    let l = f.layout(b"II", -0.2);
+    let ink: Vec<i64> = l.origins.iter().map(|o| o.unwrap() + 102).collect();
+    assert_eq!(ink, vec![50, 151]);
+}
+
+#[test]
+fn scenes_with_text_patterns_report_bad_files_and_arguments() {
+    use tessera::scene::{parse_scene_text, ReadOptions, Scene};
+    let tmp = tempfile::tempdir().unwrap();
+    let dir = tmp.path();
+    write_inputs(dir);
+    std::fs::write(dir.join("bad.fnt"), "65 3 1 2 3 4 5 999\n").unwrap();
+    let build = |pattern: &str| -> Result<Scene, String> {
+        let text = format!(
+            "{pattern}\nvoid plastic white 0 0 5 .5 .5 .5 0 0\n\
+             pat alias m white\nm polygon p 0 0 9 0 0 0 1 0 0 0 1 0\n"
+        );
+        let prims = parse_scene_text(&text, "t.rad", &ReadOptions::default()).unwrap();
+        Scene::build_on(&prims, &[dir.to_path_buf()]).map_err(|e| e.to_string())
+    };
+    let ok = "void brighttext pat 3 block.fnt . TO 0 11 0 1 0 1 0 0 0 -1 0 2 0.5";
+    build(ok).unwrap();
+    let cases = [
+        (
+            "void brighttext pat 3 none.fnt . TO 0 11 0 1 0 1 0 0 0 -1 0 2 0.5",
+            "cannot find file 'none.fnt' on RAYPATH",
+        ),
+        (
+            "void brighttext pat 3 bad.fnt . TO 0 11 0 1 0 1 0 0 0 -1 0 2 0.5",
+            "bad.fnt:1: y of vertex 3 of character 65 is 999",
+        ),
+        (
+            "void brighttext pat 2 block.fnt none.txt 0 11 0 1 0 1 0 0 0 -1 0 2 0.5",
+            "cannot find file 'none.txt'",
+        ),
+        (
+            "void brighttext pat 3 block.fnt . TO 0 10 0 1 0 1 0 0 0 -1 0 2",
+            "takes 11 or 12 real arguments",
+        ),
+        (
+            "void colortext pat 3 block.fnt . TO 0 11 0 1 0 1 0 0 0 -1 0 2 0.5",
+            "takes 15 or 16 real arguments",
+        ),
+        (
+            "void brighttext pat 3 block.fnt . TO 0 11 0 1 0 1 0 0 2 0 0 2 0.5",
+            "illegal motion vector",
+        ),
+        (
+            "void mixtext pat 4 white nothing block.fnt lines.txt 0 9 0 1 0 1 0 0 0 -1 0",
+            "unknown modifier",
+        ),
+        (
+            "void brighttext pat 1 block.fnt 0 11 0 1 0 1 0 0 0 -1 0 2 0.5",
+            "needs the string arguments",
+        ),
+    ];
+    for (pattern, want) in cases {
+        let e = build(pattern).err().unwrap();
+        assert!(e.contains("t.rad:1") && e.contains(want), "{pattern}: {e}");
+    }
+}
