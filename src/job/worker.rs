@@ -198,9 +198,13 @@ impl Beater {
 /// sharing when the values are cached).
 fn start_session(job: &JobDir, m: &Manifest, owner: &str, wo: &WorkerOptions) -> Result<Session> {
     let scene_path = job.file(&m.scene_file);
+    // The job directory first (the flattened scene names no other scene file), then the
+    // RAYPATH, where fonts, data files and pictures named by modifiers are found.
+    let mut raypath = vec![job.root().to_path_buf()];
+    raypath.extend(ReadOptions::from_env().raypath);
     let ro = ReadOptions {
         allow_commands: false,
-        raypath: vec![job.root().to_path_buf()],
+        raypath,
     };
     let source = SceneSource::read(&[scene_path.display().to_string()], &ro, &m.params)?;
     if source.fingerprint != m.fingerprint_bytes() {

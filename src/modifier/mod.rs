@@ -7,7 +7,9 @@
 //! [`crate::render::shading::ShadingPoint`]: a pattern multiplies its colour, a texture adds
 //! to its perturbation, a mixture shades two chains and blends them, a material (after its
 //! own chain) shades it. Adding a pattern type is one new file here with a parser and a
-//! [`Pattern`] implementation, and one line in [`ModifierTypes::standard`].
+//! [`Pattern`] implementation, and one line in [`ModifierTypes::standard`]. Files a
+//! modifier reads (fonts, text, data files, pictures) come through
+//! [`ModifierLookup::files`]: found along the RAYPATH and read once per scene.
 
 pub mod frame;
 
@@ -18,6 +20,14 @@ use crate::scene::primitive::Primitive;
 use glam::DVec3;
 use std::collections::HashMap;
 use std::fmt::Debug;
+
+pub mod data;
+pub mod files;
+pub mod font;
+pub mod picdata;
+pub mod text;
+
+pub use files::SceneFiles;
 
 /// Index of a modifier in [`crate::scene::Scene::modifiers`].
 pub type ModId = usize;
@@ -88,6 +98,10 @@ pub struct ModifierDef {
 pub trait ModifierLookup {
     /// The current definition of a modifier name (`void` → [`ModRef::Void`]), or an error.
     fn modref(&self, name: &str) -> Result<ModRef, String>;
+
+    /// The files modifiers read (fonts, text files, data files, pictures): found along the
+    /// RAYPATH the scene was read with, each read once per scene.
+    fn files(&self) -> &SceneFiles;
 }
 
 /// Parses a modifier primitive of one type into what it does.
@@ -100,12 +114,17 @@ pub struct ModifierTypes {
 }
 
 impl ModifierTypes {
-    /// The types Tessera implements. Radiance's patterns, textures and mixtures
-    /// (`brightfunc`, `colorfunc`, `texfunc`, `mixfunc`, the `*data`, `*pict` and `*text`
-    /// types) need the function language and are not implemented yet: a scene that uses one
-    /// is refused with its file, line and type.
+    /// The types Tessera implements: the text patterns `brighttext` and `colortext` and the
+    /// mixture `mixtext` ([`text`]). Radiance's other patterns, textures and mixtures
+    /// (`brightfunc`, `colorfunc`, `texfunc`, `mixfunc`, the `*data` and `*pict` types) need
+    /// the function language and are not implemented yet (their data files and pictures are
+    /// read by [`data`] and [`picdata`]): a scene that uses one is refused with its file,
+    /// line and type.
     pub fn standard() -> ModifierTypes {
         ModifierTypes::default()
+            .with("brighttext", text::parse_brighttext)
+            .with("colortext", text::parse_colortext)
+            .with("mixtext", text::parse_mixtext)
     }
 
     /// These types and `name`, parsed by `parser` (a type of the same name is replaced).

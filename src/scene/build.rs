@@ -7,11 +7,14 @@ use crate::geometry::bvh::Bvh;
 use crate::geometry::source::DistantSource;
 use crate::geometry::Surface;
 use crate::material::{MatId, Material, MaterialLookup, MATERIAL_TYPES};
-use crate::modifier::{ModRef, ModifierDef, ModifierKind, ModifierLookup, ModifierTypes};
+use crate::modifier::{
+    ModRef, ModifierDef, ModifierKind, ModifierLookup, ModifierTypes, SceneFiles,
+};
 use crate::scene::reader::KNOWN_TYPES;
 use crate::FTINY;
 use glam::DVec3;
 use std::collections::HashMap;
+use std::path::PathBuf;
 
 /// Surface primitive types (finite ones go into the BVH; `source` is distant).
 pub const SURFACE_TYPES: &[&str] = &[
@@ -124,6 +127,8 @@ struct Modifiers {
     unsupported: HashMap<String, (String, Location)>,
     /// The patterns, textures and mixtures defined so far.
     defs: Vec<ModifierDef>,
+    /// The files modifiers read, found along the RAYPATH.
+    files: SceneFiles,
 }
 
 impl ModifierLookup for Modifiers {
@@ -140,6 +145,10 @@ impl ModifierLookup for Modifiers {
             Some(r) => Ok(*r),
             None => Err(format!("unknown modifier '{name}'")),
         }
+    }
+
+    fn files(&self) -> &SceneFiles {
+        &self.files
     }
 }
 
@@ -261,13 +270,31 @@ fn alias(
 }
 
 impl Scene {
-    /// Build a scene from primitives in definition order, with Tessera's modifier types.
+    /// Build a scene from primitives in definition order, with Tessera's modifier types;
+    /// files that modifiers name are looked up in the current directory (Radiance's default
+    /// RAYPATH).
     pub fn build(prims: &[Primitive]) -> Result<Scene, SceneError> {
         Scene::build_with(prims, &ModifierTypes::standard())
     }
 
+    /// [`Scene::build`] with files that modifiers name (fonts, text, data files, pictures)
+    /// looked up along `raypath` (empty: the current directory).
+    pub fn build_on(prims: &[Primitive], raypath: &[PathBuf]) -> Result<Scene, SceneError> {
+        Scene::build_in(prims, &ModifierTypes::standard(), raypath)
+    }
+
     /// [`Scene::build`] with the modifier types `types`.
     pub fn build_with(prims: &[Primitive], types: &ModifierTypes) -> Result<Scene, SceneError> {
+        Scene::build_in(prims, types, &[])
+    }
+
+    /// [`Scene::build`] with the modifier types `types` and files looked up along
+    /// `raypath`.
+    pub fn build_in(
+        prims: &[Primitive],
+        types: &ModifierTypes,
+        raypath: &[PathBuf],
+    ) -> Result<Scene, SceneError> {
         let err = |p: &Primitive, msg: String| SceneError::syntax(p.loc.clone(), msg);
         // Pass 1: bounds of finite geometry, to choose the origin. Surfaces are parsed once
         // with a zero origin for bounds, then re-parsed relative to the chosen origin.
@@ -300,6 +327,7 @@ impl Scene {
             current: HashMap::new(),
             unsupported: HashMap::new(),
             defs: Vec::new(),
+            files: SceneFiles::new(raypath),
         };
         let mut materials: Vec<MaterialDef> = Vec::new();
         let mut objects = Vec::new();

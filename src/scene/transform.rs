@@ -33,7 +33,8 @@ pub const SURFACE_TYPES: &[&str] = &[
 ];
 
 /// Non-surface types whose string arguments end with transform words (real `xform` appends
-/// its transform to these).
+/// its transform to these). The text types are not among them: xform moves their frame
+/// (the first nine reals) instead.
 pub const TRANSFORMABLE_TYPES: &[&str] = &[
     "brightfunc",
     "colorfunc",
@@ -44,9 +45,6 @@ pub const TRANSFORMABLE_TYPES: &[&str] = &[
     "colordata",
     "texdata",
     "mixdata",
-    "brighttext",
-    "colortext",
-    "mixtext",
     "mixpict",
     "specfunc",
     "specdata",
@@ -323,7 +321,8 @@ impl Transform {
     /// radii, ring centre, normal (transformed as a vector, not renormalised, negated by
     /// `-I`) and radii, source direction (transformed as a vector, not renormalised);
     /// instance, mesh and pattern-like types get the words appended to their string
-    /// arguments; everything else is unchanged. Errors on wrong argument counts.
+    /// arguments, except the text types, whose origin (a point) and right and down vectors
+    /// are transformed; everything else is unchanged. Errors on wrong argument counts.
     pub fn apply(&self, p: &Primitive) -> Result<Primitive, String> {
         let mut q = p.clone();
         let r = &p.rargs;
@@ -411,6 +410,16 @@ impl Transform {
                 }
                 q.sargs.extend(self.words.iter().cloned());
             }
+            "brighttext" | "colortext" | "mixtext" => {
+                // No transform words: the origin moves as a point, the right and down
+                // vectors as vectors (real xform's rule).
+                if r.len() < 9 {
+                    return Err(bad("need at least 9 reals"));
+                }
+                put(&mut q.rargs, 0, pt(0));
+                put(&mut q.rargs, 3, vc(3));
+                put(&mut q.rargs, 6, vc(6));
+            }
             t if TRANSFORMABLE_TYPES.contains(&t) => {
                 q.sargs.extend(self.words.iter().cloned());
             }
@@ -448,6 +457,31 @@ mod tests {
         let (t, n) = parse_transform(&w("-i 0 -mx")).unwrap();
         assert_eq!(n, 3);
         assert!(!t.mirrors());
+    }
+
+    #[test]
+    fn text_frames_move_with_the_transform() {
+        // Real xform: `-rz 90 -t 1 2 3 -s 2` on O (0,1,0), R (1,0,0), D (0,-1,0) gives
+        // O (0,4,6), R (0,2,0), D (2,0,0); the strings are unchanged.
+        let (t, _) = parse_transform(&w("-rz 90 -t 1 2 3 -s 2")).unwrap();
+        let p = Primitive {
+            modifier: "void".into(),
+            ptype: "brighttext".into(),
+            name: "t".into(),
+            sargs: w("helvet.fnt . AI"),
+            iargs: vec![],
+            rargs: vec![0.0, 1.0, 0.0, 1.0, 0.0, 0.0, 0.0, -1.0, 0.0, 2.0, 0.5],
+            loc: crate::scene::Location::new("t", 1),
+        };
+        let q = t.apply(&p).unwrap();
+        assert_eq!(q.sargs, p.sargs);
+        let want = [0.0, 4.0, 6.0, 0.0, 2.0, 0.0, 2.0, 0.0, 0.0, 2.0, 0.5];
+        for (a, b) in q.rargs.iter().zip(want) {
+            assert!((a - b).abs() < 1e-12, "{:?}", q.rargs);
+        }
+        let mut short = p.clone();
+        short.rargs.truncate(3);
+        assert!(t.apply(&short).is_err());
     }
 
     #[test]

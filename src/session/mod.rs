@@ -37,6 +37,9 @@ pub struct SceneSource {
     pub prims: Vec<Primitive>,
     /// [`crate::ambient::fingerprint::fingerprint`] of the primitives and the parameters.
     pub fingerprint: [u8; 32],
+    /// Where files named by modifiers (fonts, data files, pictures) are looked up (the
+    /// RAYPATH the scene was read with).
+    pub raypath: Vec<std::path::PathBuf>,
 }
 
 impl SceneSource {
@@ -44,7 +47,11 @@ impl SceneSource {
     pub fn read(files: &[String], ro: &ReadOptions, params: &RenderParams) -> Result<SceneSource> {
         let prims = read_scene_files(files, ro)?;
         let fingerprint = crate::ambient::fingerprint::fingerprint(&prims, params);
-        Ok(SceneSource { prims, fingerprint })
+        Ok(SceneSource {
+            prims,
+            fingerprint,
+            raypath: ro.raypath.clone(),
+        })
     }
 }
 
@@ -90,7 +97,7 @@ impl Session {
         source: SceneSource,
         threads: Option<usize>,
     ) -> Result<Session> {
-        let scene = Scene::build(&source.prims)?;
+        let scene = Scene::build_on(&source.prims, &source.raypath)?;
         let mut warnings = scene.warnings.clone();
         let lights = LightSet::collect(&scene, params.dr);
         warnings.extend(lights.warnings.iter().cloned());
