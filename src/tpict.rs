@@ -159,6 +159,9 @@ fn render_command(args: &[String], opts: &RpictOptions, log: &Log) -> Result<()>
     if opts.picture.pm != 0.0 || opts.picture.pd != 0.0 {
         bail!("-pm (motion blur) and -pd (depth of field) are not supported yet; use -pm 0 -pd 0");
     }
+    if let Some(why) = opts.params.refused() {
+        bail!("{why}");
+    }
     let mut session = start_session(opts, log)?;
     let amb_file = open_stores(&mut session, &opts.run, log)?;
     let run = Run {

@@ -306,6 +306,9 @@ pub fn create_job(dir: &Path, req: &PlanRequest) -> Result<Manifest> {
     if opts.picture.pm != 0.0 || opts.picture.pd != 0.0 {
         bail!("-pm (motion blur) and -pd (depth of field) are not supported yet; use -pm 0 -pd 0");
     }
+    if let Some(why) = opts.params.refused() {
+        bail!("{why}");
+    }
     if opts.scene_files.is_empty() {
         bail!("no scene files given (a job cannot read its scene from standard input)");
     }

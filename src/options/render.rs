@@ -3,7 +3,7 @@
 //! `--amb-*`). Kept in job manifests and hashed (in part) into the ambient fingerprint.
 
 use super::words::{
-    arg, bool_option, f1, f3, i1, nonneg3, nonneg_i32, range, split_words, unsupported, OptError,
+    arg, bool_option, f1, f3, i1, nonneg3, nonneg_i32, range, split_words, OptError,
 };
 use crate::ambient::settings::AmbientSettings;
 
@@ -107,6 +107,17 @@ impl Default for RenderParams {
 }
 
 impl RenderParams {
+    /// Why these settings cannot be rendered, if they ask for something Tessera refuses
+    /// rather than ignores: a participating medium (`-me` above zero; rpict would render
+    /// one). Parsing accepts them all (`-defaults` prints them as rpict does).
+    pub fn refused(&self) -> Option<String> {
+        self.me.iter().any(|&c| c > 0.0).then(|| {
+            "option -me is not supported: a participating medium (mist) is not implemented; \
+             rpict would render one. Remove -me or give -me 0 0 0"
+                .to_string()
+        })
+    }
+
     /// Try to apply one rendering option at `words[0]`. Returns `Ok(Some(n_words_consumed))`
     /// if it was a rendering option, `Ok(None)` if not, and an error for bad values, photon
     /// map / spectral options (not supported) or mixing `-ae` and `-ai`.
@@ -239,16 +250,7 @@ impl RenderParams {
                 2
             }
             "-me" => {
-                let me = nonneg3(o, f3(words)?)?;
-                if me.iter().any(|&c| c > 0.0) {
-                    // Never ignore a medium: rpict's picture would differ completely.
-                    return Err(unsupported(
-                        o,
-                        "a participating medium (mist) is not implemented; rpict would \
-                         render one. Remove -me or give -me 0 0 0",
-                    ));
-                }
-                self.me = me;
+                self.me = nonneg3(o, f3(words)?)?;
                 4
             }
             "-ma" => {
