@@ -152,6 +152,7 @@ impl Parser<'_, '_> {
             cache: &mut [],
             tick: 0,
             depth: 0,
+            stack: super::eval::stack_here(),
             fatal: None,
         };
         let r = f(&mut m);

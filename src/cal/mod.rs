@@ -41,7 +41,8 @@
 //! expression"); lazy, per-call cached arguments; function names as arguments; master's
 //! run-time error rules (NaN → domain, ±Inf → range from library calls and `^`; division
 //! by zero → range; `select` out of range → domain). Evaluation depth is limited to
-//! [`MAX_DEPTH`] nested node evaluations (a fatal error, never a stack overflow), and an
+//! [`MAX_DEPTH`] nested node evaluations or [`MAX_STACK`] bytes of stack (a fatal error,
+//! never a stack overflow), and an
 //! expression's tree to 2000 levels. Not implemented: `source_corr`, `source_theta`,
 //! `source_phi`, `fprism_val` (their definitions are not in the reference).
 
@@ -58,7 +59,7 @@ mod program;
 
 pub use builder::{CalBuilder, BRDF_VARS, BUILTIN_RAYINIT, CHANNELS};
 pub use error::{CalError, EvalError};
-pub use eval::MAX_DEPTH;
+pub use eval::{MAX_DEPTH, MAX_STACK};
 pub use noise::{fnoise3, noise3};
 pub use program::{Evaluation, Program};
 

@@ -93,6 +93,7 @@ impl Evaluation<'_> {
             cache: &mut self.cache,
             tick: self.tick,
             depth: 0,
+            stack: super::eval::stack_here(),
             fatal: None,
         };
         let r = f(&mut m);
