@@ -7,6 +7,8 @@
 //! - [`scene`]: the scene language (lexer → primitives → scene), inline commands, `xform`,
 //!   `genbox`.
 //! - [`geometry`]: one file per surface kind, plus the BVH wrapper (obvhs).
+//! - [`cal`]: Radiance's function language (`.cal` files and the expressions of patterns,
+//!   textures, mixtures and procedural materials), compiled once and evaluated per ray.
 //! - [`material`] and [`modifier`]: materials, and the patterns, textures and mixtures that
 //!   modify them (the chain the tracer walks over a shading point).
 //! - [`light`]: light sources and direct lighting.
@@ -23,6 +25,7 @@
 //! - [`job`]: the batch toolkit's job directory: plan, workers, merge, assembly, status.
 
 pub mod ambient;
+pub mod cal;
 pub mod color;
 pub mod fault;
 pub mod geometry;

@@ -1,0 +1,479 @@
+//! The evaluator: a recursive walk over the node arena with lazy, per-call cached
+//! arguments, per-evaluation cached variables and a depth limit.
+//!
+//! Errors travel as a small [`Trap`]; a fatal error's message is kept in the machine
+//! until the public API turns it into [`super::EvalError::Fatal`].
+
+use super::code::{Callee, Code, Def, Node, NodeId, Op, SlotId};
+use super::library::Lib;
+use super::noise;
+use super::Env;
+use std::cell::Cell;
+
+/// The deepest nesting of node evaluations (expression depth plus function and variable
+/// calls, added up) one evaluation may reach; deeper is the fatal error "recursion too
+/// deep". A release build uses about 600 KB of stack for this depth.
+pub const MAX_DEPTH: u32 = 3000;
+
+/// The stack one evaluation may use, whichever limit comes first (debug builds have much
+/// larger frames): a runaway recursion is a fatal error, never a stack overflow, even on a
+/// 2 MB thread.
+pub const MAX_STACK: usize = 1 << 20;
+
+/// An address on the current stack.
+#[inline(always)]
+pub(crate) fn stack_here() -> usize {
+    let marker = 0u8;
+    std::hint::black_box(&marker) as *const u8 as usize
+}
+
+/// Arguments cached per call (Radiance caches the first 10; later ones are re-evaluated on
+/// each use, which is equivalent since evaluation has no side effects).
+const NCACHE: usize = 8;
+
+/// A run-time error inside the machine.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(crate) enum Trap {
+    Domain,
+    Range,
+    /// The message is in [`Machine::fatal`].
+    Fatal,
+}
+
+pub(crate) type R = Result<f64, Trap>;
+
+/// A cached variable value: valid when `tick` is the evaluation's tick.
+#[derive(Debug, Clone, Copy, Default)]
+pub(crate) struct Entry {
+    pub tick: u64,
+    pub value: f64,
+}
+
+/// Where a call's arguments come from.
+#[derive(Clone, Copy)]
+pub(crate) enum ArgSrc<'f> {
+    /// No arguments (a variable or top-level expression).
+    None,
+    /// Argument expressions, evaluated lazily in the caller's frame.
+    Nodes {
+        list: &'f [NodeId],
+        caller: &'f Frame<'f>,
+    },
+    /// Values given by the host program.
+    Values(&'f [f64]),
+}
+
+impl ArgSrc<'_> {
+    fn len(&self) -> usize {
+        match self {
+            ArgSrc::None => 0,
+            ArgSrc::Nodes { list, .. } => list.len(),
+            ArgSrc::Values(v) => v.len(),
+        }
+    }
+}
+
+/// One function call's frame.
+pub(crate) struct Frame<'f> {
+    src: ArgSrc<'f>,
+    /// The function called (for messages); u32::MAX at top level.
+    func: SlotId,
+    done: Cell<u32>,
+    vals: [Cell<f64>; NCACHE],
+}
+
+impl<'f> Frame<'f> {
+    pub fn new(src: ArgSrc<'f>, func: SlotId) -> Frame<'f> {
+        Frame {
+            src,
+            func,
+            done: Cell::new(0),
+            vals: Default::default(),
+        }
+    }
+
+    pub fn top() -> Frame<'static> {
+        Frame::new(ArgSrc::None, u32::MAX)
+    }
+}
+
+/// The evaluator's state for one evaluation.
+pub(crate) struct Machine<'a> {
+    pub code: &'a Code,
+    /// None: constant mode (folding while compiling), where ray data is an error.
+    pub env: Option<&'a Env<'a>>,
+    pub cache: &'a mut [Entry],
+    pub tick: u64,
+    pub depth: u32,
+    /// [`stack_here`] where the evaluation started.
+    pub stack: usize,
+    pub fatal: Option<String>,
+}
+
+fn check(v: f64) -> R {
+    if v.is_nan() {
+        Err(Trap::Domain)
+    } else if v.is_infinite() {
+        Err(Trap::Range)
+    } else {
+        Ok(v)
+    }
+}
+
+/// A fatal error, described when it happens (out of line: keeps the evaluator's frames
+/// small).
+#[derive(Clone, Copy)]
+enum Fail {
+    TooDeep(NodeId),
+    ConstChan(u32, NodeId),
+    BadChan(u32, NodeId),
+    ConstVar(SlotId, NodeId),
+    NoBrdf(SlotId, NodeId),
+    FuncAsVar(SlotId, NodeId),
+    UndefVar(SlotId, NodeId),
+    FewArgs(SlotId, usize),
+    UndefFunc(SlotId, NodeId),
+    NotFunc(SlotId, NodeId),
+    FewFuncArgs(SlotId, usize, NodeId),
+    NotFuncName(SlotId, usize, NodeId),
+    FewLibArgs(Lib, NodeId),
+    ConstArg(NodeId),
+    MissingArg(i64, usize, NodeId),
+}
+
+impl<'a> Machine<'a> {
+    fn at(&self, node: NodeId) -> String {
+        match self.code.locs.get(node as usize) {
+            Some(l) => self.code.place(*l),
+            None => "a call from the renderer".to_string(),
+        }
+    }
+
+    fn defined_at(&self, s: SlotId) -> String {
+        self.code.place(self.code.slots[s as usize].def_loc)
+    }
+
+    #[cold]
+    #[inline(never)]
+    fn fail(&mut self, f: Fail) -> Trap {
+        let name = |s: SlotId| self.code.name(s).to_string();
+        let msg = match f {
+            Fail::TooDeep(n) => format!(
+                "recursion too deep (more than {MAX_DEPTH} nested evaluations or {} KB of \
+                 stack) at {}",
+                MAX_STACK >> 10,
+                self.at(n)
+            ),
+            Fail::ConstChan(c, n) => format!(
+                "ray parameter used in constant expression (${c} at {})",
+                self.at(n)
+            ),
+            Fail::BadChan(c, n) => format!("illegal channel number ${c} at {}", self.at(n)),
+            Fail::ConstVar(s, n) => format!(
+                "ray parameter used in constant expression ({} at {})",
+                name(s),
+                self.at(n)
+            ),
+            Fail::NoBrdf(s, n) => format!(
+                "{}: undefined variable (only BRDF materials define it; used at {})",
+                name(s),
+                self.at(n)
+            ),
+            Fail::FuncAsVar(s, n) => format!(
+                "{}: function used as a variable at {} (defined at {})",
+                name(s),
+                self.at(n),
+                self.defined_at(s)
+            ),
+            Fail::UndefVar(s, n) => {
+                format!("{}: undefined variable (used at {})", name(s), self.at(n))
+            }
+            Fail::FewArgs(s, i) => format!(
+                "{}(): too few arguments (parameter {} used; {} defined at {})",
+                name(s),
+                i + 1,
+                name(s),
+                self.defined_at(s)
+            ),
+            Fail::UndefFunc(s, n) => {
+                format!("{}(): undefined function (called at {})", name(s), self.at(n))
+            }
+            Fail::NotFunc(s, n) => format!(
+                "{}(): not a function (defined as a variable at {}, called at {})",
+                name(s),
+                self.defined_at(s),
+                self.at(n)
+            ),
+            Fail::FewFuncArgs(s, i, n) => format!(
+                "{}(): too few arguments (function parameter {} called at {})",
+                name(s),
+                i + 1,
+                self.at(n)
+            ),
+            Fail::NotFuncName(s, i, n) => format!(
+                "{}(): argument {} is not a function name (called at {})",
+                name(s),
+                i + 1,
+                self.at(n)
+            ),
+            Fail::FewLibArgs(l, n) => {
+                format!("{}(): too few arguments (called at {})", l.name(), self.at(n))
+            }
+            Fail::ConstArg(n) => format!(
+                "arg() used in a constant expression at {} (a ':' definition that depends \
+                 on the primitive's arguments?)",
+                self.at(n)
+            ),
+            Fail::MissingArg(k, have, n) => format!(
+                "missing real argument {k} (the primitive has {have}; arg() called at {})",
+                self.at(n)
+            ),
+        };
+        if self.fatal.is_none() {
+            self.fatal = Some(msg);
+        }
+        Trap::Fatal
+    }
+
+    /// Evaluate node `n` in frame `f`.
+    pub fn eval(&mut self, n: NodeId, f: &Frame) -> R {
+        self.depth += 1;
+        if self.depth > MAX_DEPTH || self.stack.abs_diff(stack_here()) > MAX_STACK {
+            return Err(self.fail(Fail::TooDeep(n)));
+        }
+        let r = match self.code.nodes[n as usize] {
+            Node::Num(v) => Ok(v),
+            Node::Chan(c) => match self.env {
+                Some(env) if (1..=27).contains(&c) => Ok(env.chan[c as usize - 1]),
+                Some(_) => Err(self.fail(Fail::BadChan(c, n))),
+                None => Err(self.fail(Fail::ConstChan(c, n))),
+            },
+            Node::Var(s) => self.var(s, n),
+            Node::Param(i) => {
+                let i = i as usize;
+                if i < NCACHE && f.done.get() >> i & 1 == 1 {
+                    Ok(f.vals[i].get())
+                } else {
+                    self.param(f, i)
+                }
+            }
+            Node::Neg(a) => self.eval(a, f).map(|v| -v),
+            Node::Bin(op, a, b) => match self.eval(a, f) {
+                Ok(x) => match self.eval(b, f) {
+                    Ok(y) => binop(op, x, y),
+                    Err(e) => Err(e),
+                },
+                Err(e) => Err(e),
+            },
+            Node::Call { callee, first, n: k } => self.call(callee, first, k, f, n),
+        };
+        self.depth -= 1;
+        r
+    }
+
+    #[inline(never)]
+    fn call(&mut self, callee: Callee, first: u32, k: u16, f: &Frame, n: NodeId) -> R {
+        let list = self.code.args(first, k);
+        let src = ArgSrc::Nodes { list, caller: f };
+        match callee {
+            Callee::Slot(s) => self.call_slot(s, src, n),
+            Callee::Lib(l) => self.lib(l, src, n),
+            Callee::Param(i) => self.call_param(f, i as usize, src, n),
+        }
+    }
+
+    /// The value of variable slot `s`, referenced at node `site`.
+    #[inline(never)]
+    pub fn var(&mut self, s: SlotId, site: NodeId) -> R {
+        match self.code.slots[s as usize].def {
+            Def::Num(v) => Ok(v),
+            Def::Var { expr, .. } => {
+                if self.env.is_none() {
+                    return self.eval(expr, &Frame::top());
+                }
+                let e = self.cache[s as usize];
+                if e.tick == self.tick {
+                    return Ok(e.value);
+                }
+                let v = self.eval(expr, &Frame::top())?;
+                self.cache[s as usize] = Entry {
+                    tick: self.tick,
+                    value: v,
+                };
+                Ok(v)
+            }
+            Def::Brdf(i) => match self.env.map(|e| e.brdf) {
+                None => Err(self.fail(Fail::ConstVar(s, site))),
+                Some(Some(b)) => Ok(b[i as usize]),
+                Some(None) => Err(self.fail(Fail::NoBrdf(s, site))),
+            },
+            Def::Func { .. } => Err(self.fail(Fail::FuncAsVar(s, site))),
+            Def::None => Err(self.fail(Fail::UndefVar(s, site))),
+        }
+    }
+
+    /// Parameter `i` of frame `f` (not cached yet): evaluated in the caller's frame.
+    #[inline(never)]
+    fn param(&mut self, f: &Frame, i: usize) -> R {
+        let v = match f.src {
+            ArgSrc::Nodes { list, caller } if i < list.len() => self.eval(list[i], caller)?,
+            ArgSrc::Values(v) if i < v.len() => v[i],
+            _ => return Err(self.fail(Fail::FewArgs(f.func, i))),
+        };
+        if i < NCACHE {
+            f.vals[i].set(v);
+            f.done.set(f.done.get() | 1 << i);
+        }
+        Ok(v)
+    }
+
+    /// Call the definition of slot `s` (or its library fallback) at node `site`.
+    pub fn call_slot(&mut self, s: SlotId, src: ArgSrc, site: NodeId) -> R {
+        let slot = &self.code.slots[s as usize];
+        match slot.def {
+            Def::Func { body, .. } => {
+                let frame = Frame::new(src, s);
+                self.eval(body, &frame)
+            }
+            Def::None => match slot.lib {
+                Some(l) => self.lib(l, src, site),
+                None => Err(self.fail(Fail::UndefFunc(s, site))),
+            },
+            _ => Err(self.fail(Fail::NotFunc(s, site))),
+        }
+    }
+
+    /// Call the function whose name the caller of frame `f` passed as parameter `i`.
+    fn call_param(&mut self, f: &Frame, i: usize, src: ArgSrc, site: NodeId) -> R {
+        let mut frame = f;
+        let mut i = i;
+        loop {
+            let (list, caller) = match frame.src {
+                ArgSrc::Nodes { list, caller } if i < list.len() => (list, caller),
+                _ => return Err(self.fail(Fail::FewFuncArgs(frame.func, i, site))),
+            };
+            match self.code.nodes[list[i] as usize] {
+                Node::Var(s) => return self.call_slot(s, src, site),
+                Node::Param(j) => {
+                    frame = caller;
+                    i = j as usize;
+                }
+                _ => return Err(self.fail(Fail::NotFuncName(frame.func, i, site))),
+            }
+        }
+    }
+
+    /// Argument `i` of a library call.
+    #[inline]
+    fn arg(&mut self, src: &ArgSrc, i: usize, l: Lib, site: NodeId) -> R {
+        match *src {
+            ArgSrc::Nodes { list, caller } if i < list.len() => self.eval(list[i], caller),
+            ArgSrc::Values(v) if i < v.len() => Ok(v[i]),
+            _ => Err(self.fail(Fail::FewLibArgs(l, site))),
+        }
+    }
+
+    /// Call library function `l`.
+    pub fn lib(&mut self, l: Lib, src: ArgSrc, site: NodeId) -> R {
+        if let Some(f) = l.unary() {
+            let x = self.arg(&src, 0, l, site)?;
+            return check(f(x));
+        }
+        match l {
+            Lib::If => {
+                let c = self.arg(&src, 0, l, site)?;
+                self.arg(&src, if c > 0.0 { 1 } else { 2 }, l, site)
+            }
+            _ => self.lib_other(l, src, site),
+        }
+    }
+
+    #[inline(never)]
+    fn lib_other(&mut self, l: Lib, src: ArgSrc, site: NodeId) -> R {
+        match l {
+            Lib::Select => {
+                let d = self.arg(&src, 0, l, site)? + 0.5;
+                if !(d >= 0.0) {
+                    return Err(Trap::Domain);
+                }
+                let count = src.len().saturating_sub(1);
+                let k = d.trunc();
+                if k == 0.0 {
+                    Ok(count as f64)
+                } else if k > count as f64 {
+                    Err(Trap::Domain)
+                } else {
+                    self.arg(&src, k as usize, l, site)
+                }
+            }
+            Lib::Min | Lib::Max => {
+                // From the last argument backwards, as Radiance (a NaN last argument wins).
+                let n = src.len();
+                let mut best = self.arg(&src, n.max(1) - 1, l, site)?;
+                for i in (0..n.saturating_sub(1)).rev() {
+                    let a = self.arg(&src, i, l, site)?;
+                    if (l == Lib::Min && a < best) || (l == Lib::Max && a > best) {
+                        best = a;
+                    }
+                }
+                check(best)
+            }
+            Lib::Atan2 => {
+                let y = self.arg(&src, 0, l, site)?;
+                let x = self.arg(&src, 1, l, site)?;
+                check(y.atan2(x))
+            }
+            Lib::Arg => self.arg_fn(&src, site),
+            _ => {
+                let x = self.arg(&src, 0, l, site)?;
+                let y = self.arg(&src, 1, l, site)?;
+                let z = self.arg(&src, 2, l, site)?;
+                check(noise_fn(l, x, y, z))
+            }
+        }
+    }
+
+    /// `arg(n)`: the primitive's real arguments.
+    fn arg_fn(&mut self, src: &ArgSrc, site: NodeId) -> R {
+        let x = self.arg(src, 0, Lib::Arg, site)?;
+        let Some(env) = self.env else {
+            return Err(self.fail(Fail::ConstArg(site)));
+        };
+        let k = (x + 0.5) as i64;
+        if k < 1 {
+            return Ok(env.args.len() as f64);
+        }
+        match env.args.get(k as usize - 1) {
+            Some(v) => Ok(*v),
+            None => Err(self.fail(Fail::MissingArg(k, env.args.len(), site))),
+        }
+    }
+}
+
+#[inline(never)]
+fn noise_fn(l: Lib, x: f64, y: f64, z: f64) -> f64 {
+    match l {
+        Lib::Noise3 => noise::noise3(x, y, z),
+        Lib::Noise3x => noise::noise3_d(0, x, y, z),
+        Lib::Noise3y => noise::noise3_d(1, x, y, z),
+        Lib::Noise3z => noise::noise3_d(2, x, y, z),
+        _ => noise::fnoise3(x, y, z),
+    }
+}
+
+/// A binary operator with Radiance master's error rules.
+pub(crate) fn binop(op: Op, x: f64, y: f64) -> R {
+    match op {
+        Op::Add => Ok(x + y),
+        Op::Sub => Ok(x - y),
+        Op::Mul => Ok(x * y),
+        Op::Div => {
+            if y == 0.0 {
+                Err(Trap::Range)
+            } else {
+                Ok(x / y)
+            }
+        }
+        Op::Pow => check(x.powf(y)),
+    }
+}

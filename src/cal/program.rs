@@ -1,0 +1,132 @@
+//! [`Program`] (immutable, shared by threads) and [`Evaluation`] (one tick of Radiance's
+//! evaluation clock, with this thread's variable cache).
+
+use super::code::{Code, NodeId};
+use super::eval::{ArgSrc, Entry, Frame, Machine, Trap};
+use super::{Env, EvalError, ExprId, FuncRef};
+use std::cell::{Cell, RefCell};
+use std::sync::atomic::{AtomicU64, Ordering};
+
+static NEXT_ID: AtomicU64 = AtomicU64::new(1);
+
+/// Caches kept per thread, for the programs it used last.
+const POOL_SIZE: usize = 16;
+
+thread_local! {
+    /// Variable caches not in use, by program id.
+    static POOL: RefCell<Vec<(u64, Vec<Entry>)>> = const { RefCell::new(Vec::new()) };
+    /// This thread's evaluation clock.
+    static TICK: Cell<u64> = const { Cell::new(0) };
+}
+
+/// Compiled definitions and expressions. Immutable; evaluate it from any number of threads
+/// with [`Program::begin`].
+#[derive(Debug)]
+pub struct Program {
+    code: Code,
+    exprs: Vec<NodeId>,
+    outputs: Vec<(u32, ExprId)>,
+    id: u64,
+}
+
+impl Program {
+    pub(crate) fn new(code: Code, exprs: Vec<NodeId>, outputs: Vec<(u32, ExprId)>) -> Program {
+        Program {
+            code,
+            exprs,
+            outputs,
+            id: NEXT_ID.fetch_add(1, Ordering::Relaxed),
+        }
+    }
+
+    /// Start one evaluation (Radiance's clock tick for one (modifier, ray) pair): every
+    /// [`Evaluation::eval`] and [`Evaluation::call`] made through it shares variable values.
+    /// Evaluations may nest on one thread; each has its own cache.
+    pub fn begin<'a>(&'a self, env: &'a Env<'a>) -> Evaluation<'a> {
+        let tick = TICK.with(|t| {
+            t.set(t.get() + 1);
+            t.get()
+        });
+        let n = self.code.slots.len();
+        let cache = POOL
+            .try_with(|p| {
+                let mut p = p.borrow_mut();
+                p.iter()
+                    .rposition(|(id, _)| *id == self.id)
+                    .map(|i| p.swap_remove(i).1)
+            })
+            .ok()
+            .flatten()
+            .unwrap_or_else(|| vec![Entry::default(); n]);
+        Evaluation {
+            prog: self,
+            env,
+            cache,
+            tick,
+        }
+    }
+
+    /// The rcalc-style outputs (`$N = expr`) in definition order.
+    pub fn outputs(&self) -> &[(u32, ExprId)] {
+        &self.outputs
+    }
+
+    /// Number of compiled nodes (a size figure for tests and statistics).
+    pub fn node_count(&self) -> usize {
+        self.code.nodes.len()
+    }
+}
+
+/// One evaluation of a [`Program`] for one environment.
+pub struct Evaluation<'a> {
+    prog: &'a Program,
+    env: &'a Env<'a>,
+    cache: Vec<Entry>,
+    tick: u64,
+}
+
+impl Evaluation<'_> {
+    fn run(&mut self, f: impl FnOnce(&mut Machine) -> Result<f64, Trap>) -> Result<f64, EvalError> {
+        let mut m = Machine {
+            code: &self.prog.code,
+            env: Some(self.env),
+            cache: &mut self.cache,
+            tick: self.tick,
+            depth: 0,
+            stack: super::eval::stack_here(),
+            fatal: None,
+        };
+        let r = f(&mut m);
+        r.map_err(|t| match t {
+            Trap::Domain => EvalError::Domain,
+            Trap::Range => EvalError::Range,
+            Trap::Fatal => EvalError::Fatal(m.fatal.take().unwrap_or_default()),
+        })
+    }
+
+    /// The value of a compiled expression.
+    pub fn eval(&mut self, e: ExprId) -> Result<f64, EvalError> {
+        let node = self.prog.exprs[e.0 as usize];
+        self.run(|m| m.eval(node, &Frame::top()))
+    }
+
+    /// Call a function with values.
+    pub fn call(&mut self, f: FuncRef, args: &[f64]) -> Result<f64, EvalError> {
+        self.run(|m| m.call_slot(f.0, ArgSrc::Values(args), u32::MAX))
+    }
+}
+
+impl Drop for Evaluation<'_> {
+    fn drop(&mut self) {
+        let cache = std::mem::take(&mut self.cache);
+        let id = self.prog.id;
+        let _ = POOL.try_with(|p| {
+            if let Ok(mut p) = p.try_borrow_mut() {
+                if p.len() >= POOL_SIZE {
+                    p.remove(0);
+                }
+                p.push((id, cache));
+            }
+        });
+    }
+}
