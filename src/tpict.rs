@@ -320,7 +320,8 @@ impl Run<'_> {
             x1: x,
             y1: y,
         };
-        let pixels = self.with_reports(&progress, start, || session.render(&fs, region, &progress));
+        let pixels =
+            self.with_reports(&progress, start, || session.render(&fs, region, &progress))?;
         if let Ok(mut st) = self.stats.lock() {
             let rays = progress.rays.load(Ordering::Relaxed);
             st.total_rays += rays;

@@ -215,16 +215,16 @@ fn wrong_chains_are_refused_with_file_and_line() {
     assert!(e.contains("must be void"), "{e}");
     let e = err("void colorfunc floor 0 0 2 1 1");
     assert!(e.contains("takes 3 real arguments"), "{e}");
-    // Without the test types, Radiance's pattern types are refused as unsupported.
+    // Radiance's types Tessera lacks are refused as unsupported.
     let prims = parse_scene_text(
-        &floor_scene("void colorfunc floor 4 1 1 1 . 0 0"),
+        &floor_scene("void specfunc floor 2 sf . 0 2 380 780"),
         "t.rad",
         &ReadOptions::default(),
     )
     .unwrap();
     let e = Scene::build(&prims).err().unwrap().to_string();
     assert!(
-        e.contains("t.rad:3") && e.contains("unsupported primitive type colorfunc"),
+        e.contains("t.rad:3") && e.contains("unsupported primitive type specfunc"),
         "{e}"
     );
 }

@@ -197,6 +197,25 @@ fn adaptive_sampling_default_ps_matches_every_pixel_rpict() {
         res: RES,
     });
 }
+/// Function and data patterns, a texture, an alias of a pattern and a function mixture
+/// (tests/scenes/patterns: colorfunc with a function file and a transform, texfunc,
+/// brightfunc, brightdata, mixfunc with noise3), at `-ab 0` and `-ab 1`.
+#[test]
+fn patterns_textures_and_mixtures_with_functions_and_data() {
+    for ab in ["0", "1"] {
+        check(&Case {
+            dir: "patterns",
+            files: &["patterns.rad"],
+            view: "patterns.vf",
+            opts: &[
+                "-ab", ab, "-av", ".05", ".05", ".05", "-ps", "1", "-pj", "0",
+            ],
+            ours_extra: &[],
+            res: RES,
+        });
+    }
+}
+
 /// `-i`: irradiance through transparent materials. rpict's irradiance rays pass straight
 /// through glass, trans, dielectric and interface surfaces (before, tpict shaded them as
 /// white diffuse surfaces: a glass pane 0.462 against rpict's 0.265).

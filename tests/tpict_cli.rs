@@ -246,13 +246,8 @@ fn octree_argument_is_refused_with_an_explanation() {
 #[test]
 fn unsupported_primitive_types_are_named_with_location() {
     for (ty, args) in [
-        ("brightfunc", "2 refl funcs.cal\n0\n0\n"),
-        ("texfunc", "4 dx dy dz funcs.cal\n0\n0\n"),
-        (
-            "colorpict",
-            "7 red green blue pic.hdr picture.cal pic_u pic_v\n0\n0\n",
-        ),
-        ("mixfunc", "4 red grey mix funcs.cal\n0\n0\n"),
+        ("specfunc", "2 sf funcs.cal\n0\n2 380 780\n"),
+        ("prism1", "5 coef dx dy dz prism.cal\n0\n0\n"),
     ] {
         let text =
             format!("{LAMP}\nvoid {ty} pat\n{args}\npat plastic red\n0\n0\n5 .5 .5 .5 0 0\n");
@@ -262,6 +257,42 @@ fn unsupported_primitive_types_are_named_with_location() {
             &[&format!("unsupported primitive type {ty}")],
         );
     }
+}
+
+/// A pattern whose function file is missing: the error names the scene file and line, the
+/// primitive and the file it could not find.
+#[test]
+fn missing_function_files_are_named() {
+    for (ty, args) in [
+        ("brightfunc", "2 refl funcs.cal\n0\n0\n"),
+        ("texfunc", "4 dx dy dz funcs.cal\n0\n0\n"),
+        ("mixfunc", "4 red grey mix funcs.cal\n0\n0\n"),
+    ] {
+        let text =
+            format!("{LAMP}\nvoid {ty} pat\n{args}\npat plastic red\n0\n0\n5 .5 .5 .5 0 0\n");
+        scene_error(
+            &[("pat.rad", &text)],
+            "pat.rad:11:",
+            &["funcs.cal", "cannot find function file"],
+        );
+    }
+}
+
+/// Errors in expressions: a syntax error is a load-time error naming the scene file and
+/// line; an undefined variable met while rendering stops the render (rpict's fatal error),
+/// names the variable and the primitive, and writes no picture.
+#[test]
+fn expression_errors_stop_with_a_message() {
+    let floor = "\npat plastic red\n0\n0\n5 .5 .5 .5 0 0\n\
+                 red polygon floor\n0\n0\n12 -9 -9 0 9 -9 0 9 9 0 -9 9 0\n";
+    let text = format!("{LAMP}\nvoid brightfunc pat\n2 Px*(2 .\n0\n0\n{floor}");
+    scene_error(&[("pat.rad", &text)], "pat.rad:11", &["')' expected"]);
+    let text = format!("{LAMP}\nvoid brightfunc pat\n2 Px*nosuchvar .\n0\n0\n{floor}");
+    scene_error(
+        &[("pat.rad", &text)],
+        "pat.rad:11",
+        &["nosuchvar", "undefined"],
+    );
 }
 
 // ---------------------------------------------------------------------------------------

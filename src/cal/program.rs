@@ -130,3 +130,24 @@ impl Drop for Evaluation<'_> {
         });
     }
 }
+
+impl Program {
+    /// The number of parameters of `f`'s definition: Some(n) for a defined function,
+    /// Some(0) for a variable or constant, None for a library function or an undefined
+    /// name.
+    pub fn params(&self, f: FuncRef) -> Option<usize> {
+        use super::code::Def;
+        match self.code.slots.get(f.0 as usize)?.def {
+            Def::Func { nparams, .. } => Some(nparams as usize),
+            Def::Var { .. } | Def::Num(_) | Def::Brdf(_) => Some(0),
+            Def::None => None,
+        }
+    }
+}
+
+impl Evaluation<'_> {
+    /// The program being evaluated.
+    pub fn program(&self) -> &Program {
+        self.prog
+    }
+}

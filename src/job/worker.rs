@@ -551,7 +551,7 @@ impl Worker<'_> {
             x1: rect.x0 + rect.w,
             y1: rect.y0 + rect.h,
         };
-        let pixels = self.session.render(&fs, region, &progress);
+        let pixels = self.session.render(&fs, region, &progress)?;
         let wall = t0.elapsed();
         let counters = &self.beat.counters;
         add_time(&counters.render_ns, wall);

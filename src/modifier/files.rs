@@ -9,6 +9,7 @@
 
 use super::data::DataArray;
 use super::font::Font;
+use super::func::SceneFunctions;
 use super::picdata::PictData;
 use std::collections::HashMap;
 use std::path::{Path, PathBuf};
@@ -20,6 +21,7 @@ type Cache<T> = Mutex<HashMap<PathBuf, Result<Arc<T>, String>>>;
 #[derive(Default)]
 pub struct SceneFiles {
     raypath: Vec<PathBuf>,
+    functions: SceneFunctions,
     data: Cache<DataArray>,
     pictures: Cache<PictData>,
     fonts: Cache<Font>,
@@ -38,8 +40,14 @@ impl SceneFiles {
     pub fn new(raypath: &[PathBuf]) -> SceneFiles {
         SceneFiles {
             raypath: raypath.to_vec(),
+            functions: SceneFunctions::new(raypath),
             ..SceneFiles::default()
         }
+    }
+
+    /// The scene's function language state (function files found along the RAYPATH).
+    pub fn functions(&self) -> &SceneFunctions {
+        &self.functions
     }
 
     /// The RAYPATH directories searched (never empty).

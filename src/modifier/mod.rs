@@ -22,8 +22,11 @@ use std::collections::HashMap;
 use std::fmt::Debug;
 
 pub mod data;
+pub mod datapat;
 pub mod files;
 pub mod font;
+pub mod func;
+pub mod funcpat;
 pub mod picdata;
 pub mod text;
 
@@ -125,6 +128,16 @@ impl ModifierTypes {
             .with("brighttext", text::parse_brighttext)
             .with("colortext", text::parse_colortext)
             .with("mixtext", text::parse_mixtext)
+            .with("brightfunc", funcpat::parse_brightfunc)
+            .with("colorfunc", funcpat::parse_colorfunc)
+            .with("texfunc", funcpat::parse_texfunc)
+            .with("mixfunc", funcpat::parse_mixfunc)
+            .with("brightdata", datapat::parse_brightdata)
+            .with("colordata", datapat::parse_colordata)
+            .with("colorpict", datapat::parse_colorpict)
+            .with("texdata", datapat::parse_texdata)
+            .with("mixdata", datapat::parse_mixdata)
+            .with("mixpict", datapat::parse_mixpict)
     }
 
     /// These types and `name`, parsed by `parser` (a type of the same name is replaced).

@@ -182,6 +182,9 @@ pub fn render_region(
     overture(tr, fs, x0, x1, &overture_rows, progress);
     if ps == 1 {
         out.par_chunks_mut(w).enumerate().for_each(|(row, line)| {
+            if tr.scene.fatal_error().is_some() {
+                return;
+            }
             let mut rays = 0;
             for (i, px) in line.iter_mut().enumerate() {
                 let s = sample_pixel(tr, fs, x0 + i, y0 + row, &mut rays);
@@ -199,6 +202,9 @@ pub fn render_region(
         .map(|cy| {
             let mut rays = 0;
             let mut pix = Vec::new();
+            if tr.scene.fatal_error().is_some() {
+                return pix;
+            }
             for cx in cx0..cx1 {
                 render_cell(tr, fs, cx, cy, ps, &mut rays, &mut |x, y, c| {
                     if x >= x0 && x < x1 && y >= y0 && y < y1 {

@@ -8,13 +8,14 @@ use crate::geometry::source::DistantSource;
 use crate::geometry::Surface;
 use crate::material::{MatId, Material, MaterialLookup, MATERIAL_TYPES};
 use crate::modifier::{
-    ModRef, ModifierDef, ModifierKind, ModifierLookup, ModifierTypes, SceneFiles,
+    func::FuncShared, ModRef, ModifierDef, ModifierKind, ModifierLookup, ModifierTypes, SceneFiles,
 };
 use crate::scene::reader::KNOWN_TYPES;
 use crate::FTINY;
 use glam::DVec3;
 use std::collections::HashMap;
 use std::path::PathBuf;
+use std::sync::Arc;
 
 /// Surface primitive types (finite ones go into the BVH; `source` is distant).
 pub const SURFACE_TYPES: &[&str] = &[
@@ -118,6 +119,17 @@ pub struct Scene {
     pub bvh: Bvh,
     /// Warnings (degenerate geometry dropped, zero areas), each naming file:line.
     pub warnings: Vec<String>,
+    /// The function language program of the scene's patterns and materials, None when
+    /// no primitive uses functions.
+    pub functions: Option<Arc<FuncShared>>,
+}
+
+impl Scene {
+    /// The first fatal error of a function evaluation (rpict would have stopped): renders
+    /// stop early and the tools report it.
+    pub fn fatal_error(&self) -> Option<&str> {
+        self.functions.as_ref().and_then(|f| f.fatal())
+    }
 }
 
 struct Modifiers {
@@ -431,6 +443,7 @@ impl Scene {
         }
         let bounds: Vec<(DVec3, DVec3)> = objects.iter().map(|o| o.surface.bounds()).collect();
         let bvh = Bvh::build(&bounds, eps);
+        let functions = mods.files.functions().finish();
         Ok(Scene {
             origin,
             size,
@@ -441,6 +454,7 @@ impl Scene {
             distant,
             bvh,
             warnings,
+            functions,
         })
     }
 

@@ -193,11 +193,22 @@ impl Session {
         Tracer::new(&self.scene, &self.params, &self.lights).with_ambient(self.ambient.as_deref())
     }
 
-    /// Render a region of a frame on the session's threads.
-    pub fn render(&self, fs: &FrameSetup, r: Region, progress: &RenderProgress) -> Vec<[f32; 3]> {
+    /// Render a region of a frame on the session's threads. Fails when a function
+    /// evaluation met an error rpict treats as fatal (the render stops at the next row).
+    pub fn render(
+        &self,
+        fs: &FrameSetup,
+        r: Region,
+        progress: &RenderProgress,
+    ) -> Result<Vec<[f32; 3]>> {
         let tracer = self.tracer();
-        self.pool
-            .install(|| render_region(&tracer, fs, r.x0, r.y0, r.x1, r.y1, progress))
+        let pixels = self
+            .pool
+            .install(|| render_region(&tracer, fs, r.x0, r.y0, r.x1, r.y1, progress));
+        if let Some(e) = self.scene.fatal_error() {
+            anyhow::bail!("{e}");
+        }
+        Ok(pixels)
     }
 
     /// New ambient values made so far and the nanoseconds spent making them.

@@ -1,0 +1,261 @@
+//! Patterns, textures and mixtures over data files and pictures: `brightdata`,
+//! `colordata`, `texdata`, `mixdata`, `colorpict`, `mixpict` (radiance-formats.md §2.3;
+//! the files are read by [`super::data`] and [`super::picdata`]).
+//!
+//! ```text
+//! mod brightdata id  f dfile ff x1..xN [xf]                 pattern ×= f(interp)
+//! mod colordata  id  rf gf bf rfile gfile bfile ff x1..xN [xf]
+//! mod colorpict  id  rf gf bf pic ff u v [xf]
+//! mod texdata    id  fx fy fz xfile yfile zfile ff x1..xN [xf]
+//! void mixdata   id  fore back f dfile ff x1..xN [xf]       foreground share f(interp)
+//! void mixpict   id  fore back f pic ff u v [xf]            foreground share f(r, g, b)
+//! ```
+//! N is the data file's number of dimensions; the coordinates are expressions, the
+//! functions are names (in the context of `ff`). With three values (r, g, b) the red
+//! function gets all three, the green and blue functions their own value when they take
+//! fewer than three parameters, else all three.
+
+use super::data::DataArray;
+use super::func::{compile, finite, function, load_context, FuncCall};
+use super::picdata::PictData;
+use super::{MixCoefficient, ModifierKind, ModifierLookup, Pattern, Texture};
+use crate::cal::{EvalError, Evaluation, ExprId, FuncRef};
+use crate::color::Color;
+use crate::render::shading::ShadingPoint;
+use crate::scene::primitive::Primitive;
+use glam::DVec3;
+use std::sync::Arc;
+
+/// Where the values come from.
+#[derive(Debug)]
+enum Source {
+    /// One data file per value (1 or 3), all of the same dimensions.
+    Data(Vec<Arc<DataArray>>),
+    /// A picture: three values (r, g, b) at (u, v).
+    Picture(Arc<PictData>),
+}
+
+/// The common part: values at coordinates, then functions of them.
+#[derive(Debug)]
+struct DataCall {
+    call: FuncCall,
+    source: Source,
+    coords: Vec<ExprId>,
+    funcs: Vec<FuncRef>,
+    /// Whether later functions may take their own value (colour types) rather than all
+    /// three (texdata).
+    own_values: bool,
+}
+
+fn bad_count(p: &Primitive, need: usize) -> String {
+    format!(
+        "bad # arguments for {} \"{}\": {} string arguments, at least {need} needed",
+        p.ptype,
+        p.name,
+        p.sargs.len()
+    )
+}
+
+/// Parse `p`'s strings from `at`: `nf` function names, `nf` data files (or one picture),
+/// the function file, the coordinates, the transform.
+fn parse_call(
+    p: &Primitive,
+    l: &dyn ModifierLookup,
+    at: usize,
+    nf: usize,
+    picture: bool,
+) -> Result<DataCall, String> {
+    let s = &p.sargs;
+    let nfiles = if picture { 1 } else { nf };
+    let ff_at = at + nf + nfiles;
+    if s.len() <= ff_at {
+        return Err(bad_count(p, ff_at + 1));
+    }
+    let files = l.files();
+    let (source, ndims) = if picture {
+        (Source::Picture(files.picture(&s[at + nf])?), 2)
+    } else {
+        let data = s[at + nf..ff_at]
+            .iter()
+            .map(|n| files.data(n))
+            .collect::<Result<Vec<_>, _>>()?;
+        let n = data[0].dims();
+        if data.iter().any(|d| d.dims() != n) {
+            return Err(format!(
+                "{} \"{}\": data files of different dimensions",
+                p.ptype, p.name
+            ));
+        }
+        (Source::Data(data), n)
+    };
+    if s.len() < ff_at + 1 + ndims {
+        return Err(bad_count(p, ff_at + 1 + ndims));
+    }
+    let fns = files.functions();
+    let (funcs, coords) = fns.with(|b| {
+        let ctx = load_context(b, &s[ff_at])?;
+        let funcs = s[at..at + nf]
+            .iter()
+            .map(|n| function(b, n, ctx))
+            .collect::<Result<Vec<_>, _>>()?;
+        let coords = s[ff_at + 1..ff_at + 1 + ndims]
+            .iter()
+            .map(|t| compile(b, p, t, ctx))
+            .collect::<Result<Vec<_>, _>>()?;
+        Ok((funcs, coords))
+    })?;
+    let call = FuncCall::new(fns.shared(), p, ff_at + 1 + ndims)?;
+    Ok(DataCall {
+        call,
+        source,
+        coords,
+        funcs,
+        own_values: true,
+    })
+}
+
+impl DataCall {
+    /// The values at the evaluated coordinates: one or three.
+    fn values(&self, ev: &mut Evaluation) -> Result<[f64; 3], EvalError> {
+        let mut x = [0.0; 6];
+        for (xi, e) in x.iter_mut().zip(&self.coords) {
+            *xi = finite(ev.eval(*e)?)?;
+        }
+        let x = &x[..self.coords.len()];
+        Ok(match &self.source {
+            Source::Picture(p) => p.lookup(x[0], x[1]),
+            Source::Data(d) => {
+                let mut v = [0.0; 3];
+                for (vi, di) in v.iter_mut().zip(d) {
+                    *vi = di.interp(x);
+                }
+                v
+            }
+        })
+    }
+
+    /// Function `i` of the values: the first (and a single value's) function gets them
+    /// all, later ones their own when they take fewer than three parameters (colour
+    /// types).
+    fn apply(
+        &self,
+        ev: &mut Evaluation,
+        i: usize,
+        v: &[f64; 3],
+        n: usize,
+    ) -> Result<f64, EvalError> {
+        let f = self.funcs[i];
+        let own = i > 0 && self.own_values && ev.program().params(f).is_some_and(|k| k < 3);
+        let r = if n == 1 || own {
+            ev.call(f, &[v[i.min(n - 1)]])?
+        } else {
+            ev.call(f, &v[..n])?
+        };
+        finite(r)
+    }
+
+    /// Number of values per point.
+    fn width(&self) -> usize {
+        match &self.source {
+            Source::Picture(_) => 3,
+            Source::Data(d) => d.len(),
+        }
+    }
+
+    /// The functions' results (one per function).
+    fn results(&self, sp: &ShadingPoint) -> Option<[f64; 3]> {
+        self.call.eval(sp, None, |ev| {
+            let v = self.values(ev)?;
+            let n = self.width();
+            let mut out = [0.0; 3];
+            for (i, o) in out.iter_mut().enumerate().take(self.funcs.len()) {
+                *o = self.apply(ev, i, &v, n)?;
+            }
+            Ok(out)
+        })
+    }
+}
+
+#[derive(Debug)]
+struct DataPattern(DataCall);
+
+impl Pattern for DataPattern {
+    fn colour(&self, sp: &ShadingPoint) -> Option<Color> {
+        let r = self.0.results(sp)?;
+        Some(if self.0.funcs.len() == 1 {
+            Color::splat(r[0])
+        } else {
+            Color::new(r[0], r[1], r[2])
+        })
+    }
+}
+
+#[derive(Debug)]
+struct DataTexture(DataCall);
+
+impl Texture for DataTexture {
+    fn perturbation(&self, sp: &ShadingPoint) -> Option<DVec3> {
+        let r = self.0.results(sp)?;
+        Some(
+            self.0
+                .call
+                .frame()
+                .vector_to_world(sp, DVec3::from_array(r)),
+        )
+    }
+}
+
+#[derive(Debug)]
+struct DataMix(DataCall);
+
+impl MixCoefficient for DataMix {
+    fn coefficient(&self, sp: &ShadingPoint) -> Option<f64> {
+        self.0.results(sp).map(|r| r[0])
+    }
+}
+
+/// Parser of `brightdata`.
+pub fn parse_brightdata(p: &Primitive, l: &dyn ModifierLookup) -> Result<ModifierKind, String> {
+    Ok(ModifierKind::Pattern(Box::new(DataPattern(parse_call(
+        p, l, 0, 1, false,
+    )?))))
+}
+
+/// Parser of `colordata`.
+pub fn parse_colordata(p: &Primitive, l: &dyn ModifierLookup) -> Result<ModifierKind, String> {
+    Ok(ModifierKind::Pattern(Box::new(DataPattern(parse_call(
+        p, l, 0, 3, false,
+    )?))))
+}
+
+/// Parser of `colorpict`.
+pub fn parse_colorpict(p: &Primitive, l: &dyn ModifierLookup) -> Result<ModifierKind, String> {
+    Ok(ModifierKind::Pattern(Box::new(DataPattern(parse_call(
+        p, l, 0, 3, true,
+    )?))))
+}
+
+/// Parser of `texdata`: each function gets the three values.
+pub fn parse_texdata(p: &Primitive, l: &dyn ModifierLookup) -> Result<ModifierKind, String> {
+    let mut c = parse_call(p, l, 0, 3, false)?;
+    c.own_values = false;
+    Ok(ModifierKind::Texture(Box::new(DataTexture(c))))
+}
+
+/// Parser of `mixdata`.
+pub fn parse_mixdata(p: &Primitive, l: &dyn ModifierLookup) -> Result<ModifierKind, String> {
+    Ok(ModifierKind::Mixture {
+        coef: Box::new(DataMix(parse_call(p, l, 2, 1, false)?)),
+        foreground: l.modref(&p.sargs[0])?,
+        background: l.modref(&p.sargs[1])?,
+    })
+}
+
+/// Parser of `mixpict`: the function gets (r, g, b).
+pub fn parse_mixpict(p: &Primitive, l: &dyn ModifierLookup) -> Result<ModifierKind, String> {
+    Ok(ModifierKind::Mixture {
+        coef: Box::new(DataMix(parse_call(p, l, 2, 1, true)?)),
+        foreground: l.modref(&p.sargs[0])?,
+        background: l.modref(&p.sargs[1])?,
+    })
+}

@@ -1,0 +1,180 @@
+//! The function language in a scene: one [`CalBuilder`] while the scene is read, one
+//! [`Program`] after, shared by every pattern, texture, mixture and material that
+//! evaluates expressions ([`FuncCall`]).
+//!
+//! Only scenes that use functions create the builder (and load `rayinit.cal`): a scene
+//! without them renders exactly as before. A run-time error Radiance treats as fatal
+//! (an undefined name, too few arguments, `arg(n)` past the end, the recursion limit) is
+//! recorded once ([`FuncShared::fatal`]); renders stop at the next row and the tools report
+//! it with a non-zero exit. Domain and range errors skip the primitive for that ray, as
+//! Radiance does.
+
+use super::frame::PatternFrame;
+use crate::cal::{CalBuilder, Ctx, Env, EvalError, Evaluation, ExprId, FuncRef, Program};
+use crate::render::shading::ShadingPoint;
+use crate::scene::primitive::Primitive;
+use std::path::PathBuf;
+use std::sync::{Arc, Mutex, OnceLock};
+
+/// What the function modifiers of one scene share: the program (set when the scene is
+/// built) and the first fatal run-time error.
+#[derive(Debug, Default)]
+pub struct FuncShared {
+    program: OnceLock<Arc<Program>>,
+    fatal: OnceLock<String>,
+}
+
+impl FuncShared {
+    /// The scene's program (None before the scene is built).
+    pub fn program(&self) -> Option<&Arc<Program>> {
+        self.program.get()
+    }
+
+    /// The first fatal evaluation error, if one happened.
+    pub fn fatal(&self) -> Option<&str> {
+        self.fatal.get().map(String::as_str)
+    }
+
+    /// Record a fatal error (the first one is kept).
+    pub fn report(&self, msg: String) {
+        let _ = self.fatal.set(msg);
+    }
+}
+
+/// The function language state of a scene being read.
+#[derive(Default)]
+pub struct SceneFunctions {
+    raypath: Vec<PathBuf>,
+    builder: Mutex<Option<CalBuilder>>,
+    shared: Arc<FuncShared>,
+}
+
+impl std::fmt::Debug for SceneFunctions {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("SceneFunctions")
+            .field("raypath", &self.raypath)
+            .finish_non_exhaustive()
+    }
+}
+
+impl SceneFunctions {
+    /// No functions yet; files will be found along `raypath`.
+    pub fn new(raypath: &[PathBuf]) -> SceneFunctions {
+        SceneFunctions {
+            raypath: raypath.to_vec(),
+            builder: Mutex::new(None),
+            shared: Arc::new(FuncShared::default()),
+        }
+    }
+
+    /// Run `f` with the scene's builder (created, with `rayinit.cal`, on first use).
+    pub fn with<R>(
+        &self,
+        f: impl FnOnce(&mut CalBuilder) -> Result<R, String>,
+    ) -> Result<R, String> {
+        let mut g = self
+            .builder
+            .lock()
+            .map_err(|_| "function language state poisoned".to_string())?;
+        if g.is_none() {
+            *g = Some(CalBuilder::new(&self.raypath).map_err(|e| e.to_string())?);
+        }
+        f(g.as_mut().expect("just created"))
+    }
+
+    /// The state the scene's function modifiers share.
+    pub fn shared(&self) -> Arc<FuncShared> {
+        self.shared.clone()
+    }
+
+    /// Link the program (when any primitive used functions) and hand out the shared
+    /// state; None when the scene has no functions.
+    pub fn finish(&self) -> Option<Arc<FuncShared>> {
+        let b = self.builder.lock().ok()?.take()?;
+        let _ = self.shared.program.set(b.finish());
+        Some(self.shared.clone())
+    }
+}
+
+/// One primitive's use of the function language: its context, frame and real arguments.
+#[derive(Debug)]
+pub struct FuncCall {
+    shared: Arc<FuncShared>,
+    frame: PatternFrame,
+    args: Vec<f64>,
+    /// Where the primitive was defined (for fatal errors).
+    origin: String,
+}
+
+/// The context of a primitive's function file (its string argument `ff`).
+pub fn load_context(b: &mut CalBuilder, ff: &str) -> Result<Ctx, String> {
+    b.load_file(ff).map_err(|e| e.to_string())
+}
+
+/// Compile expression `text` in `ctx` for primitive `p`.
+pub fn compile(b: &mut CalBuilder, p: &Primitive, text: &str, ctx: Ctx) -> Result<ExprId, String> {
+    b.expr(text, ctx, &p.loc.to_string())
+        .map_err(|e| e.to_string())
+}
+
+/// Resolve function name `name` in `ctx`.
+pub fn function(b: &mut CalBuilder, name: &str, ctx: Ctx) -> Result<FuncRef, String> {
+    b.func(name, ctx).map_err(|e| e.to_string())
+}
+
+impl FuncCall {
+    /// The call state of primitive `p` whose transform words start at string argument
+    /// `xf_at`.
+    pub fn new(shared: Arc<FuncShared>, p: &Primitive, xf_at: usize) -> Result<FuncCall, String> {
+        let words = p.sargs.get(xf_at..).unwrap_or(&[]);
+        Ok(FuncCall {
+            shared,
+            frame: PatternFrame::from_words(words)?,
+            args: p.rargs.clone(),
+            origin: format!("{} {} {}", p.loc, p.ptype, p.name),
+        })
+    }
+
+    /// The frame the primitive evaluates in.
+    pub fn frame(&self) -> &PatternFrame {
+        &self.frame
+    }
+
+    /// Evaluate at `sp` with `f`, which gets an evaluation; None (the primitive is skipped
+    /// for this ray) on a domain or range error, a non-finite result or a fatal error
+    /// (which is recorded).
+    pub fn eval<R>(
+        &self,
+        sp: &ShadingPoint,
+        brdf: Option<[f64; 7]>,
+        f: impl FnOnce(&mut Evaluation) -> Result<R, EvalError>,
+    ) -> Option<R> {
+        let prog = self.shared.program()?;
+        if self.shared.fatal().is_some() {
+            return None;
+        }
+        let env = Env {
+            chan: self.frame.channels(sp),
+            args: &self.args,
+            brdf,
+        };
+        let mut ev = prog.begin(&env);
+        match f(&mut ev) {
+            Ok(r) => Some(r),
+            Err(EvalError::Fatal(m)) => {
+                self.shared.report(format!("{}: {m}", self.origin));
+                None
+            }
+            Err(_) => None,
+        }
+    }
+}
+
+/// `Ok(v)` if finite, else a range error (a NaN or infinity never leaves an evaluation).
+pub fn finite(v: f64) -> Result<f64, EvalError> {
+    if v.is_finite() {
+        Ok(v)
+    } else {
+        Err(EvalError::Range)
+    }
+}
