@@ -11,7 +11,8 @@ use super::trace::Tracer;
 use crate::color::{sanitize, Color};
 use crate::material::MatId;
 use crate::modifier::{MixCoefficient, ModRef, ModifierKind};
-use crate::FTINY;
+use crate::scene::build::DistantObject;
+use crate::{FHUGE, FTINY};
 
 /// Where a walk over patterns and textures stopped.
 enum End<'s> {
@@ -64,6 +65,43 @@ impl Tracer<'_> {
             }
         }
         End::Void
+    }
+
+    /// The pattern colour of a light source's surface where a ray toward it hits it: the
+    /// patterns of its chain and of its material's own chain (Radiance shades a shadow
+    /// ray's hit on a source like any hit, so `brightfunc` skies and `brightdata`
+    /// luminaires shape the emitted light). One for sources without patterns.
+    pub fn emission_pattern(&self, ray: &Ray, hit: &Hit, chain: ModRef) -> Color {
+        let own = |m: MatId| self.scene.materials[m].chain;
+        match chain {
+            ModRef::Material(m) if own(m) == ModRef::Void => return Color::ONE,
+            ModRef::Void => return Color::ONE,
+            _ => {}
+        }
+        let mut sp = ShadingPoint::new(ray, hit, self.scene.origin);
+        if let End::Material(m) = self.walk(&mut sp, chain) {
+            let c = own(m);
+            if c != ModRef::Void {
+                self.walk(&mut sp, c);
+            }
+        }
+        sp.pcol
+    }
+
+    /// [`Tracer::emission_pattern`] of distant source `d` seen along `ray`'s direction: the
+    /// hit lies at Radiance's "infinite" distance, facing the ray.
+    pub fn distant_pattern(&self, ray: &Ray, d: &DistantObject) -> Color {
+        let hit = Hit {
+            obj: 0,
+            t: FHUGE,
+            point: ray.org + ray.dir * FHUGE,
+            normal: -ray.dir,
+            back: false,
+            flat: true,
+            material: d.material,
+            antimatter: ray.antimatter,
+        };
+        self.emission_pattern(ray, &hit, d.chain)
     }
 
     /// Shade a hit: its surface's modifier chain, then its material. An antimatter exit

@@ -324,6 +324,11 @@ impl<'a> Tracer<'a> {
                     let glowish =
                         matches!(e.kind, EmitterKind::Glow { .. } | EmitterKind::Illum { .. });
                     let v = self.emitter_value(ray, e, f64::INFINITY);
+                    let v = if v == Color::ZERO {
+                        v
+                    } else {
+                        v * self.distant_pattern(ray, d)
+                    };
                     if glowish {
                         fallback.get_or_insert(v);
                     } else {
@@ -578,13 +583,23 @@ impl<'a> Tracer<'a> {
     ) -> Color {
         let src = &self.lights.sources[si];
         let (t, hit) = self.shadow_walk(org, dir, dist, am, rng, |h| src.obj == Some(h.obj));
+        if t == Color::ZERO {
+            return t;
+        }
+        // The source's patterns at the point the shadow ray reaches.
+        let mut ray = Ray::shadow(org, dir);
         match hit {
             // Flat sources emit from their front only.
             Some(h) if h.back && h.flat => Color::ZERO,
-            Some(_) => t,
+            Some(h) => {
+                ray.prior = ((h.point - org).length() - h.t).max(0.0);
+                t * self.emission_pattern(&ray, &h, self.scene.objects[h.obj].chain)
+            }
             // Left the scene: reached a distant source, missed a local one.
-            None if src.distant.is_some() => t,
-            None => Color::ZERO,
+            None => match src.distant {
+                Some(d) => t * self.distant_pattern(&ray, &self.scene.distant[d]),
+                None => Color::ZERO,
+            },
         }
     }
 
