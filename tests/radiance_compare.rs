@@ -267,6 +267,24 @@ fn daylit_room_with_a_gensky_sky() {
     }
 }
 
+/// A room lit by an IES luminaire converted by real `ies2rad -dm` (tests/scenes/ies:
+/// `brightdata` over a 2-D candela table with `source.cal`'s `flatcorr`, `src_phi4`,
+/// `src_theta`), placed by `xform -rz 30`, at `-ab 0` and `-ab 1` (means measured equal to
+/// 0.02%).
+#[test]
+fn ies_luminaire_from_ies2rad() {
+    for ab in ["0", "1"] {
+        check(&Case {
+            dir: "ies",
+            files: &["room.rad"],
+            view: "room.vf",
+            opts: &["-ab", ab, "-av", ".01", ".01", ".01", "-ps", "1", "-pj", "0"],
+            ours_extra: &[],
+            res: RES,
+        });
+    }
+}
+
 /// `-i`: irradiance through transparent materials. rpict's irradiance rays pass straight
 /// through glass, trans, dielectric and interface surfaces (before, tpict shaded them as
 /// white diffuse surfaces: a glass pane 0.462 against rpict's 0.265).
