@@ -64,19 +64,35 @@ fn main() {
     b.load_text(SKY.as_bytes(), "sky", sky).unwrap();
     let g = tessera::cal::Ctx::GLOBAL;
     let cases: Vec<(&str, ExprId)> = vec![
-        ("Px*2 + Py (trivial)", b.expr("Px*2 + Py", g, "b:1").unwrap()),
-        ("clear sky (gensky's formula)", b.expr("sky", sky, "b:2").unwrap()),
-        ("noise3(Px,Py,Pz)", b.expr("noise3(Px,Py,Pz)", g, "b:3").unwrap()),
-        ("fnoise3(Px,Py,Pz)", b.expr("fnoise3(Px,Py,Pz)", g, "b:4").unwrap()),
+        (
+            "Px*2 + Py (trivial)",
+            b.expr("Px*2 + Py", g, "b:1").unwrap(),
+        ),
+        (
+            "clear sky (gensky's formula)",
+            b.expr("sky", sky, "b:2").unwrap(),
+        ),
+        (
+            "noise3(Px,Py,Pz)",
+            b.expr("noise3(Px,Py,Pz)", g, "b:3").unwrap(),
+        ),
+        (
+            "fnoise3(Px,Py,Pz)",
+            b.expr("fnoise3(Px,Py,Pz)", g, "b:4").unwrap(),
+        ),
         (
             "marble: sin(Px*3 + 4*turbulence(P, .01))",
-            b.expr("sin(Px*3 + 4*turbulence(Px,Py,Pz,.01))", g, "b:5").unwrap(),
+            b.expr("sin(Px*3 + 4*turbulence(Px,Py,Pz,.01))", g, "b:5")
+                .unwrap(),
         ),
     ];
     let mut cases = cases;
     if !raypath.is_empty() {
         let ctx = b.load_file("skybright.cal").unwrap();
-        cases.push(("skybr (Radiance's skybright.cal)", b.expr("skybr", ctx, "b:6").unwrap()));
+        cases.push((
+            "skybr (Radiance's skybright.cal)",
+            b.expr("skybr", ctx, "b:6").unwrap(),
+        ));
     }
     let prog = b.finish();
     let n = 2_000_000;

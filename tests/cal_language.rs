@@ -58,7 +58,12 @@ fn plain_nofold() -> CalOptions {
 }
 
 /// Tessera's outcomes for expressions (each in its own evaluation).
-fn tessera_eval(defs: &str, texts: &[String], opts: CalOptions, env: &Env) -> Vec<Result<f64, Out>> {
+fn tessera_eval(
+    defs: &str,
+    texts: &[String],
+    opts: CalOptions,
+    env: &Env,
+) -> Vec<Result<f64, Out>> {
     let mut b = CalBuilder::with_options(&[], opts).unwrap();
     b.load_text(defs.as_bytes(), "defs", Ctx::GLOBAL).unwrap();
     let ids: Vec<_> = texts
@@ -67,7 +72,9 @@ fn tessera_eval(defs: &str, texts: &[String], opts: CalOptions, env: &Env) -> Ve
         .map(|(i, t)| b.expr(t, Ctx::GLOBAL, &format!("gen:{i}")).unwrap())
         .collect();
     let prog = b.finish();
-    ids.iter().map(|&e| out_of(prog.begin(env).eval(e))).collect()
+    ids.iter()
+        .map(|&e| out_of(prog.begin(env).eval(e)))
+        .collect()
 }
 
 fn close(a: f64, b: f64, rel: f64) -> bool {
@@ -88,7 +95,11 @@ fn rcalc_batch(bin: &Path, defs: &str, texts: &[String]) -> Vec<f64> {
         .arg(&f)
         .output()
         .unwrap();
-    assert!(out.status.success(), "rcalc: {}", String::from_utf8_lossy(&out.stderr));
+    assert!(
+        out.status.success(),
+        "rcalc: {}",
+        String::from_utf8_lossy(&out.stderr)
+    );
     let v: Vec<f64> = out
         .stdout
         .chunks_exact(8)
@@ -105,7 +116,7 @@ fn random_expressions_match_rcalc() {
     let (mut finite, mut nonfinite, mut err_nan, mut err_masked, mut skipped) = (0, 0, 0, 0, 0);
     let mut bad = Vec::new();
     for batch in 0..3u64 {
-        let mut rng = Rng(0x9e37_79b9_7f4a_7c15 ^ (batch + 1) * 0x1234_5678);
+        let mut rng = Rng(0x9e37_79b9_7f4a_7c15 ^ ((batch + 1) * 0x1234_5678));
         let mut exprs: Vec<E> = Vec::new();
         let mut want = Vec::new();
         while exprs.len() < 1000 {
@@ -125,7 +136,10 @@ fn random_expressions_match_rcalc() {
         let theirs = rcalc_batch(&bin, cal_gen::DEFS, &texts);
         for i in 0..texts.len() {
             if !same(ours[i], want[i]) {
-                bad.push(format!("{}: tessera {:?}, reference {:?}", texts[i], ours[i], want[i]));
+                bad.push(format!(
+                    "{}: tessera {:?}, reference {:?}",
+                    texts[i], ours[i], want[i]
+                ));
             }
             let r = theirs[i];
             match want[i] {
@@ -155,7 +169,12 @@ fn random_expressions_match_rcalc() {
          {err_nan} errors (6.0a NaN/Inf), {err_masked} errors (6.0a masked), \
          {skipped} skipped (6.0a select crash)"
     );
-    assert!(bad.is_empty(), "{} mismatches:\n{}", bad.len(), bad[..bad.len().min(20)].join("\n"));
+    assert!(
+        bad.is_empty(),
+        "{} mismatches:\n{}",
+        bad.len(),
+        bad[..bad.len().min(20)].join("\n")
+    );
     assert!(finite > 1500, "too few finite comparisons: {finite}");
 }
 
@@ -167,8 +186,16 @@ fn rtrace_batch(bin: &Path, dir: &Path, cal: &str, n: usize) -> Vec<f32> {
          g polygon p\n0\n0\n12 -1 -1 0 {n}.5 -1 0 {n}.5 2 0 -1 2 0\n"
     );
     std::fs::write(dir.join("s.rad"), scene).unwrap();
-    let oct = radiance(bin, "oconv").current_dir(dir).arg("s.rad").output().unwrap();
-    assert!(oct.status.success(), "oconv: {}", String::from_utf8_lossy(&oct.stderr));
+    let oct = radiance(bin, "oconv")
+        .current_dir(dir)
+        .arg("s.rad")
+        .output()
+        .unwrap();
+    assert!(
+        oct.status.success(),
+        "oconv: {}",
+        String::from_utf8_lossy(&oct.stderr)
+    );
     std::fs::write(dir.join("s.oct"), &oct.stdout).unwrap();
     let rays: String = (0..n).map(|i| format!("{}.5 0.5 1 0 0 -1\n", i)).collect();
     std::fs::write(dir.join("rays.txt"), rays).unwrap();
@@ -180,7 +207,11 @@ fn rtrace_batch(bin: &Path, dir: &Path, cal: &str, n: usize) -> Vec<f32> {
         .stdin(std::fs::File::open(dir.join("rays.txt")).unwrap())
         .output()
         .unwrap();
-    assert!(out.status.success(), "rtrace: {}", String::from_utf8_lossy(&out.stderr));
+    assert!(
+        out.status.success(),
+        "rtrace: {}",
+        String::from_utf8_lossy(&out.stderr)
+    );
     let v: Vec<f32> = out
         .stdout
         .chunks_exact(12)
@@ -267,7 +298,12 @@ fn random_noise_expressions_match_rtrace() {
         "rtrace agreement: {agree} equal (float precision), {errors} errors and {unstable} \
          ill-conditioned not compared"
     );
-    assert!(bad.is_empty(), "{} mismatches:\n{}", bad.len(), bad[..bad.len().min(20)].join("\n"));
+    assert!(
+        bad.is_empty(),
+        "{} mismatches:\n{}",
+        bad.len(),
+        bad[..bad.len().min(20)].join("\n")
+    );
     assert!(agree > 800, "too few comparisons: {agree}");
 }
 
@@ -286,11 +322,15 @@ fn every_library_file_compiles() {
         let rcalc = RCALC_FILES.contains(&f.as_str());
         let host = HOST_FILES.contains(&f.as_str());
         let opts = CalOptions {
-            dialect: if rcalc { Dialect::Rcalc } else { Dialect::Renderer },
+            dialect: if rcalc {
+                Dialect::Rcalc
+            } else {
+                Dialect::Renderer
+            },
             fold: !host,
             rayinit: true,
         };
-        let mut b = CalBuilder::with_options(&[lib.clone()], opts).unwrap();
+        let mut b = CalBuilder::with_options(std::slice::from_ref(&lib), opts).unwrap();
         if let Err(e) = b.load_file(f) {
             failed.push(e.to_string());
         }
@@ -298,11 +338,15 @@ fn every_library_file_compiles() {
         // folded without its host's definitions.
         if rcalc != host {
             let opts = CalOptions {
-                dialect: if rcalc { Dialect::Renderer } else { Dialect::Rcalc },
+                dialect: if rcalc {
+                    Dialect::Renderer
+                } else {
+                    Dialect::Rcalc
+                },
                 fold: host,
                 rayinit: true,
             };
-            let mut b = CalBuilder::with_options(&[lib.clone()], opts).unwrap();
+            let mut b = CalBuilder::with_options(std::slice::from_ref(&lib), opts).unwrap();
             assert!(b.load_file(f).is_err(), "{f} compiles in the wrong dialect");
         }
     }
@@ -331,18 +375,48 @@ fn builtin_rayinit_matches_radiance() {
     }
     prelude.push_str("arg(n) = select(n, $35, $36, $37, $38, $39, $40);\n");
     let funcs: [(&str, usize); 31] = [
-        ("bound", 3), ("Acos", 1), ("Asin", 1), ("Atan2", 2), ("Exp", 1), ("Sqrt", 1),
-        ("and", 2), ("or", 2), ("not", 1), ("xor", 2), ("abs", 1), ("sgn", 1), ("sq", 1),
-        ("inside", 3), ("frac", 1), ("mod", 2), ("tri", 2), ("linterp", 3), ("noop", 1),
-        ("clip", 1), ("noneg", 1), ("red", 3), ("green", 3), ("blue", 3), ("grey", 3),
-        ("clip_r", 3), ("clipgrey", 3), ("fade", 3), ("hermite", 5), ("bezier", 5),
+        ("bound", 3),
+        ("Acos", 1),
+        ("Asin", 1),
+        ("Atan2", 2),
+        ("Exp", 1),
+        ("Sqrt", 1),
+        ("and", 2),
+        ("or", 2),
+        ("not", 1),
+        ("xor", 2),
+        ("abs", 1),
+        ("sgn", 1),
+        ("sq", 1),
+        ("inside", 3),
+        ("frac", 1),
+        ("mod", 2),
+        ("tri", 2),
+        ("linterp", 3),
+        ("noop", 1),
+        ("clip", 1),
+        ("noneg", 1),
+        ("red", 3),
+        ("green", 3),
+        ("blue", 3),
+        ("grey", 3),
+        ("clip_r", 3),
+        ("clipgrey", 3),
+        ("fade", 3),
+        ("hermite", 5),
+        ("bezier", 5),
         ("bspline", 5),
     ];
     let mut texts: Vec<String> = Vec::new();
     for _ in 0..12 {
         for (f, n) in funcs {
             let args: Vec<String> = (0..n)
-                .map(|_| format!("{:.6}", (rng.unit() - 0.5) * [2.0, 6.0, 300.0][rng.below(3)]))
+                .map(|_| {
+                    format!(
+                        "{:.6}",
+                        (rng.unit() - 0.5) * [2.0, 6.0, 300.0][rng.below(3)]
+                    )
+                })
                 .collect();
             texts.push(format!("{f}({})", args.join(",")));
         }
@@ -350,9 +424,27 @@ fn builtin_rayinit_matches_radiance() {
         texts.push(format!("nrand({:.4})", rng.unit() * 100.0));
     }
     for t in [
-        "PI", "DEGREE", "FTINY", "AC", "A1", "A4", "D(1)+D(2)*10+D(3)*100", "N(2)", "P(3)",
-        "dot(D,N)", "cross(1,D,P)", "cross(2,D,P)", "cross(3,D,P)", "U", "V", "Idx", "Idy",
-        "Idz", "Ldx(.3,.4,.5)", "Ldy(.3,.4,.5)", "Ldz(.3,.4,.5)",
+        "PI",
+        "DEGREE",
+        "FTINY",
+        "AC",
+        "A1",
+        "A4",
+        "D(1)+D(2)*10+D(3)*100",
+        "N(2)",
+        "P(3)",
+        "dot(D,N)",
+        "cross(1,D,P)",
+        "cross(2,D,P)",
+        "cross(3,D,P)",
+        "U",
+        "V",
+        "Idx",
+        "Idy",
+        "Idz",
+        "Ldx(.3,.4,.5)",
+        "Ldy(.3,.4,.5)",
+        "Ldz(.3,.4,.5)",
     ] {
         texts.push(t.to_string());
     }
@@ -391,7 +483,11 @@ fn builtin_rayinit_matches_radiance() {
         .stdin(std::fs::File::open(dir.path().join("in.txt")).unwrap())
         .output()
         .unwrap();
-    assert!(out.status.success(), "rcalc: {}", String::from_utf8_lossy(&out.stderr));
+    assert!(
+        out.status.success(),
+        "rcalc: {}",
+        String::from_utf8_lossy(&out.stderr)
+    );
     let theirs: Vec<f64> = out
         .stdout
         .chunks_exact(8)
@@ -418,12 +514,20 @@ fn builtin_rayinit_matches_radiance() {
             let want = theirs[r * texts.len() + i];
             match ev.eval(e) {
                 Ok(v) if close(v, want, 1e-9) || (v - want).abs() < 1e-12 => {}
-                got => bad.push(format!("{} (row {r}): tessera {got:?}, radiance {want:e}", texts[i])),
+                got => bad.push(format!(
+                    "{} (row {r}): tessera {got:?}, radiance {want:e}",
+                    texts[i]
+                )),
             }
         }
     }
     eprintln!("rayinit: {} comparisons", texts.len() * input.len());
-    assert!(bad.is_empty(), "{} mismatches:\n{}", bad.len(), bad[..bad.len().min(30)].join("\n"));
+    assert!(
+        bad.is_empty(),
+        "{} mismatches:\n{}",
+        bad.len(),
+        bad[..bad.len().min(30)].join("\n")
+    );
 }
 
 proptest! {
@@ -489,7 +593,13 @@ fn noise_functions_match_rtrace() {
         let scale = [1.0, 10.0, 200.0, 1e5][rng.below(4)];
         let p: [f64; 3] = [0, 1, 2].map(|_| ((rng.unit() - 0.5) * scale * 1e6).round() / 1e6);
         let f = funcs[i % funcs.len()];
-        cal.push_str(&format!("e{} = {f}({:e}+z0, {:e}+z0, {:e}+z0);\n", i + 1, p[0], p[1], p[2]));
+        cal.push_str(&format!(
+            "e{} = {f}({:e}+z0, {:e}+z0, {:e}+z0);\n",
+            i + 1,
+            p[0],
+            p[1],
+            p[2]
+        ));
         pts.push((f, p));
     }
     cal.push_str("v = select(floor(Px)+1");
@@ -501,7 +611,12 @@ fn noise_functions_match_rtrace() {
     let mut worst = [0f64; 5];
     let mut bad = Vec::new();
     for (i, (f, p)) in pts.iter().enumerate() {
-        let ours = tessera::cal::icalc("", &format!("{f}({:e},{:e},{:e})", p[0], p[1], p[2]), CalOptions::default()).unwrap();
+        let ours = tessera::cal::icalc(
+            "",
+            &format!("{f}({:e},{:e},{:e})", p[0], p[1], p[2]),
+            CalOptions::default(),
+        )
+        .unwrap();
         let r = theirs[i] as f64;
         let err = (ours - r).abs() / ours.abs().max(1e-3);
         let k = funcs.iter().position(|x| x == f).unwrap();
@@ -510,6 +625,14 @@ fn noise_functions_match_rtrace() {
             bad.push(format!("{f}({:?}) = {ours:e}, rtrace {r:e}", p));
         }
     }
-    eprintln!("noise worst relative errors {:?}", funcs.iter().zip(worst).collect::<Vec<_>>());
-    assert!(bad.is_empty(), "{} mismatches:\n{}", bad.len(), bad[..bad.len().min(20)].join("\n"));
+    eprintln!(
+        "noise worst relative errors {:?}",
+        funcs.iter().zip(worst).collect::<Vec<_>>()
+    );
+    assert!(
+        bad.is_empty(),
+        "{} mismatches:\n{}",
+        bad.len(),
+        bad[..bad.len().min(20)].join("\n")
+    );
 }

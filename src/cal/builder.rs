@@ -14,8 +14,8 @@ pub const BUILTIN_RAYINIT: &str = include_str!("rayinit.cal");
 
 /// The ray channel variables `$1..$27`, in order (§1.8).
 pub const CHANNELS: [&str; 27] = [
-    "Dx", "Dy", "Dz", "Nx", "Ny", "Nz", "Px", "Py", "Pz", "T", "Rdot", "S", "Tx", "Ty", "Tz",
-    "Ix", "Iy", "Iz", "Jx", "Jy", "Jz", "Kx", "Ky", "Kz", "Ts", "Lu", "Lv",
+    "Dx", "Dy", "Dz", "Nx", "Ny", "Nz", "Px", "Py", "Pz", "T", "Rdot", "S", "Tx", "Ty", "Tz", "Ix",
+    "Iy", "Iz", "Jx", "Jy", "Jz", "Kx", "Ky", "Kz", "Ts", "Lu", "Lv",
 ];
 
 /// The variables only BRDF materials define, in [`super::Env::brdf`] order.
@@ -83,7 +83,10 @@ impl CalBuilder {
             }
         }
         if opts.rayinit {
-            let found = raypath.iter().map(|d| d.join("rayinit.cal")).find(|p| p.is_file());
+            let found = raypath
+                .iter()
+                .map(|d| d.join("rayinit.cal"))
+                .find(|p| p.is_file());
             match found {
                 Some(p) => {
                     let text = std::fs::read(&p)
@@ -93,7 +96,11 @@ impl CalBuilder {
                     b.rayinit = name;
                 }
                 None => {
-                    b.load_text(BUILTIN_RAYINIT.as_bytes(), "<tessera rayinit.cal>", Ctx::GLOBAL)?;
+                    b.load_text(
+                        BUILTIN_RAYINIT.as_bytes(),
+                        "<tessera rayinit.cal>",
+                        Ctx::GLOBAL,
+                    )?;
                     b.rayinit = "built-in".into();
                 }
             }
@@ -134,7 +141,10 @@ impl CalBuilder {
             return Ok(*c);
         }
         let path = self.find(name).ok_or_else(|| {
-            CalError::file(name, format!("cannot find function file on RAYPATH {:?}", self.raypath))
+            CalError::file(
+                name,
+                format!("cannot find function file on RAYPATH {:?}", self.raypath),
+            )
         })?;
         let text = std::fs::read(&path)
             .map_err(|e| CalError::file(&path.display().to_string(), e.to_string()))?;
@@ -142,7 +152,9 @@ impl CalBuilder {
             .file_name()
             .map_or(name.to_string(), |s| s.to_string_lossy().into_owned());
         let stem = match base.len().checked_sub(4) {
-            Some(i) if base.is_char_boundary(i) && base[i..].eq_ignore_ascii_case(".cal") => &base[..i],
+            Some(i) if base.is_char_boundary(i) && base[i..].eq_ignore_ascii_case(".cal") => {
+                &base[..i]
+            }
             _ => &base[..],
         };
         let ctx = self.context(stem);
@@ -200,8 +212,13 @@ impl CalBuilder {
     /// A function-name argument, resolved in context `ctx` as a call would be. The name
     /// may be defined later (or never: calling it is then a fatal error).
     pub fn func(&mut self, name: &str, ctx: Ctx) -> Result<FuncRef, CalError> {
-        let ok = name.bytes().next().is_some_and(|c| c.is_ascii_alphabetic() || c == b'`')
-            && name.bytes().all(|c| c.is_ascii_alphanumeric() || b"_.`".contains(&c));
+        let ok = name
+            .bytes()
+            .next()
+            .is_some_and(|c| c.is_ascii_alphabetic() || c == b'`')
+            && name
+                .bytes()
+                .all(|c| c.is_ascii_alphanumeric() || b"_.`".contains(&c));
         if !ok {
             return Err(CalError::file(name, "illegal function name"));
         }
@@ -307,7 +324,15 @@ impl CalBuilder {
     }
 
     /// Define `name` (a variable, or a function of `nparams` parameters).
-    pub(crate) fn define(&mut self, name: &str, ctx: &str, nparams: usize, konst: bool, body: NodeId, loc: Loc) {
+    pub(crate) fn define(
+        &mut self,
+        name: &str,
+        ctx: &str,
+        nparams: usize,
+        konst: bool,
+        body: NodeId,
+        loc: Loc,
+    ) {
         let s = self.lookup_def(name, ctx);
         let value = match self.code.nodes[body as usize] {
             Node::Num(v) => Some(v),
@@ -316,9 +341,9 @@ impl CalBuilder {
         let slot = &self.code.slots[s as usize];
         let q = slot.name.clone();
         match slot.def {
-            Def::None if slot.lib.is_some() => {
-                self.warnings.push(format!("{q}: definition hides library function"))
-            }
+            Def::None if slot.lib.is_some() => self
+                .warnings
+                .push(format!("{q}: definition hides library function")),
             Def::None => {}
             Def::Num(_) | Def::Var { konst: true, .. } | Def::Func { konst: true, .. } => {
                 self.warnings.push(format!("{q}: constant redefined"))
@@ -335,12 +360,19 @@ impl CalBuilder {
             match value {
                 Some(v) => Def::Num(v),
                 None => {
-                    self.warnings.push(format!("{q}: assigned non-constant value"));
-                    Def::Var { expr: body, konst: true }
+                    self.warnings
+                        .push(format!("{q}: assigned non-constant value"));
+                    Def::Var {
+                        expr: body,
+                        konst: true,
+                    }
                 }
             }
         } else {
-            Def::Var { expr: body, konst: false }
+            Def::Var {
+                expr: body,
+                konst: false,
+            }
         };
         let slot = &mut self.code.slots[s as usize];
         slot.def = def;

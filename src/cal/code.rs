@@ -102,7 +102,10 @@ pub(crate) struct Code {
 impl Code {
     /// `file:line` of a location.
     pub fn place(&self, loc: Loc) -> String {
-        let f = self.files.get(loc.file as usize).map_or("?", |s| s.as_str());
+        let f = self
+            .files
+            .get(loc.file as usize)
+            .map_or("?", |s| s.as_str());
         if loc.line == 0 {
             f.to_string()
         } else {

@@ -196,7 +196,11 @@ impl<'a> Machine<'a> {
                 self.defined_at(s)
             ),
             Fail::UndefFunc(s, n) => {
-                format!("{}(): undefined function (called at {})", name(s), self.at(n))
+                format!(
+                    "{}(): undefined function (called at {})",
+                    name(s),
+                    self.at(n)
+                )
             }
             Fail::NotFunc(s, n) => format!(
                 "{}(): not a function (defined as a variable at {}, called at {})",
@@ -217,7 +221,11 @@ impl<'a> Machine<'a> {
                 self.at(n)
             ),
             Fail::FewLibArgs(l, n) => {
-                format!("{}(): too few arguments (called at {})", l.name(), self.at(n))
+                format!(
+                    "{}(): too few arguments (called at {})",
+                    l.name(),
+                    self.at(n)
+                )
             }
             Fail::ConstArg(n) => format!(
                 "arg() used in a constant expression at {} (a ':' definition that depends \
@@ -265,7 +273,11 @@ impl<'a> Machine<'a> {
                 },
                 Err(e) => Err(e),
             },
-            Node::Call { callee, first, n: k } => self.call(callee, first, k, f, n),
+            Node::Call {
+                callee,
+                first,
+                n: k,
+            } => self.call(callee, first, k, f, n),
         };
         self.depth -= 1;
         r
@@ -408,7 +420,7 @@ impl<'a> Machine<'a> {
         match l {
             Lib::Select => {
                 let d = self.arg(&src, 0, l, site)? + 0.5;
-                if !(d >= 0.0) {
+                if d.is_nan() || d < 0.0 {
                     return Err(Trap::Domain);
                 }
                 let count = src.len().saturating_sub(1);

@@ -14,7 +14,11 @@ pub(crate) const MAX_NODE_DEPTH: u32 = 2000;
 impl Parser<'_, '_> {
     /// Add a node whose children are `kids`.
     pub fn node(&mut self, n: Node, loc: Loc, kids: &[NodeId]) -> Result<NodeId, PErr> {
-        let depth = 1 + kids.iter().map(|&k| self.b.depth[k as usize]).max().unwrap_or(0);
+        let depth = 1 + kids
+            .iter()
+            .map(|&k| self.b.depth[k as usize])
+            .max()
+            .unwrap_or(0);
         if depth > MAX_NODE_DEPTH {
             return Err(self.err(format!(
                 "expression too deep (more than {MAX_NODE_DEPTH} levels of operators)"
@@ -38,6 +42,7 @@ impl Parser<'_, '_> {
     }
 
     /// `left op right` for an operator character.
+    #[allow(clippy::redundant_guards)] // guards compare -0.0 and 0.0 alike, as Radiance
     pub fn binary(&mut self, c: u8, a: NodeId, b: NodeId) -> Result<NodeId, PErr> {
         let op = match c {
             b'+' => Op::Add,

@@ -203,12 +203,15 @@ mod tests {
 
     #[test]
     fn numbers() {
-        assert_eq!(toks("5. .5e1 1e-3 2E+2"), Ok(vec![
-            Tok::Num(5.0),
-            Tok::Num(5.0),
-            Tok::Num(1e-3),
-            Tok::Num(200.0)
-        ]));
+        assert_eq!(
+            toks("5. .5e1 1e-3 2E+2"),
+            Ok(vec![
+                Tok::Num(5.0),
+                Tok::Num(5.0),
+                Tok::Num(1e-3),
+                Tok::Num(200.0)
+            ])
+        );
         assert_eq!(toks("."), Err("badly formed number"));
         assert_eq!(toks("1.e"), Err("missing exponent"));
         assert_eq!(toks("1e+x"), Err("missing exponent"));
@@ -222,13 +225,16 @@ mod tests {
 
     #[test]
     fn names_and_channels() {
-        assert_eq!(toks("a.b un2`P. $12 $ %"), Ok(vec![
-            Tok::Name("a.b".into()),
-            Tok::Name("un2`P.".into()),
-            Tok::Chan(12),
-            Tok::Char(b'$'),
-            Tok::Char(b'%')
-        ]));
+        assert_eq!(
+            toks("a.b un2`P. $12 $ %"),
+            Ok(vec![
+                Tok::Name("a.b".into()),
+                Tok::Name("un2`P.".into()),
+                Tok::Chan(12),
+                Tok::Char(b'$'),
+                Tok::Char(b'%')
+            ])
+        );
         let long = "x".repeat(200);
         assert_eq!(toks(&long), Ok(vec![Tok::Name("x".repeat(MAX_NAME))]));
     }

@@ -164,7 +164,9 @@ pub fn icalc_env(
     let mut b = CalBuilder::with_options(&[], opts).map_err(IcalcError::Compile)?;
     b.load_text(statements.as_bytes(), "<input>", Ctx::GLOBAL)
         .map_err(IcalcError::Compile)?;
-    let e = b.expr(expr, Ctx::GLOBAL, "<expr>").map_err(IcalcError::Compile)?;
+    let e = b
+        .expr(expr, Ctx::GLOBAL, "<expr>")
+        .map_err(IcalcError::Compile)?;
     let prog = b.finish();
     let mut ev = prog.begin(env);
     ev.eval(e).map_err(IcalcError::Eval)

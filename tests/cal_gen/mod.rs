@@ -126,7 +126,11 @@ impl Gen {
                 if r.chance(0.5) {
                     // Bounded: Radiance 6.0a crashes on indices beyond an int.
                     let m = E::Num(n as f64 + 1.5, 0);
-                    v[0] = E::Bin(b'*', Box::new(E::Call("rand", vec![self.expr(r, d)])), Box::new(m));
+                    v[0] = E::Bin(
+                        b'*',
+                        Box::new(E::Call("rand", vec![self.expr(r, d)])),
+                        Box::new(m),
+                    );
                 }
                 v.extend(args(r, n));
                 E::Call("select", v)
@@ -269,6 +273,7 @@ fn check(v: f64) -> Result<f64, Out> {
     }
 }
 
+#[allow(clippy::approx_constant)] // Radiance's constants
 fn rand(x: f64) -> f64 {
     let mut x = x * (1.0 / (1.0 + x * x) + 2.71828182845904);
     x += 0.785398163397447 - x.floor();
@@ -298,7 +303,8 @@ fn unary(f: &str, x: f64) -> f64 {
 fn noise(f: &str, x: f64, y: f64, z: f64, p: f64) -> f64 {
     use tessera::cal::{fnoise3, noise3};
     let eps = 0.0005;
-    let d = |q: [f64; 3]| (noise3(x, y, z) * (1.0 + p) - noise3(q[0], q[1], q[2]) * (1.0 - p)) / eps;
+    let d =
+        |q: [f64; 3]| (noise3(x, y, z) * (1.0 + p) - noise3(q[0], q[1], q[2]) * (1.0 - p)) / eps;
     match f {
         "noise3" => noise3(x, y, z) * (1.0 + p),
         "noise3x" => d([x - eps, y, z]),
@@ -357,7 +363,7 @@ impl Ref {
             }
             "select" => {
                 let d = self.eval(&args[0])? + 0.5;
-                if !(d >= 0.0) {
+                if d.is_nan() || d < 0.0 {
                     return Err(Out::Domain);
                 }
                 if d >= 2147483647.0 {
