@@ -360,12 +360,42 @@ fn every_library_file_compiles() {
     assert!(failed.is_empty(), "{}", failed.join("\n"));
 }
 
-/// Tessera's built-in rayinit.cal against Radiance's, through rcalc with the ray channels,
-/// BRDF variables and real arguments given as input fields.
-#[test]
-fn builtin_rayinit_matches_radiance() {
-    let Some(bin) = radiance_bin() else { return };
-    let mut rng = Rng(77);
+/// rayinit functions and their number of arguments.
+const RAYINIT_FUNCS: [(&str, usize); 31] = [
+    ("bound", 3),
+    ("Acos", 1),
+    ("Asin", 1),
+    ("Atan2", 2),
+    ("Exp", 1),
+    ("Sqrt", 1),
+    ("and", 2),
+    ("or", 2),
+    ("not", 1),
+    ("xor", 2),
+    ("abs", 1),
+    ("sgn", 1),
+    ("sq", 1),
+    ("inside", 3),
+    ("frac", 1),
+    ("mod", 2),
+    ("tri", 2),
+    ("linterp", 3),
+    ("noop", 1),
+    ("clip", 1),
+    ("noneg", 1),
+    ("red", 3),
+    ("green", 3),
+    ("blue", 3),
+    ("grey", 3),
+    ("clip_r", 3),
+    ("clipgrey", 3),
+    ("fade", 3),
+    ("hermite", 5),
+    ("bezier", 5),
+    ("bspline", 5),
+];
+
+fn rayinit_prelude() -> String {
     let mut prelude = String::new();
     for (i, n) in tessera::cal::CHANNELS.iter().enumerate() {
         prelude.push_str(&format!("{n} = ${};\n", i + 1));
@@ -374,42 +404,14 @@ fn builtin_rayinit_matches_radiance() {
         prelude.push_str(&format!("{n} = ${};\n", i + 28));
     }
     prelude.push_str("arg(n) = select(n, $35, $36, $37, $38, $39, $40);\n");
-    let funcs: [(&str, usize); 31] = [
-        ("bound", 3),
-        ("Acos", 1),
-        ("Asin", 1),
-        ("Atan2", 2),
-        ("Exp", 1),
-        ("Sqrt", 1),
-        ("and", 2),
-        ("or", 2),
-        ("not", 1),
-        ("xor", 2),
-        ("abs", 1),
-        ("sgn", 1),
-        ("sq", 1),
-        ("inside", 3),
-        ("frac", 1),
-        ("mod", 2),
-        ("tri", 2),
-        ("linterp", 3),
-        ("noop", 1),
-        ("clip", 1),
-        ("noneg", 1),
-        ("red", 3),
-        ("green", 3),
-        ("blue", 3),
-        ("grey", 3),
-        ("clip_r", 3),
-        ("clipgrey", 3),
-        ("fade", 3),
-        ("hermite", 5),
-        ("bezier", 5),
-        ("bspline", 5),
-    ];
+    prelude
+}
+
+/// Calls of every rayinit function with random arguments, and the names that use rays.
+fn rayinit_texts(rng: &mut Rng) -> Vec<String> {
     let mut texts: Vec<String> = Vec::new();
     for _ in 0..12 {
-        for (f, n) in funcs {
+        for (f, n) in RAYINIT_FUNCS {
             let args: Vec<String> = (0..n)
                 .map(|_| {
                     format!(
@@ -448,7 +450,12 @@ fn builtin_rayinit_matches_radiance() {
     ] {
         texts.push(t.to_string());
     }
-    // Input: a unit direction, a unit normal, a point, …; perturbed normal; 6 real args.
+    texts
+}
+
+/// Input rows: a unit direction, a unit normal, a point, …; a perturbed normal; 6 real
+/// arguments.
+fn rayinit_inputs(rng: &mut Rng) -> Vec<Vec<f64>> {
     let unit = |r: &mut Rng| {
         let v: [f64; 3] = [r.unit() - 0.5, r.unit() - 0.5, r.unit() - 0.5];
         let l = (v[0] * v[0] + v[1] * v[1] + v[2] * v[2]).sqrt();
@@ -457,27 +464,32 @@ fn builtin_rayinit_matches_radiance() {
     let mut input = Vec::new();
     for _ in 0..3 {
         let mut row: Vec<f64> = Vec::new();
-        row.extend(unit(&mut rng));
-        row.extend(unit(&mut rng));
+        row.extend(unit(rng));
+        row.extend(unit(rng));
         row.extend((0..21).map(|_| (rng.unit() - 0.5) * 4.0));
-        row.extend(unit(&mut rng));
+        row.extend(unit(rng));
         row.extend((0..4).map(|_| rng.unit()));
         row.extend((0..6).map(|_| (rng.unit() - 0.5) * 4.0));
         input.push(row);
     }
+    input
+}
+
+/// rcalc's values of `texts` for each input row, with Radiance's rayinit.cal.
+fn rayinit_rcalc(bin: &Path, prelude: &str, texts: &[String], input: &[Vec<f64>]) -> Vec<f64> {
     let dir = tempfile::tempdir().unwrap();
-    let mut src = prelude.clone();
+    let mut src = prelude.to_string();
     for (i, t) in texts.iter().enumerate() {
         src.push_str(&format!("${} = {t};\n", i + 1));
     }
     std::fs::write(dir.path().join("p.cal"), src).unwrap();
     let mut inp = String::new();
-    for row in &input {
+    for row in input {
         let s: Vec<String> = row.iter().map(|v| format!("{v:e}")).collect();
         inp.push_str(&(s.join(" ") + "\n"));
     }
     std::fs::write(dir.path().join("in.txt"), inp).unwrap();
-    let out = radiance(&bin, "rcalc")
+    let out = radiance(bin, "rcalc")
         .args(["-od", "-f", "rayinit.cal", "-f"])
         .arg(dir.path().join("p.cal"))
         .stdin(std::fs::File::open(dir.path().join("in.txt")).unwrap())
@@ -494,6 +506,19 @@ fn builtin_rayinit_matches_radiance() {
         .map(|c| f64::from_le_bytes(c.try_into().unwrap()))
         .collect();
     assert_eq!(theirs.len(), texts.len() * input.len());
+    theirs
+}
+
+/// Tessera's built-in rayinit.cal against Radiance's, through rcalc with the ray channels,
+/// BRDF variables and real arguments given as input fields.
+#[test]
+fn builtin_rayinit_matches_radiance() {
+    let Some(bin) = radiance_bin() else { return };
+    let mut rng = Rng(77);
+    let prelude = rayinit_prelude();
+    let texts = rayinit_texts(&mut rng);
+    let input = rayinit_inputs(&mut rng);
+    let theirs = rayinit_rcalc(&bin, &prelude, &texts, &input);
     // Tessera: built-in rayinit (empty RAYPATH).
     let mut b = CalBuilder::new(&[]).unwrap();
     assert_eq!(b.rayinit(), "built-in");
