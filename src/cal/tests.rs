@@ -175,6 +175,10 @@ fn definitions_and_lazy_arguments() {
     assert!(
         matches!(eval_err("", "if(Px-1,2)"), EvalError::Fatal(m) if m.starts_with("if(): too few arguments"))
     );
+    // With constant arguments the call folds when compiled: the same error, at load.
+    assert!(compile_err("", "if(-1,2)")
+        .message
+        .starts_with("if(): too few arguments"));
     assert!(
         matches!(eval_err("f(a,b) = b;", "f(1)"), EvalError::Fatal(m) if m.starts_with("f(): too few arguments"))
     );
