@@ -39,6 +39,18 @@ pub enum E {
     Pass(&'static str, Box<E>),
 }
 
+/// Whether `e` has a literal 0 (folding turns `0*x` into +0 whatever the sign of x, as
+/// Radiance does, so `atan2` and divisions may then differ from the unfolded value).
+pub fn has_zero(e: &E) -> bool {
+    match e {
+        E::Num(v, _) => *v == 0.0,
+        E::Var(_) => false,
+        E::Neg(a) | E::Pos(a) | E::Paren(a) | E::Pass(_, a) => has_zero(a),
+        E::Bin(_, a, b) => has_zero(a) || has_zero(b),
+        E::Call(_, args) => args.iter().any(has_zero),
+    }
+}
+
 /// The definitions every generated expression may use.
 pub const DEFS: &str = "a = 0.7; b = -2.3; c = a*b + 1;
 f(x) = x*x - 1; g(x,y) = if(x, y, -y); l(x,y,z) = if(x, y, z);
