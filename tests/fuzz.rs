@@ -1,6 +1,7 @@
 //! A mutation fuzzer for every reader of outside input: scene text (lexer, reader and scene
 //! build with its BVH), rpict's option language, view lines, RGBE and EXR pictures, Tessera's
-//! ambient log, Radiance's ambient files, job manifests and task entry names.
+//! ambient log, Radiance's ambient files, job manifests, task entry names and the function
+//! language (`.cal` files and expressions: compiled and evaluated).
 //!
 //! Each target starts from valid seeds and mutates them (byte flips, inserts, deletions,
 //! duplicated runs, splices, interesting numbers); a case passes when the reader returns,
@@ -200,6 +201,11 @@ fn targets(dir: Arc<tempfile::TempDir>) -> Vec<Target> {
         }),
     });
     v.push(Target {
+        name: "cal",
+        seeds: cal_seeds(),
+        run: Box::new(run_cal),
+    });
+    v.push(Target {
         name: "options",
         seeds: vec![
             b"-vtv -vp 1 2 3 -vd 0 1 0 -x 64 -y 48 -ab 2 -aa .1 -ad 512 -i+ -ps 1 s.rad".to_vec(),
@@ -299,6 +305,77 @@ fn targets(dir: Arc<tempfile::TempDir>) -> Vec<Target> {
 }
 
 /// A valid job manifest (planned from the demo scene).
+/// Seeds for the function language: Tessera's rayinit, snippets, and Radiance's library
+/// `.cal` files when Radiance is installed (read in place, never copied).
+fn cal_seeds() -> Vec<Vec<u8>> {
+    let mut v: Vec<Vec<u8>> = vec![
+        tessera::cal::BUILTIN_RAYINIT.as_bytes().to_vec(),
+        b"v = Px*2 + 3; w = v + k; k : 10; f(x) = if(x-1, f(x-1)*x, 1); y = f(5)".to_vec(),
+        b"g(a) = a(2)+1; sq2(x) = x*x; z = g(sq2) + select(2, 1, 2^-3, 3) {c {n}}".to_vec(),
+        b"t = noise3(Px,Py,Pz) + fnoise3(Dx, Dy, Dz)*turbulence(Px, Py, Pz, .01); `l = 2;".to_vec(),
+        b"r = v`foo + w` - -2^2 * 1e-3 / .5e1 ; m(a,b) : max(a, b, rand(a)) ; c : m(1, 2)".to_vec(),
+    ];
+    let bin = std::env::var("TESSERA_RADIANCE_BIN")
+        .unwrap_or_else(|_| "/opt/radvenv/lib/python3.11/site-packages/pyradiance/bin".into());
+    let lib = Path::new(&bin).parent().map(|p| p.join("lib"));
+    if let Some(Ok(rd)) = lib.map(std::fs::read_dir) {
+        let mut files: Vec<PathBuf> = rd
+            .filter_map(|e| Some(e.ok()?.path()))
+            .filter(|p| p.extension().is_some_and(|x| x == "cal"))
+            .collect();
+        files.sort();
+        v.extend(files.iter().filter_map(|p| std::fs::read(p).ok()));
+    }
+    v
+}
+
+/// Compile `b` as a function file and as an expression, then evaluate every definition
+/// (functions with 0.5 for each parameter) with a dummy environment.
+fn run_cal(b: &[u8]) {
+    use tessera::cal::{CalBuilder, CalOptions, Ctx, Dialect, Env};
+    let dialects = [
+        CalOptions::default(),
+        CalOptions {
+            dialect: Dialect::Rcalc,
+            fold: false,
+            rayinit: false,
+        },
+    ];
+    let opts = dialects[b.first().map_or(0, |c| (*c as usize) & 1)];
+    let Ok(mut cb) = CalBuilder::with_options(&[], opts) else {
+        return;
+    };
+    let loaded = cb.load_text(b, "fuzz.cal", Ctx::GLOBAL).is_ok();
+    let mut exprs = Vec::new();
+    if let Ok(e) = cb.expr(&text(b), Ctx::GLOBAL, "fuzz:1") {
+        exprs.push(e);
+    }
+    let mut funcs = Vec::new();
+    if loaded {
+        for (name, params) in cb.definitions() {
+            match params {
+                None => exprs.extend(cb.expr(&name, Ctx::GLOBAL, "fuzz:2").ok()),
+                Some(n) => funcs.extend(cb.func(&name, Ctx::GLOBAL).ok().map(|f| (f, n))),
+            }
+        }
+    }
+    let prog = cb.finish();
+    let mut chan = [0.25; 27];
+    chan[6] = 0.5;
+    let env = Env {
+        chan,
+        args: &[1.0, 2.0],
+        brdf: Some([0.0, 0.0, 1.0, 0.5, 1.0, 1.0, 1.0]),
+    };
+    let mut ev = prog.begin(&env);
+    for e in exprs {
+        let _ = ev.eval(e);
+    }
+    for (f, n) in funcs {
+        let _ = ev.call(f, &vec![0.5; n]);
+    }
+}
+
 fn manifest_seed(dir: &Path) -> Vec<u8> {
     let job = dir.join("seedjob");
     let req = tessera::job::manifest::PlanRequest {

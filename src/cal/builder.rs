@@ -226,6 +226,20 @@ impl CalBuilder {
         Ok(FuncRef(self.lookup_ref(name, &cstr)))
     }
 
+    /// Every defined name (fully qualified, e.g. `` v`foo``), with its number of
+    /// parameters for a function (None for a variable or constant). In slot order.
+    pub fn definitions(&self) -> Vec<(String, Option<usize>)> {
+        self.code
+            .slots
+            .iter()
+            .filter_map(|s| match s.def {
+                Def::None => None,
+                Def::Func { nparams, .. } => Some((s.name.clone(), Some(nparams as usize))),
+                _ => Some((s.name.clone(), None)),
+            })
+            .collect()
+    }
+
     /// The rcalc-style outputs (`$N = expr`) compiled so far.
     pub fn outputs(&self) -> &[(u32, ExprId)] {
         &self.outputs

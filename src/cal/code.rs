@@ -124,8 +124,8 @@ impl Code {
     }
 
     /// Resolve what can be resolved once every definition is final: calls to undefined
-    /// names with a library fallback call the library directly, references to known
-    /// constants become numbers.
+    /// names with a library fallback call the library directly, references to numbers and
+    /// to plain channel variables become the number or the channel.
     pub fn link(&mut self) {
         for i in 0..self.nodes.len() {
             match self.nodes[i] {
@@ -143,13 +143,17 @@ impl Code {
                         };
                     }
                 }
-                Node::Var(s) => {
-                    if let Def::Num(v) = self.slots[s as usize].def {
-                        // Still a name where it is passed as a function argument: keep
-                        // those (they are never numbers, so this is always safe).
-                        self.nodes[i] = Node::Num(v);
+                // A name whose value is a number or a ray channel is read directly
+                // (channel names such as Px are `Px = $7`): no cache needed.
+                Node::Var(s) => match self.slots[s as usize].def {
+                    Def::Num(v) => self.nodes[i] = Node::Num(v),
+                    Def::Var { expr, .. } => {
+                        if let n @ (Node::Num(_) | Node::Chan(_)) = self.nodes[expr as usize] {
+                            self.nodes[i] = n;
+                        }
                     }
-                }
+                    _ => {}
+                },
                 _ => {}
             }
         }

@@ -266,8 +266,8 @@ impl<'a> Machine<'a> {
                 }
             }
             Node::Neg(a) => self.eval(a, f).map(|v| -v),
-            Node::Bin(op, a, b) => match self.eval(a, f) {
-                Ok(x) => match self.eval(b, f) {
+            Node::Bin(op, a, b) => match self.operand(a, f) {
+                Ok(x) => match self.operand(b, f) {
                     Ok(y) => binop(op, x, y),
                     Err(e) => Err(e),
                 },
@@ -281,6 +281,21 @@ impl<'a> Machine<'a> {
         };
         self.depth -= 1;
         r
+    }
+
+    /// An operand: numbers, channels and cached parameters without a call.
+    #[inline(always)]
+    fn operand(&mut self, n: NodeId, f: &Frame) -> R {
+        match self.code.nodes[n as usize] {
+            Node::Num(v) => Ok(v),
+            Node::Chan(c @ 1..=27) if self.env.is_some() => {
+                Ok(self.env.map_or(0.0, |e| e.chan[c as usize - 1]))
+            }
+            Node::Param(i) if (i as usize) < NCACHE && f.done.get() >> i & 1 == 1 => {
+                Ok(f.vals[i as usize].get())
+            }
+            _ => self.eval(n, f),
+        }
     }
 
     #[inline(never)]
@@ -379,7 +394,7 @@ impl<'a> Machine<'a> {
     #[inline]
     fn arg(&mut self, src: &ArgSrc, i: usize, l: Lib, site: NodeId) -> R {
         match *src {
-            ArgSrc::Nodes { list, caller } if i < list.len() => self.eval(list[i], caller),
+            ArgSrc::Nodes { list, caller } if i < list.len() => self.operand(list[i], caller),
             ArgSrc::Values(v) if i < v.len() => Ok(v[i]),
             _ => Err(self.fail(Fail::FewLibArgs(l, site))),
         }
@@ -405,7 +420,7 @@ impl<'a> Machine<'a> {
         match l {
             Lib::Select => {
                 let d = self.arg(&src, 0, l, site)? + 0.5;
-                if !(d >= 0.0) {
+                if d.is_nan() || d < 0.0 {
                     return Err(Trap::Domain);
                 }
                 let count = src.len().saturating_sub(1);

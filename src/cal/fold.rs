@@ -42,6 +42,7 @@ impl Parser<'_, '_> {
     }
 
     /// `left op right` for an operator character.
+    #[allow(clippy::redundant_guards)] // guards compare -0.0 and 0.0 alike, as Radiance
     pub fn binary(&mut self, c: u8, a: NodeId, b: NodeId) -> Result<NodeId, PErr> {
         let op = match c {
             b'+' => Op::Add,

@@ -118,6 +118,7 @@ impl Lib {
 }
 
 /// Radiance's deterministic `rand(x)`: a number in [0, 1) that jumps about with x.
+#[allow(clippy::approx_constant)] // Radiance's constants, not e and π/4
 pub fn rand(x: f64) -> f64 {
     let mut x = x * (1.0 / (1.0 + x * x) + 2.71828182845904);
     x += 0.785398163397447 - x.floor();

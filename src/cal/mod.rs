@@ -42,9 +42,10 @@
 //! run-time error rules (NaN → domain, ±Inf → range from library calls and `^`; division
 //! by zero → range; `select` out of range → domain). Evaluation depth is limited to
 //! [`MAX_DEPTH`] nested node evaluations or [`MAX_STACK`] bytes of stack (a fatal error,
-//! never a stack overflow), and an
-//! expression's tree to 2000 levels. Not implemented: `source_corr`, `source_theta`,
-//! `source_phi`, `fprism_val` (their definitions are not in the reference).
+//! never a stack overflow); an expression's tree to 2000 levels and its parentheses,
+//! calls and `^` to 200 (compile errors). Not implemented: `source_corr`, `source_theta`,
+//! `source_phi`, `fprism_val` (the reference does not define them fully).
+//! docs/functions.md describes the language, the dialects and the error rules.
 
 mod builder;
 mod code;

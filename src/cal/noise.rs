@@ -44,10 +44,17 @@ fn grad(hash: usize, x: f64, y: f64, z: f64) -> f64 {
     (if h & 1 == 0 { u } else { -u }) + (if h & 2 == 0 { v } else { -v })
 }
 
-/// The cell index of a coordinate (masked by 255) and the fraction within the cell.
+/// The cell index of a coordinate (masked by 255) and the offset within the cell. The
+/// cell is a C int, as in Radiance: beyond its range (or for NaN) it is INT_MIN (x86's
+/// conversion), so huge coordinates give huge offsets (and an infinite or NaN result).
 fn cell(x: f64) -> (usize, f64) {
     let f = x.floor();
-    ((f as i64 & 255) as usize, x - f)
+    let i = if (-2147483648.0..2147483648.0).contains(&f) {
+        f as i32
+    } else {
+        i32::MIN
+    };
+    ((i & 255) as usize, x - i as f64)
 }
 
 /// Perlin's improved noise at (x, y, z), about in [−1, 1].
@@ -175,9 +182,9 @@ pub fn fnoise3(x: f64, y: f64, z: f64) -> f64 {
             corner[branch ^ bit] = 0.5 * (old[branch & !bit] + old[branch | bit]) + amp * frand3(v);
             v = keep;
         }
-        for i in 0..3 {
+        for (i, bi) in b.iter_mut().enumerate() {
             if branch >> i & 1 == 1 {
-                b[i] = b[i].wrapping_add(s);
+                *bi = bi.wrapping_add(s);
             }
         }
     }
