@@ -278,7 +278,9 @@ fn ies_luminaire_from_ies2rad() {
             dir: "ies",
             files: &["room.rad"],
             view: "room.vf",
-            opts: &["-ab", ab, "-av", ".01", ".01", ".01", "-ps", "1", "-pj", "0"],
+            opts: &[
+                "-ab", ab, "-av", ".01", ".01", ".01", "-ps", "1", "-pj", "0",
+            ],
             ours_extra: &[],
             res: RES,
         });
@@ -337,4 +339,51 @@ fn ambient_specular_mirror_and_spot() {
 fn ambient_curved_surfaces() {
     ambient_case("", &["curved.rad"], "curved.vf", "1");
     ambient_case("", &["curved.rad"], "curved.vf", "2");
+}
+
+/// Tessera's own `skybright.cal` and `source.cal` (used when the RAYPATH has no Radiance
+/// library) give the same pictures as Radiance's: the daylit room under gensky's clear,
+/// intermediate and overcast skies, and the IES room, rendered by tpict both ways.
+#[test]
+fn builtin_library_files_match_radiances() {
+    let Some(bin) = radiance_bin() else { return };
+    let lib = bin.parent().unwrap().join("lib");
+    let scenes = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/scenes");
+    let tmp = tempfile::tempdir().unwrap();
+    let day = scenes.join("daylight");
+    let glows = std::fs::read_to_string(day.join("sky.rad")).unwrap();
+    let glows = &glows[glows.find("# (added)").unwrap()..];
+    let mut cases = Vec::new();
+    for (i, sky) in ["+s", "+i", "-c"].iter().enumerate() {
+        let out = run_ok(radiance(&bin, "gensky").args(["3", "21", "11", "-a", "40", sky]));
+        let f = tmp.path().join(format!("sky{i}.rad"));
+        std::fs::write(&f, [out.as_slice(), glows.as_bytes()].concat()).unwrap();
+        cases.push((
+            day.clone(),
+            vec![f.display().to_string(), "room.rad".into()],
+        ));
+    }
+    cases.push((scenes.join("ies"), vec!["room.rad".to_string()]));
+    for (dir, files) in cases {
+        let render = |raypath: String, out: &str| {
+            let out = tmp.path().join(out);
+            run_ok(
+                std::process::Command::new(tpict_bin())
+                    .current_dir(&dir)
+                    .env("RAYPATH", raypath)
+                    .args(["-vf", "room.vf", "-x", "64", "-y", "50", "-ab", "0"])
+                    .args(["-ps", "1", "-pj", "0", "-o"])
+                    .arg(&out)
+                    .args(&files),
+            );
+            read_picture(&out).unwrap()
+        };
+        let theirs = render(format!(".:{}", lib.display()), "theirs.hdr");
+        let ours = render(".".into(), "ours.hdr");
+        let c = compare(&ours.pixels_f64(), &theirs.pixels_f64(), 0.01);
+        eprintln!("{files:?}: {c:?}");
+        assert!(c.max < 1e-3, "{files:?}: {c:?}");
+        std::fs::remove_file(tmp.path().join("theirs.hdr")).unwrap();
+        std::fs::remove_file(tmp.path().join("ours.hdr")).unwrap();
+    }
 }

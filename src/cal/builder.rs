@@ -12,6 +12,21 @@ use std::sync::Arc;
 /// Tessera's own ray initialisation file, used when the RAYPATH has no `rayinit.cal`.
 pub const BUILTIN_RAYINIT: &str = include_str!("rayinit.cal");
 
+/// Tessera's own versions of Radiance library files that generated scenes name (written
+/// from the published models, `src/cal/lib/`), used when the RAYPATH has none.
+pub const BUILTIN_LIBRARY: [(&str, &str); 2] = [
+    ("skybright.cal", include_str!("lib/skybright.cal")),
+    ("source.cal", include_str!("lib/source.cal")),
+];
+
+/// The built-in text of library file `name`, if Tessera has one.
+pub fn builtin_library(name: &str) -> Option<&'static str> {
+    BUILTIN_LIBRARY
+        .iter()
+        .find(|(n, _)| *n == name)
+        .map(|(_, t)| *t)
+}
+
 /// The ray channel variables `$1..$27`, in order (§1.8).
 pub const CHANNELS: [&str; 27] = [
     "Dx", "Dy", "Dz", "Nx", "Ny", "Nz", "Px", "Py", "Pz", "T", "Rdot", "S", "Tx", "Ty", "Tz", "Ix",
@@ -140,14 +155,27 @@ impl CalBuilder {
         if let Some(c) = self.loaded.get(name) {
             return Ok(*c);
         }
-        let path = self.find(name).ok_or_else(|| {
-            CalError::file(
-                name,
-                format!("cannot find function file on RAYPATH {:?}", self.raypath),
-            )
-        })?;
-        let text = std::fs::read(&path)
-            .map_err(|e| CalError::file(&path.display().to_string(), e.to_string()))?;
+        let (text, path) = match self.find(name) {
+            Some(path) => (
+                std::fs::read(&path)
+                    .map_err(|e| CalError::file(&path.display().to_string(), e.to_string()))?,
+                path,
+            ),
+            // Radiance's library files a scene names most (gensky's skybright.cal,
+            // ies2rad's source.cal): Tessera's own versions when Radiance's are not found.
+            None => match builtin_library(name) {
+                Some(t) => (
+                    t.as_bytes().to_vec(),
+                    PathBuf::from(format!("<built-in {name}>")),
+                ),
+                None => {
+                    return Err(CalError::file(
+                        name,
+                        format!("cannot find function file on RAYPATH {:?}", self.raypath),
+                    ))
+                }
+            },
+        };
         let base = Path::new(name)
             .file_name()
             .map_or(name.to_string(), |s| s.to_string_lossy().into_owned());

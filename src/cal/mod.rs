@@ -58,7 +58,9 @@ mod noise;
 mod parser;
 mod program;
 
-pub use builder::{CalBuilder, BRDF_VARS, BUILTIN_RAYINIT, CHANNELS};
+pub use builder::{
+    builtin_library, CalBuilder, BRDF_VARS, BUILTIN_LIBRARY, BUILTIN_RAYINIT, CHANNELS,
+};
 pub use error::{CalError, EvalError};
 pub use eval::{MAX_DEPTH, MAX_STACK};
 pub use noise::{fnoise3, noise3};
