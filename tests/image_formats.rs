@@ -987,4 +987,9 @@ fn fuzz_findings_are_refused() {
     // 29 GB.
     let e = tessera::image::exr::read_exr(&dir.join("exr-huge-layer.exr")).unwrap_err();
     assert!(e.to_string().contains("OpenEXR"), "{e}");
+    // A damaged ZIP block makes the exr crate's inflater (zune-inflate) ask for 5.6 GB
+    // (zeroed, so untouched pages): under a memory limit the process aborted; without one
+    // it is an error. Decoding runs on the calling thread (no rayon pool to abort in).
+    let e = tessera::image::exr::read_exr(&dir.join("exr-decoder-panic.exr")).unwrap_err();
+    assert!(e.to_string().contains("OpenEXR"), "{e}");
 }

@@ -220,6 +220,7 @@ pub fn read_exr(path: &Path) -> Result<Image, ImageError> {
         )
         .first_valid_layer()
         .all_attributes()
+        .non_parallel()
         .from_file(path);
     let image = read.map_err(|e| match e {
         x::Error::Io(source) => ImageError::Io {
