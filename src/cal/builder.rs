@@ -45,6 +45,8 @@ pub struct CalBuilder {
     names: HashMap<String, SlotId>,
     ctxs: Vec<String>,
     loaded: HashMap<String, Ctx>,
+    /// Function files read from disk: (name as given, path), in load order.
+    paths: Vec<(String, PathBuf)>,
     file_ids: HashMap<String, u32>,
     raypath: Vec<PathBuf>,
     exprs: Vec<NodeId>,
@@ -77,6 +79,7 @@ impl CalBuilder {
             names: HashMap::new(),
             ctxs: vec![String::new()],
             loaded: HashMap::new(),
+            paths: Vec::new(),
             file_ids: HashMap::new(),
             raypath: raypath.to_vec(),
             exprs: Vec::new(),
@@ -156,11 +159,12 @@ impl CalBuilder {
             return Ok(*c);
         }
         let (text, path) = match self.find(name) {
-            Some(path) => (
-                std::fs::read(&path)
-                    .map_err(|e| CalError::file(&path.display().to_string(), e.to_string()))?,
-                path,
-            ),
+            Some(path) => {
+                let text = std::fs::read(&path)
+                    .map_err(|e| CalError::file(&path.display().to_string(), e.to_string()))?;
+                self.paths.push((name.to_string(), path.clone()));
+                (text, path)
+            }
             // Radiance's library files a scene names most (gensky's skybright.cal,
             // ies2rad's source.cal): Tessera's own versions when Radiance's are not found.
             None => match builtin_library(name) {
@@ -271,6 +275,12 @@ impl CalBuilder {
     /// The rcalc-style outputs (`$N = expr`) compiled so far.
     pub fn outputs(&self) -> &[(u32, ExprId)] {
         &self.outputs
+    }
+
+    /// The function files read from disk so far: (name as given, path found), in load
+    /// order (built-in files are not listed).
+    pub fn file_paths(&self) -> &[(String, PathBuf)] {
+        &self.paths
     }
 
     /// The immutable program.

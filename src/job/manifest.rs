@@ -430,6 +430,7 @@ pub fn create_job(dir: &Path, req: &PlanRequest) -> Result<Manifest> {
     }
     super::write_file_atomic(&job.file("scene.rad"), text.as_bytes())
         .context("cannot write scene.rad")?;
+    copy_inputs(&job, &scene.inputs)?;
     for (name, _, _) in m.tasks() {
         std::fs::File::create(job.tasks().join(format!("{name}.todo")))
             .with_context(|| format!("cannot create task {name}"))?;
@@ -456,6 +457,33 @@ pub fn create_job(dir: &Path, req: &PlanRequest) -> Result<Manifest> {
     super::sync_dir(&parent);
     Ok(m)
 }
+
+/// Copy the files the scene's primitives read by relative name (function files, data
+/// files, pictures, fonts, text) into `JOB/files/` under the same names, so that workers
+/// find them whatever their directory and RAYPATH. Names climbing out with `..` are left
+/// to the workers' RAYPATH.
+fn copy_inputs(job: &JobDir, inputs: &[(String, std::path::PathBuf)]) -> Result<()> {
+    let dir = job.root().join(INPUTS_DIR);
+    for (name, path) in inputs {
+        let rel = Path::new(name);
+        if rel
+            .components()
+            .any(|c| !matches!(c, std::path::Component::Normal(_)))
+        {
+            continue;
+        }
+        let dest = dir.join(rel);
+        if let Some(p) = dest.parent() {
+            std::fs::create_dir_all(p).with_context(|| format!("cannot create {}", p.display()))?;
+        }
+        std::fs::copy(path, &dest)
+            .with_context(|| format!("cannot copy {} into the job", path.display()))?;
+    }
+    Ok(())
+}
+
+/// Where a job keeps the files its scene reads by relative name ([`copy_inputs`]).
+pub const INPUTS_DIR: &str = "files";
 
 #[cfg(test)]
 mod tests {

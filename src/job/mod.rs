@@ -5,6 +5,8 @@
 //! ```text
 //! JOB/manifest.json            what to render (written once by tplan, then read-only)
 //! JOB/scene.rad                the scene, flattened (inline commands and xform expanded)
+//! JOB/files/                   files the scene reads by relative name (.cal, .dat, pictures,
+//!                              fonts, text), copied by tplan; workers look here first
 //! JOB/tasks/<task>.todo        a tile nobody has claimed
 //! JOB/tasks/<task>.claim.<owner>   claimed by a worker incarnation
 //! JOB/tasks/<task>.done        finished (its result is in tiles/)

@@ -198,9 +198,12 @@ impl Beater {
 /// sharing when the values are cached).
 fn start_session(job: &JobDir, m: &Manifest, owner: &str, wo: &WorkerOptions) -> Result<Session> {
     let scene_path = job.file(&m.scene_file);
-    // The job directory first (the flattened scene names no other scene file), then the
-    // RAYPATH, where fonts, data files and pictures named by modifiers are found.
-    let mut raypath = vec![job.root().to_path_buf()];
+    // The files the planner copied (function files, data files, pictures, fonts), the job
+    // directory (the flattened scene names no other scene file), then the RAYPATH.
+    let mut raypath = vec![
+        job.root().join(super::manifest::INPUTS_DIR),
+        job.root().to_path_buf(),
+    ];
     raypath.extend(ReadOptions::from_env().raypath);
     let ro = ReadOptions {
         allow_commands: false,

@@ -21,6 +21,8 @@ type Cache<T> = Mutex<HashMap<PathBuf, Result<Arc<T>, String>>>;
 #[derive(Default)]
 pub struct SceneFiles {
     raypath: Vec<PathBuf>,
+    /// Every file found so far: (name as given, path), first finds only.
+    used: Mutex<Vec<(String, PathBuf)>>,
     functions: SceneFunctions,
     data: Cache<DataArray>,
     pictures: Cache<PictData>,
@@ -43,6 +45,20 @@ impl SceneFiles {
             functions: SceneFunctions::new(raypath),
             ..SceneFiles::default()
         }
+    }
+
+    /// The files the scene's primitives read, relative names only (as given, and the path
+    /// found along the RAYPATH): data files, pictures, fonts, text files and function files.
+    /// A batch job copies them into its directory.
+    pub fn relative_inputs(&self) -> Vec<(String, PathBuf)> {
+        let mut all = self.used.lock().map(|u| u.clone()).unwrap_or_default();
+        for (n, p) in self.functions.file_paths() {
+            if !all.iter().any(|(m, _)| *m == n) {
+                all.push((n, p));
+            }
+        }
+        all.retain(|(n, _)| Path::new(n).is_relative());
+        all
     }
 
     /// The scene's function language state (function files found along the RAYPATH).
@@ -74,13 +90,17 @@ impl SceneFiles {
             };
         }
         let dirs = self.raypath();
-        dirs.iter()
-            .map(|d| d.join(p))
-            .find(|c| c.is_file())
-            .ok_or_else(|| {
-                let shown: Vec<String> = dirs.iter().map(|d| d.display().to_string()).collect();
-                format!("cannot find file '{name}' on RAYPATH {}", shown.join(":"))
-            })
+        let found = dirs.iter().map(|d| d.join(p)).find(|c| c.is_file());
+        if let Some(f) = &found {
+            let mut used = self.used.lock().unwrap_or_else(|e| e.into_inner());
+            if !used.iter().any(|(n, _)| n == name) {
+                used.push((name.to_string(), f.clone()));
+            }
+        }
+        found.ok_or_else(|| {
+            let shown: Vec<String> = dirs.iter().map(|d| d.display().to_string()).collect();
+            format!("cannot find file '{name}' on RAYPATH {}", shown.join(":"))
+        })
     }
 
     fn cached<T>(

@@ -47,6 +47,8 @@ pub struct SceneFunctions {
     raypath: Vec<PathBuf>,
     builder: Mutex<Option<CalBuilder>>,
     shared: Arc<FuncShared>,
+    /// The function files read (name as given, path), kept when the program is linked.
+    paths: Mutex<Vec<(String, PathBuf)>>,
 }
 
 impl std::fmt::Debug for SceneFunctions {
@@ -64,6 +66,7 @@ impl SceneFunctions {
             raypath: raypath.to_vec(),
             builder: Mutex::new(None),
             shared: Arc::new(FuncShared::default()),
+            paths: Mutex::new(Vec::new()),
         }
     }
 
@@ -82,6 +85,16 @@ impl SceneFunctions {
         f(g.as_mut().expect("just created"))
     }
 
+    /// The function files read from disk: (name as given, path found).
+    pub fn file_paths(&self) -> Vec<(String, PathBuf)> {
+        if let Ok(g) = self.builder.lock() {
+            if let Some(b) = g.as_ref() {
+                return b.file_paths().to_vec();
+            }
+        }
+        self.paths.lock().map(|p| p.clone()).unwrap_or_default()
+    }
+
     /// The state the scene's function modifiers share.
     pub fn shared(&self) -> Arc<FuncShared> {
         self.shared.clone()
@@ -91,6 +104,9 @@ impl SceneFunctions {
     /// state; None when the scene has no functions.
     pub fn finish(&self) -> Option<Arc<FuncShared>> {
         let b = self.builder.lock().ok()?.take()?;
+        if let Ok(mut p) = self.paths.lock() {
+            *p = b.file_paths().to_vec();
+        }
         let _ = self.shared.program.set(b.finish());
         Some(self.shared.clone())
     }

@@ -122,6 +122,9 @@ pub struct Scene {
     /// The function language program of the scene's patterns and materials, None when
     /// no primitive uses functions.
     pub functions: Option<Arc<FuncShared>>,
+    /// The files its primitives read by relative name (data files, pictures, fonts, text
+    /// and function files): the name as given and the path found along the RAYPATH.
+    pub inputs: Vec<(String, PathBuf)>,
 }
 
 impl Scene {
@@ -444,6 +447,7 @@ impl Scene {
         let bounds: Vec<(DVec3, DVec3)> = objects.iter().map(|o| o.surface.bounds()).collect();
         let bvh = Bvh::build(&bounds, eps);
         let functions = mods.files.functions().finish();
+        let inputs = mods.files.relative_inputs();
         Ok(Scene {
             origin,
             size,
@@ -455,6 +459,7 @@ impl Scene {
             bvh,
             warnings,
             functions,
+            inputs,
         })
     }
 

@@ -1,0 +1,99 @@
+//! A job carries the files its scene reads by relative name (function files, data files,
+//! pictures): `tplan` copies them into `JOB/files/`, so workers started anywhere, without a
+//! RAYPATH, render the same picture as `tpict` in the scene's directory.
+
+mod common;
+
+use common::*;
+use std::path::{Path, PathBuf};
+use std::process::Command;
+use tessera::image::read_picture;
+
+fn scene_dir() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/scenes/patterns")
+}
+
+fn tool(name: &str, dir: &Path) -> Command {
+    let exe = match name {
+        "tplan" => env!("CARGO_BIN_EXE_tplan"),
+        "tpiece" => env!("CARGO_BIN_EXE_tpiece"),
+        "tassemble" => env!("CARGO_BIN_EXE_tassemble"),
+        _ => env!("CARGO_BIN_EXE_tpict"),
+    };
+    let mut c = Command::new(exe);
+    c.current_dir(dir)
+        .env_remove("RAYPATH")
+        .env_remove("SLURM_ARRAY_JOB_ID")
+        .env_remove("SLURM_JOB_ID")
+        .env_remove("SLURM_CPUS_PER_TASK");
+    c
+}
+
+#[test]
+fn jobs_carry_the_files_their_scene_reads() {
+    let t = tempfile::tempdir().unwrap();
+    let job = t.path().join("job");
+    let args = [
+        "-vf",
+        "patterns.vf",
+        "-x",
+        "48",
+        "-y",
+        "40",
+        "-ab",
+        "0",
+        "-ps",
+        "1",
+        "-av",
+        ".05",
+        ".05",
+        ".05",
+    ];
+    for scene in ["patterns.rad", "datapat.rad"] {
+        let _ = std::fs::remove_dir_all(&job);
+        run_ok(
+            tool("tplan", &scene_dir())
+                .args(["--workers", "1", "-o"])
+                .arg(&job)
+                .arg("--")
+                .args(args)
+                .arg(scene),
+        );
+        let files = job.join("files");
+        let wanted: &[&str] = if scene == "patterns.rad" {
+            &["tiles.cal", "lum.dat"]
+        } else {
+            &["grad.dat", "bump.dat", "pic.hdr"]
+        };
+        for f in wanted {
+            assert!(files.join(f).is_file(), "{f} not copied into the job");
+        }
+        // The worker runs elsewhere, without a RAYPATH.
+        run_ok(
+            tool("tpiece", t.path())
+                .arg(&job)
+                .args(["--threads", "1", "-q"]),
+        );
+        let out = t.path().join("job.hdr");
+        let _ = std::fs::remove_file(&out);
+        run_ok(tool("tassemble", t.path()).arg(&job).arg("-o").arg(&out));
+        let reference = t.path().join("ref.hdr");
+        let _ = std::fs::remove_file(&reference);
+        run_ok(
+            tool("tpict", &scene_dir())
+                .args(["-n", "1"])
+                .args(args)
+                .arg("-o")
+                .arg(&reference)
+                .arg(scene),
+        );
+        let (a, b) = (
+            read_picture(&out).unwrap(),
+            read_picture(&reference).unwrap(),
+        );
+        assert_eq!(
+            a.pixels, b.pixels,
+            "{scene}: the job's picture differs from tpict's"
+        );
+    }
+}
