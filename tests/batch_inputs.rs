@@ -97,3 +97,32 @@ fn jobs_carry_the_files_their_scene_reads() {
         );
     }
 }
+
+/// The job's fingerprint covers the copied files: a worker refuses a job whose function or
+/// data file changed after planning, as it refuses a changed scene, since its ambient values
+/// would mix with values computed from the old file.
+#[test]
+fn a_changed_job_file_is_refused() {
+    let t = tempfile::tempdir().unwrap();
+    let job = t.path().join("job");
+    run_ok(
+        tool("tplan", &scene_dir())
+            .args(["--workers", "1", "-o"])
+            .arg(&job)
+            .arg("--")
+            .args(["-vf", "patterns.vf", "-x", "16", "-y", "16", "-ab", "1"])
+            .arg("datapat.rad"),
+    );
+    let data = job.join("files/grad.dat");
+    let mut text = std::fs::read_to_string(&data).unwrap();
+    text.push_str("\n# edited after planning\n");
+    std::fs::write(&data, text).unwrap();
+    let out = tool("tpiece", t.path())
+        .arg(&job)
+        .args(["--threads", "1", "-q"])
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(!out.status.success(), "tpiece accepted a changed job file");
+    assert!(err.contains("fingerprint"), "unclear error: {err}");
+}

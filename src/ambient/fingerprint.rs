@@ -52,6 +52,30 @@ impl Hasher {
     }
 }
 
+/// `fp` extended by the contents of the files the scene reads by relative name (function
+/// files, data files, pictures, fonts: [`crate::scene::Scene::inputs`]), so that a changed
+/// `.cal` or data file refuses stored values. Unchanged when there are none.
+pub fn with_inputs(
+    fp: [u8; 32],
+    inputs: &[(String, std::path::PathBuf)],
+) -> Result<[u8; 32], String> {
+    if inputs.is_empty() {
+        return Ok(fp);
+    }
+    let mut sorted: Vec<&(String, std::path::PathBuf)> = inputs.iter().collect();
+    sorted.sort_by(|a, b| a.0.cmp(&b.0));
+    let mut h = Hasher::new();
+    h.str("tessera-inputs-v1");
+    h.bytes(&fp);
+    for (name, path) in sorted {
+        let data = std::fs::read(path).map_err(|e| format!("{}: {e}", path.display()))?;
+        h.str(name);
+        h.bytes(&(data.len() as u64).to_le_bytes());
+        h.bytes(&data);
+    }
+    Ok(h.finish())
+}
+
 /// Fingerprint of a scene's primitives and the ambient-relevant options.
 pub fn fingerprint(prims: &[Primitive], params: &RenderParams) -> [u8; 32] {
     let mut h = Hasher::new();

@@ -331,7 +331,11 @@ pub fn create_job(dir: &Path, req: &PlanRequest) -> Result<Manifest> {
     for w in &scene.warnings {
         eprintln!("tplan: warning - {w}");
     }
-    let fingerprint = crate::ambient::fingerprint::fingerprint(&prims, &opts.params);
+    let fingerprint = crate::ambient::fingerprint::with_inputs(
+        crate::ambient::fingerprint::fingerprint(&prims, &opts.params),
+        &scene.inputs,
+    )
+    .map_err(|e| anyhow!("cannot read a scene input: {e}"))?;
     let text = scene_text(&prims, &opts.scene_files);
     // Frames.
     let mut views: Vec<View> = Vec::new();

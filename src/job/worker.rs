@@ -210,16 +210,17 @@ fn start_session(job: &JobDir, m: &Manifest, owner: &str, wo: &WorkerOptions) ->
         raypath,
     };
     let source = SceneSource::read(&[scene_path.display().to_string()], &ro, &m.params)?;
-    if source.fingerprint != m.fingerprint_bytes() {
+    // The fingerprint covers the files the scene reads (JOB/files/), known once it is built.
+    let mut session = Session::start(m.params.clone(), source, wo.threads)?;
+    if session.fingerprint != m.fingerprint_bytes() {
         bail!(
             "{}: the scene or the manifest's options changed since the job was planned \
              (fingerprint {} instead of {}); plan a new job",
             scene_path.display(),
-            super::hex32(&source.fingerprint),
+            super::hex32(&session.fingerprint),
             m.fingerprint
         );
     }
-    let mut session = Session::start(m.params.clone(), source, wo.threads)?;
     if session.cached_ambient().is_some() {
         let store = open_share(job, owner, &session, wo.amb_flush)?;
         session.attach_store(store);

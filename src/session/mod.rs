@@ -98,6 +98,9 @@ impl Session {
         threads: Option<usize>,
     ) -> Result<Session> {
         let scene = Scene::build_on(&source.prims, &source.raypath)?;
+        let fingerprint =
+            crate::ambient::fingerprint::with_inputs(source.fingerprint, &scene.inputs)
+                .map_err(|e| anyhow::anyhow!("cannot read a scene input: {e}"))?;
         let mut warnings = scene.warnings.clone();
         let lights = LightSet::collect(&scene, params.dr);
         warnings.extend(lights.warnings.iter().cloned());
@@ -116,7 +119,7 @@ impl Session {
             params,
             scene,
             lights,
-            fingerprint: source.fingerprint,
+            fingerprint,
             ambient,
             threads,
             warnings,
