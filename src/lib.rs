@@ -22,6 +22,7 @@
 //! - [`tpict`]: the rpict-compatible driver behind the `tpict` binary.
 //! - [`runinfo`]: what every tool shares about the running program (software name,
 //!   threads, CPU time, frame names).
+//! - [`rif`]: `rad` input files (`.rif`) and the rpict options rad derives from them.
 //! - [`job`]: the batch toolkit's job directory: plan, workers, merge, assembly, status.
 
 pub mod ambient;
@@ -37,6 +38,7 @@ pub mod material;
 pub mod modifier;
 pub mod options;
 pub mod render;
+pub mod rif;
 pub mod runinfo;
 pub mod scene;
 pub mod session;

@@ -383,6 +383,7 @@ fn manifest_seed(dir: &Path) -> Vec<u8> {
         tile_size: None,
         workers: Some(2),
         frames: None,
+        views: None,
         lease: None,
         ambient: None,
         amb_force: false,

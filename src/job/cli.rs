@@ -71,11 +71,34 @@ struct TplanArgs {
     /// `--allow-commands` after `--`).
     #[arg(long)]
     allow_commands: bool,
+    /// Make the job from a `rad` input file: its scene, materials, views and the rpict
+    /// options rad derives (docs/rif.md); scene files may follow after `--`.
+    #[arg(long, value_name = "FILE")]
+    rif: Option<PathBuf>,
+    /// With --rif: render only this view (a view name of the file or a standard view id);
+    /// default: every view of the file, one frame each.
+    #[arg(long, value_name = "NAME", requires = "rif")]
+    view: Option<String>,
+    /// With --rif: a `VAR=value` assignment applied after the file (as rad's arguments).
+    #[arg(long = "set", value_name = "VAR=VALUE", requires = "rif")]
+    set: Vec<String>,
+    /// With --rif: print the rpict options rad would use, one line per view, and make no job.
+    #[arg(long, requires = "rif")]
+    print: bool,
     /// The job directory to create (must not exist, or be empty).
-    #[arg(short = 'o', long = "output", value_name = "JOBDIR")]
-    output: PathBuf,
-    /// rpict options and scene files (after `--`).
-    #[arg(last = true, required = true, value_name = "RPICT-OPTIONS-AND-SCENE")]
+    #[arg(
+        short = 'o',
+        long = "output",
+        value_name = "JOBDIR",
+        required_unless_present = "print"
+    )]
+    output: Option<PathBuf>,
+    /// rpict options and scene files (after `--`); with --rif, more scene files.
+    #[arg(
+        last = true,
+        required_unless_present = "rif",
+        value_name = "RPICT-OPTIONS-AND-SCENE"
+    )]
     rest: Vec<String>,
 }
 
@@ -106,29 +129,44 @@ fn tplan(a: TplanArgs) -> Result<i32> {
     if a.tiles == Some(0) {
         bail!("--tiles must be at least 1");
     }
+    let output = match (&a.rif, a.output.clone()) {
+        (Some(_), _) if a.print => return rif_print(&a),
+        (_, Some(o)) => o,
+        (_, None) => bail!("--output JOBDIR is required"),
+    };
+    let (rest, views) = match &a.rif {
+        Some(_) => {
+            if a.frames.is_some() {
+                bail!("--frames and --rif do not go together: the rif file's views are the frames");
+            }
+            rif_job_args(&a)?
+        }
+        None => (a.rest.clone(), None),
+    };
     let req = PlanRequest {
         tiles: a.tiles,
         tile_size: a.tile_size.as_deref().map(parse_size).transpose()?,
         workers: Some(a.workers),
         frames: a.frames.map(|p| p.display().to_string()),
+        views,
         lease: a.lease,
         ambient: a.ambient.map(|p| p.display().to_string()),
         amb_force: a.amb_force,
         args: if a.allow_commands {
             std::iter::once("--allow-commands".to_string())
-                .chain(a.rest)
+                .chain(rest)
                 .collect()
         } else {
-            a.rest
+            rest
         },
         command: command_line(),
     };
-    let m = create_job(&a.output, &req)?;
+    let m = create_job(&output, &req)?;
     let tiles: usize = m.frames.iter().map(|f| f.tiles.len()).sum();
     let f0 = &m.frames[0];
     eprintln!(
         "tplan: job {}: {} frame(s) of {}x{}, {} tiles, {} primitives, lease {} s",
-        a.output.display(),
+        output.display(),
         m.frames.len(),
         f0.xres,
         f0.yres,
@@ -137,6 +175,67 @@ fn tplan(a: TplanArgs) -> Result<i32> {
         m.lease_seconds
     );
     Ok(0)
+}
+
+fn rif_plan(
+    a: &TplanArgs,
+) -> Result<(crate::rif::derive::RadPlan, Vec<crate::rif::views::RadView>)> {
+    let path = a.rif.as_ref().expect("--rif");
+    let mut ro = crate::scene::ReadOptions::from_env();
+    ro.allow_commands |= a.allow_commands;
+    let plan = crate::rif::load(path, &a.set, &a.rest, &ro)?;
+    for w in &plan.warnings {
+        eprintln!("tplan: warning - {w}");
+    }
+    let views = plan
+        .select(a.view.as_deref())
+        .map_err(|e| anyhow!("{}: {e}", path.display()))?;
+    Ok((plan, views))
+}
+
+/// `tplan --rif FILE --print`: rad's rpict options, one line per view.
+fn rif_print(a: &TplanArgs) -> Result<i32> {
+    let (plan, views) = rif_plan(a)?;
+    for v in &views {
+        println!("{}", plan.rpict_words(v).join(" "));
+    }
+    Ok(0)
+}
+
+/// The job's rpict arguments and frame views from a rif file. rad's `-af` (the job has its
+/// own store), `-t` and `-e` (rpict's progress reports) are left out.
+fn rif_job_args(a: &TplanArgs) -> Result<(Vec<String>, Option<Vec<crate::view::View>>)> {
+    let (plan, views) = rif_plan(a)?;
+    let mut args = Vec::new();
+    let words = plan.rpict_words(&views[0]);
+    let mut i = 0;
+    while i < words.len() {
+        if matches!(words[i].as_str(), "-af" | "-t" | "-e") {
+            eprintln!(
+                "tplan: note - rad's {} {} is not used by a job",
+                words[i],
+                words.get(i + 1).map_or("", |s| s.as_str())
+            );
+            i += 2;
+            continue;
+        }
+        args.push(words[i].clone());
+        i += 1;
+    }
+    args.extend(plan.scene_files.iter().cloned());
+    let mut frames = Vec::new();
+    for (n, v) in views.iter().enumerate() {
+        let mut view = crate::view::View::default();
+        view.apply_words(&v.words)
+            .map_err(|e| anyhow!("view {}: {e}", v.name))?;
+        eprintln!(
+            "tplan: frame {n}: view {} (rad reduces it with: {})",
+            v.name,
+            plan.pfilt_command(v, &format!("frame{n}.hdr"))
+        );
+        frames.push(view);
+    }
+    Ok((args, Some(frames)))
 }
 
 /// `tpiece`: a worker.

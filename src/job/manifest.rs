@@ -236,6 +236,8 @@ pub struct PlanRequest {
     pub workers: Option<usize>,
     /// `--frames VIEWFILE`: one view per line, each on top of the previous.
     pub frames: Option<String>,
+    /// Views given directly, one frame each (a rif file's views); each stands alone.
+    pub views: Option<Vec<View>>,
     /// `--lease SECONDS`.
     pub lease: Option<f64>,
     /// `--ambient FILE`: seed the job's ambient store.
@@ -340,6 +342,7 @@ pub fn create_job(dir: &Path, req: &PlanRequest) -> Result<Manifest> {
     // Frames.
     let mut views: Vec<View> = Vec::new();
     match &req.frames {
+        None if req.views.is_some() => views.extend(req.views.iter().flatten().cloned()),
         None => views.push(opts.picture.view.clone()),
         Some(vf) => {
             let content = std::fs::read_to_string(vf)

@@ -1,0 +1,258 @@
+//! `rad` input files: `tplan --rif FILE --print` prints the rpict options real `rad -n`
+//! derives (compared word for word over a sweep of rif files), a job made from a rif file
+//! renders its views as frames, and bad rif files fail with file:line.
+
+mod common;
+
+use common::*;
+use std::path::Path;
+use std::process::Command;
+
+const ROOM: &str = "void plastic white 0 0 5 .6 .6 .6 0 0
+white polygon floor 0 0 12 0 0 0 0 5 0 4 5 0 4 0 0
+white polygon ceiling 0 0 12 0 0 3 4 0 3 4 5 3 0 5 3
+white polygon wall1 0 0 12 0 0 0 4 0 0 4 0 3 0 0 3
+white polygon wall2 0 0 12 0 5 0 0 5 3 4 5 3 4 5 0
+white polygon wall3 0 0 12 0 0 0 0 0 3 0 5 3 0 5 0
+white polygon wall4 0 0 12 4 0 0 4 5 0 4 5 3 4 0 3
+void light bright 0 0 3 10 10 10
+bright sphere lamp 0 0 4 2 2.5 2.7 .1
+";
+
+fn tplan(dir: &Path) -> Command {
+    let mut c = Command::new(env!("CARGO_BIN_EXE_tplan"));
+    c.current_dir(dir).env_remove("RAYPATH");
+    c
+}
+
+/// rad's rpict lines for `rif` (the overture lines to /dev/null left out), options only.
+fn rad_lines(bin: &Path, dir: &Path, rif: &str) -> Vec<String> {
+    let out = run_ok(radiance(bin, "rad").current_dir(dir).args(["-n", rif]));
+    String::from_utf8_lossy(&out)
+        .lines()
+        .filter_map(|l| l.trim().strip_prefix("rpict "))
+        .filter(|l| !l.ends_with("/dev/null"))
+        .map(|l| {
+            let w: Vec<&str> = l.split_whitespace().collect();
+            w[..w.len() - 3].join(" ")
+        })
+        .collect()
+}
+
+fn ours(dir: &Path, rif: &str) -> Vec<String> {
+    let out = run_ok(tplan(dir).args(["--rif", rif, "--print"]));
+    String::from_utf8_lossy(&out)
+        .lines()
+        .map(str::to_string)
+        .collect()
+}
+
+/// Over a sweep of rif files (every QUALITY × DETAIL × VARIABILITY × PENUMBRAS, with
+/// zones, exposures, resolutions, UP directions, standard, labelled and unnamed views,
+/// REPORT, AMBFILE, render and rpict varied along), tplan prints what rad prints.
+#[test]
+fn rpict_options_equal_rads() {
+    let Some(bin) = radiance_bin() else { return };
+    let t = tempfile::tempdir().unwrap();
+    std::fs::write(t.path().join("room.rad"), ROOM).unwrap();
+    let zones = [
+        "",
+        "ZONE= I 0 4 0 5 0 3",
+        "ZONE= Exterior -10 10 -10 10 0 5",
+        "ZONE= int 0 4 0 5 0 3",
+    ];
+    let exposures = [
+        "",
+        "EXPOSURE= +1",
+        "EXPOSURE= 0.5",
+        "EXPOSURE= -2",
+        "EXP= 3",
+    ];
+    let resolutions = [
+        "",
+        "RESOLUTION= 640 480",
+        "RES= 300",
+        "RESOLUTION= 640 480 1.2",
+    ];
+    let ups = ["", "UP= Z", "UP= -Y", "UP= X", "UP= +y"];
+    let views = [
+        "view= X",
+        "view= xZ\nview= zl",
+        "view= nw -vp 0.5 4.5 1.6 -vd 1 -1 0 -vh 60 -vv 45",
+        "view= XYZh\nview= -vp 1 1 1 -vd 0 1 0\nview= xyc",
+        "",
+        "view= Za -vu 0 1 0\nview= Ys",
+    ];
+    let extras = [
+        "",
+        "REPORT= 2 c.err",
+        "AMBFILE= x.amb\nrender= -dj .5",
+        "rpict= -lr 4",
+        "INDIRECT= 2",
+        "REPORT= 3\nINDIRECT= 1",
+    ];
+    let levels = ["L", "M", "H"];
+    let mut n = 0;
+    let mut cases = 0;
+    for q in levels {
+        for d in levels {
+            for v in levels {
+                for pen in ["PENUMBRAS= T", "PENUMBRAS= False"] {
+                    let pick = |len: usize, k: usize| (n * (k + 3) + n / 7) % len;
+                    let rif = format!(
+                        "# sweep {n}\nscene= room.rad\nQUALITY= {q}\nDETAIL= {d}\nVARIABILITY= {v}\n{pen}\n{}\n{}\n{}\n{}\n{}\n{}\n",
+                        zones[pick(zones.len(), 0)],
+                        exposures[pick(exposures.len(), 1)],
+                        resolutions[pick(resolutions.len(), 2)],
+                        ups[pick(ups.len(), 3)],
+                        views[pick(views.len(), 4)],
+                        extras[pick(extras.len(), 5)],
+                    );
+                    let name = format!("s{n}.rif");
+                    std::fs::write(t.path().join(&name), &rif).unwrap();
+                    let (want, got) = (rad_lines(&bin, t.path(), &name), ours(t.path(), &name));
+                    assert!(!want.is_empty(), "rad printed no rpict line for\n{rif}");
+                    assert_eq!(got, want, "rif file:\n{rif}");
+                    cases += want.len();
+                    n += 1;
+                }
+            }
+        }
+    }
+    eprintln!("rif: {n} files, {cases} rpict lines equal to rad -n's");
+}
+
+/// A rif file with two views makes a job of two frames with rad's options; the views
+/// render as tpict renders them with the printed options.
+#[test]
+fn a_rif_job_renders_its_views_as_frames() {
+    let t = tempfile::tempdir().unwrap();
+    let d = t.path();
+    std::fs::write(d.join("room.rad"), ROOM).unwrap();
+    std::fs::write(
+        d.join("p.rif"),
+        "scene= room.rad\nZONE= I 0 4 0 5 0 3\nRESOLUTION= 24 16\nAMBFILE= p.amb\nview= X\nview= corner -vp .5 .5 1.5 -vd 1 1 0\n",
+    )
+    .unwrap();
+    let lines = ours(d, "p.rif");
+    assert_eq!(lines.len(), 2);
+    let render_job = |job: &Path, extra: &[&str]| -> Vec<tessera::image::Image> {
+        run_ok(
+            tplan(d)
+                .args(["--rif", "p.rif", "--workers", "1"])
+                .args(extra)
+                .arg("-o")
+                .arg(job),
+        );
+        run_ok(
+            Command::new(env!("CARGO_BIN_EXE_tpiece"))
+                .current_dir(d)
+                .arg(job)
+                .args(["--threads", "1", "-q"]),
+        );
+        let out = job.with_extension("hdr");
+        let mut pics = Vec::new();
+        for frame in 0.. {
+            let _ = std::fs::remove_file(&out);
+            let r = Command::new(env!("CARGO_BIN_EXE_tassemble"))
+                .arg(job)
+                .args(["--frame", &frame.to_string(), "-o"])
+                .arg(&out)
+                .output()
+                .unwrap();
+            if !r.status.success() {
+                break;
+            }
+            pics.push(tessera::image::read_picture(&out).unwrap());
+        }
+        pics
+    };
+    let both = render_job(&d.join("both"), &[]);
+    assert_eq!(both.len(), 2, "one frame per view");
+    let corner = render_job(&d.join("corner"), &["--view", "corner"]);
+    assert_eq!(corner.len(), 1);
+    for (pic, line) in [(&both[0], &lines[0]), (&corner[0], &lines[1])] {
+        let reference = d.join("ref.hdr");
+        let _ = std::fs::remove_file(&reference);
+        let mut args: Vec<String> = line.split_whitespace().map(str::to_string).collect();
+        // rad's -af is the job's store; tpict renders without one.
+        if let Some(i) = args.iter().position(|w| w == "-af") {
+            args.drain(i..i + 2);
+        }
+        run_ok(
+            Command::new(tpict_bin())
+                .current_dir(d)
+                .args(["-n", "1"])
+                .args(&args)
+                .arg("-o")
+                .arg(&reference)
+                .arg("room.rad"),
+        );
+        let want = tessera::image::read_picture(&reference).unwrap();
+        assert_eq!((pic.width, pic.height), (want.width, want.height));
+        assert_eq!(
+            pic.pixels, want.pixels,
+            "the job's frame differs from tpict's ({line})"
+        );
+    }
+    // Frame 1 of the two-view job is the corner view (sampled with its frame's seeds).
+    let mean = |p: &tessera::image::Image| {
+        p.pixels.iter().map(|c| c[1] as f64).sum::<f64>() / p.pixels.len() as f64
+    };
+    let (a, b) = (mean(&both[1]), mean(&corner[0]));
+    assert!((a / b - 1.0).abs() < 0.05, "frame 1 mean {a} vs {b}");
+    // One view by name; an unknown name is refused with the file's views listed.
+    let out = run_ok(tplan(d).args(["--rif", "p.rif", "--view", "corner", "--print"]));
+    assert_eq!(String::from_utf8_lossy(&out).trim(), lines[1]);
+    let out = run_ok(tplan(d).args(["--rif", "p.rif", "--view", "xyZ", "--print"]));
+    assert!(String::from_utf8_lossy(&out).starts_with("-vtv -vp 0.2 0.25 2.85"));
+    let e = tplan(d)
+        .args(["--rif", "p.rif", "--view", "nope", "--print"])
+        .output()
+        .unwrap();
+    assert!(!e.status.success());
+    assert!(String::from_utf8_lossy(&e.stderr).contains("X corner"));
+}
+
+#[test]
+fn bad_rif_files_name_file_and_line() {
+    let t = tempfile::tempdir().unwrap();
+    let d = t.path();
+    std::fs::write(d.join("room.rad"), ROOM).unwrap();
+    for (text, want) in [
+        (
+            "scene= room.rad\nQUALITY= L\nBOGUS= 3\n",
+            "bad.rif:3: unknown variable 'BOGUS'",
+        ),
+        (
+            "scene= room.rad\nQUALITY= superb\n",
+            "bad.rif:2: QUALITY must be",
+        ),
+        (
+            "scene= room.rad\nZONE= I 0 4 0 5\n",
+            "bad.rif:2: ZONE needs",
+        ),
+        (
+            "scene= room.rad\nRESOLUTION= big\n",
+            "bad.rif:2: RESOLUTION 'big'",
+        ),
+        (
+            "scene= room.rad\nillum= window.rad\n",
+            "bad.rif:2: illum is not supported",
+        ),
+        ("QUALITY= L\n", "no scene files"),
+        ("scene= missing.rad\n", "missing.rad"),
+    ] {
+        std::fs::write(d.join("bad.rif"), text).unwrap();
+        let out = tplan(d)
+            .args(["--rif", "bad.rif", "--print"])
+            .output()
+            .unwrap();
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert!(!out.status.success(), "accepted:\n{text}");
+        assert!(
+            err.contains(want),
+            "for\n{text}\nwanted '{want}', got: {err}"
+        );
+    }
+}
