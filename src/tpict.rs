@@ -309,9 +309,12 @@ impl Run<'_> {
         }
         crate::runinfo::check_picture_memory(x, y, crate::runinfo::available_memory())
             .map_err(|e| anyhow!(e))?;
-        let fs = opts
+        let mut fs = opts
             .picture
             .frame_setup(&session.params, &vf, (x, y), frame);
+        // -S numbers frames from its start (default 1): the position in the animation.
+        let first = opts.run.sequence_start.unwrap_or(frame);
+        fs.aa = session.params.frame_accuracy(frame.saturating_sub(first));
         let progress = RenderProgress::default();
         let start = Instant::now();
         let region = Region {

@@ -127,6 +127,7 @@ fn render(s: &Setup, o: Opts) -> (Vec<[f64; 3]>, u64) {
         frame: o.frame,
         irradiance: false,
         overture: o.overture,
+        aa: None,
     };
     // Cached values on one thread: the cache sees its values in one order, so every figure
     // (and with it every comparison below) is the same on every run; several threads let the

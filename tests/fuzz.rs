@@ -384,6 +384,7 @@ fn manifest_seed(dir: &Path) -> Vec<u8> {
         workers: Some(2),
         frames: None,
         views: None,
+        path: None,
         lease: None,
         ambient: None,
         amb_force: false,

@@ -391,13 +391,14 @@ prop_compose! {
         amb_force in any::<bool>(),
         amb_file in proptest::option::of(name()),
         overture in any::<bool>(),
+        same_seeds in any::<bool>(),
         p in any_params(),
     ) -> RpictOptions {
         RpictOptions {
             picture: PictureParams {
                 view: View { vtype, vp: DVec3::from_array(vp), vd: DVec3::from_array(vd),
                              vu: DVec3::Z, vh, vv, vo, va, vs, vl },
-                x, y, pa, pj, pm, pd, ps, pt, overture,
+                x, y, pa, pj, pm, pd, ps, pt, overture, same_seeds,
             },
             params: p,
             run: RunParams {
@@ -421,10 +422,15 @@ prop_compose! {
         bv in any::<bool>(), me in prop::array::uniform3(0.0f64..1.0),
         ma in prop::array::uniform3(0.0f64..1.0), mg in -1.0f64..1.0, ms in 0.0f64..1.0,
         amb in any_settings(),
+        ax in prop::option::of((0.01f64..1.0, 0.01f64..1.0, 0.01f64..0.99, any::<bool>())),
     ) -> RenderParams {
+        let ax = ax.map(|(a, b, step, geometric)| {
+            tessera::options::schedule::AccuracySchedule::new(a.max(b), a.min(b), step, geometric)
+                .unwrap()
+        });
         let (ae, ai) = if include { (vec![], names) } else { (names, vec![]) };
         RenderParams { dt, dc, dj, ds, dr, dp, dv, ss, st, lr, lw, av, aw, ab, aa, ar, ad, as_,
-                       ae, ai, i, u, bv, me, ma, mg, ms, amb }
+                       ae, ai, i, u, bv, me, ma, mg, ms, amb, ax }
     }
 }
 

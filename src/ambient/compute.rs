@@ -70,7 +70,10 @@ pub struct Ambient {
     /// This calculation's identity for per-thread caches.
     owner: u64,
     ab: u32,
-    pub(super) aa: f64,
+    /// `-aa` now (f64 bits): fixed, or set per frame by an `-ax` schedule.
+    aa_bits: AtomicU64,
+    /// The largest `-aa` of the run: values are filed in the cache for it.
+    aa_max: f64,
     pub(super) ad: f64,
     pub(super) minarad: f64,
     pub(super) maxarad: f64,
@@ -106,15 +109,20 @@ impl Ambient {
             (size * 1e-6, 0.2 * size)
         };
         let aa = params.aa.max(0.0);
+        // Under -ax values are filed for the schedule's loosest accuracy, so that every
+        // later (tighter) lookup finds them in the cells it reads.
+        let aa_max = params.ax.map_or(aa, |s| s.start.max(aa));
         let settings = params.amb.clone();
         let (ad, as_) = split_divisions(params);
         Some(Ambient {
             // Radii never exceed maxarad (a fifth of the scene's size); twice the size leaves
             // room for other renderers' stores (rpict's octree cube is larger).
-            cache: AmbientCache::new(minarad, aa.max(0.01), origin_id).with_max_radius(2.0 * size),
+            cache: AmbientCache::new(minarad, aa_max.max(0.01), origin_id)
+                .with_max_radius(2.0 * size),
             stats: AmbientStats::default(),
             ab: params.ab as u32,
-            aa,
+            aa_bits: AtomicU64::new(aa.to_bits()),
+            aa_max,
             ad,
             as_,
             owner: NEXT_OWNER.fetch_add(1, Ordering::Relaxed),
@@ -141,7 +149,22 @@ impl Ambient {
 
     /// Whether values are cached ([`caches`]); else every request is a fresh estimate.
     pub fn cached(&self) -> bool {
-        self.aa > CACHE_MIN_AA
+        self.aa() > CACHE_MIN_AA
+    }
+
+    /// `-aa` now.
+    #[inline]
+    pub fn aa(&self) -> f64 {
+        f64::from_bits(self.aa_bits.load(Ordering::Relaxed))
+    }
+
+    /// Set `-aa` for the next frame (an `-ax` schedule), between renders: within the
+    /// run's loosest accuracy (the cache's filing) and above the uncached limit.
+    pub fn set_accuracy(&self, aa: f64) {
+        if self.cached() && aa.is_finite() {
+            let aa = aa.clamp(CACHE_MIN_AA * 2.0, self.aa_max.max(CACHE_MIN_AA * 2.0));
+            self.aa_bits.store(aa.to_bits(), Ordering::Relaxed);
+        }
     }
 
     /// The ambient value used when no value is computed: `-av`, or with `-aw N` > 0 a moving

@@ -117,6 +117,9 @@ pub fn fingerprint(prims: &[Primitive], params: &RenderParams) -> [u8; 32] {
     }
     h.str("tessera-settings");
     h.str(&params.amb.to_text());
+    if let Some(ax) = &params.ax {
+        h.str(&ax.to_words().join(" "));
+    }
     h.finish()
 }
 
@@ -139,6 +142,10 @@ pub fn options_text(params: &RenderParams) -> String {
     }
     for m in &params.ai {
         s.push_str(&format!(" -ai {m}"));
+    }
+    if let Some(ax) = &params.ax {
+        s.push(' ');
+        s.push_str(&ax.to_words().join(" "));
     }
     s.push(' ');
     s.push_str(&params.amb.to_text());
@@ -181,6 +188,9 @@ mod tests {
             |p: &mut RenderParams| p.amb.share_max = 1.0,
             |p: &mut RenderParams| p.amb.corral = false,
             |p: &mut RenderParams| p.amb.hessian_cells = 64,
+            |p: &mut RenderParams| {
+                p.ax = crate::options::schedule::AccuracySchedule::new(0.5, 0.1, 0.1, false).ok()
+            },
         ] {
             let mut q = RenderParams::default();
             change(&mut q);

@@ -95,7 +95,7 @@ impl Ambient {
         share: Share,
         occluded: &mut dyn FnMut(DVec3, DVec3, f64) -> bool,
     ) -> Option<Color> {
-        let aa = self.aa;
+        let aa = self.aa();
         let mut maxangle = 10f64.to_radians() + aa;
         if rweight < 0.6 {
             maxangle = (maxangle - PI / 2.0) * rweight.powf(0.13) + PI / 2.0;
@@ -138,7 +138,7 @@ impl Ambient {
         usable: &dyn Fn(&CachedValue) -> bool,
         share: Share,
     ) -> Option<Color> {
-        let aa = self.aa;
+        let aa = self.aa();
         let mut cands = CANDIDATES.with(|c| std::mem::take(&mut *c.borrow_mut()));
         cands.clear();
         self.cache.for_each_near(q.p, |v| {

@@ -332,7 +332,7 @@ impl Ambient {
         // A glow's radius of influence is a seam in the indirect light (the glow is direct
         // light inside, indirect outside): no share reach across it.
         if share > 1.0 {
-            let base = self.aa * shape.reach * shape.rad[1];
+            let base = self.aa() * shape.reach * shape.rad[1];
             for (si, maxrad) in h.tr.lights.sampled_glows() {
                 let gap = ((h.hit.point - h.tr.lights.sources[si].center).length() - maxrad).abs();
                 share = share.min((gap / base).max(1.0));
@@ -344,7 +344,7 @@ impl Ambient {
                 .iter()
                 .map(|c| (c.count > 0).then_some(c.hit))
                 .collect();
-            let reach = self.aa * shape.reach * share;
+            let reach = self.aa() * shape.reach * share;
             corral_flags(&hits, (m, nphi), h.n, (h.u0, shape.u), shape.rad, reach)
         } else {
             0

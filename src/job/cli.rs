@@ -58,6 +58,13 @@ struct TplanArgs {
     /// View file with one view per line: one frame per view (each on top of the previous).
     #[arg(long, value_name = "VIEWFILE")]
     frames: Option<PathBuf>,
+    /// A keyframed camera path: a file of key view lines (each on top of the previous);
+    /// with --path-frames N, N frames spread along it (docs/animation.md).
+    #[arg(long, value_name = "KEYFILE", requires = "path_frames", conflicts_with_all = ["frames", "rif"])]
+    path: Option<PathBuf>,
+    /// Frames along --path.
+    #[arg(long, value_name = "N", requires = "path")]
+    path_frames: Option<usize>,
     /// Seconds a claimed tile's worker may stay silent before another worker takes it over.
     #[arg(long, value_name = "SECONDS")]
     lease: Option<f64>,
@@ -149,6 +156,10 @@ fn tplan(a: TplanArgs) -> Result<i32> {
         workers: Some(a.workers),
         frames: a.frames.map(|p| p.display().to_string()),
         views,
+        path: a
+            .path
+            .as_ref()
+            .map(|p| (p.display().to_string(), a.path_frames.unwrap_or(0))),
         lease: a.lease,
         ambient: a.ambient.map(|p| p.display().to_string()),
         amb_force: a.amb_force,

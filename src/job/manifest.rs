@@ -238,6 +238,8 @@ pub struct PlanRequest {
     pub frames: Option<String>,
     /// Views given directly, one frame each (a rif file's views); each stands alone.
     pub views: Option<Vec<View>>,
+    /// `--path KEYFILE --path-frames N`: N frames along a keyframed camera path.
+    pub path: Option<(String, usize)>,
     /// `--lease SECONDS`.
     pub lease: Option<f64>,
     /// `--ambient FILE`: seed the job's ambient store.
@@ -343,6 +345,11 @@ pub fn create_job(dir: &Path, req: &PlanRequest) -> Result<Manifest> {
     let mut views: Vec<View> = Vec::new();
     match &req.frames {
         None if req.views.is_some() => views.extend(req.views.iter().flatten().cloned()),
+        None if req.path.is_some() => {
+            let (keyfile, n) = req.path.as_ref().expect("path");
+            let keys = super::path::read_keys(keyfile, &opts.picture.view)?;
+            views = super::path::frames(&keys, *n)?;
+        }
         None => views.push(opts.picture.view.clone()),
         Some(vf) => {
             let content = std::fs::read_to_string(vf)

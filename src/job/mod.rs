@@ -28,6 +28,7 @@ pub mod cli;
 pub mod heartbeat;
 pub mod manifest;
 pub mod merge;
+pub mod path;
 pub mod plan;
 pub mod share;
 pub mod status;

@@ -29,6 +29,17 @@ pub struct FrameProgress {
     /// Tiles of the plan with no task entry at all: the job directory was damaged (an entry
     /// is always in one of the three states).
     pub missing: usize,
+    /// Sums over the frame's finished tiles (their results): CPU seconds, render wall
+    /// seconds, rays, new ambient values and the seconds spent making them (T_amb).
+    pub cpu_seconds: f64,
+    /// Render wall seconds (summed over tiles).
+    pub wall_seconds: f64,
+    /// Rays traced.
+    pub rays: u64,
+    /// Ambient values computed (extensive computations).
+    pub new_values: u64,
+    /// Seconds spent computing them.
+    pub ambient_seconds: f64,
 }
 
 /// Aggregated metrics (sums over workers).
@@ -143,6 +154,13 @@ pub fn status(job: &JobDir) -> Result<JobStatus> {
                 Some(TaskState::Done) => {
                     p.done += 1;
                     done_px += r.area();
+                    if let Ok((meta, _)) = tile::read(&job.tile_file(&task_name(f.index, i))) {
+                        p.cpu_seconds += meta.cpu_seconds;
+                        p.wall_seconds += meta.wall_seconds;
+                        p.rays += meta.rays;
+                        p.new_values += meta.new_values;
+                        p.ambient_seconds += meta.ambient_seconds;
+                    }
                 }
                 Some(TaskState::Claimed(_)) => {
                     p.claimed += 1;
@@ -285,12 +303,20 @@ pub fn render_text(st: &JobStatus) -> String {
     for f in &st.frames {
         let _ = writeln!(
             s,
-            "  frame {:>5}: {:>5} todo {:>5} claimed {:>5} done (of {}){}",
+            "  frame {:>5}: {:>5} todo {:>5} claimed {:>5} done (of {}){}{}",
             f.frame,
             f.todo,
             f.claimed,
             f.done,
             f.tiles,
+            if f.done > 0 {
+                format!(
+                    ": CPU {:.2} s, {} new ambient values in {:.2} s",
+                    f.cpu_seconds, f.new_values, f.ambient_seconds
+                )
+            } else {
+                String::new()
+            },
             if f.missing > 0 {
                 format!(", {} MISSING", f.missing)
             } else {

@@ -541,10 +541,12 @@ impl Worker<'_> {
             .view
             .frame()
             .map_err(|e| anyhow!("frame {}: bad view: {e}", c.frame))?;
-        let fs = self
+        let mut fs = self
             .m
             .picture
             .frame_setup(&self.m.params, &vf, (fp.xres, fp.yres), fp.index);
+        // Frames are numbered from 0 in the job: the index is the position in the animation.
+        fs.aa = self.m.params.frame_accuracy(fp.index);
         let (made0, nanos0) = self.session.ambient_work();
         let cpu0 = process_cpu_seconds().unwrap_or(0.0);
         let t0 = Instant::now();

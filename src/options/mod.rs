@@ -5,6 +5,7 @@
 //!   numbers, and [`OptError`].
 //! - [`render`]: [`RenderParams`], what changes the light transport (`-d* -s* -l* -a* -i -u
 //!   -bv -m*` and the ambient settings [`crate::ambient::settings::AmbientSettings`]).
+//! - [`schedule`]: `-ax`/`-axg`, ambient accuracy that varies from frame to frame.
 //! - [`picture`]: [`PictureParams`], how a picture is made of that light (view, resolution,
 //!   `-p*`, the overture).
 //! - [`run`]: [`RunParams`], how one tpict process runs (threads, output, `-S`, `-e`, `-t`,
@@ -19,6 +20,7 @@ pub mod picture;
 pub mod render;
 pub mod rpict;
 pub mod run;
+pub mod schedule;
 pub mod words;
 
 pub use defaults::defaults_text;

@@ -35,6 +35,11 @@ pub struct PictureParams {
     /// before the option existed read as on.
     #[serde(default = "default_true")]
     pub overture: bool,
+    /// `--same-seeds`: pixel samples are seeded by their position alone, not by the frame,
+    /// so that what stays still in an animation is sampled the same way in every frame
+    /// (less flicker; docs/animation.md). Off: each frame has its own samples, as rpict.
+    #[serde(default)]
+    pub same_seeds: bool,
 }
 
 fn default_true() -> bool {
@@ -55,6 +60,7 @@ impl Default for PictureParams {
             ps: 4,
             pt: 0.05,
             overture: true,
+            same_seeds: false,
         }
     }
 }
@@ -124,6 +130,10 @@ impl PictureParams {
                 self.overture = false;
                 1
             }
+            "--same-seeds" => {
+                self.same_seeds = true;
+                1
+            }
             _ => return Ok(None),
         };
         Ok(Some(n))
@@ -154,6 +164,9 @@ impl PictureParams {
         if !self.overture {
             w.push("--no-overture".into());
         }
+        if self.same_seeds {
+            w.push("--same-seeds".into());
+        }
         w
     }
 
@@ -183,9 +196,10 @@ impl PictureParams {
             pj: self.pj,
             ps: self.ps,
             pt: self.pt,
-            frame,
+            frame: if self.same_seeds { 0 } else { frame },
             irradiance: params.i,
             overture: self.overture_step(params),
+            aa: None,
         }
     }
 }

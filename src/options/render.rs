@@ -2,6 +2,7 @@
 //! `-l*`, `-a*` but `-af`, `-i`, `-u`, `-bv`, `-m*`, and Tessera's ambient settings
 //! `--amb-*`). Kept in job manifests and hashed (in part) into the ambient fingerprint.
 
+use super::schedule::AccuracySchedule;
 use super::words::{
     arg, bool_option, f1, f3, i1, nonneg3, nonneg_i32, range, split_words, OptError,
 };
@@ -68,6 +69,9 @@ pub struct RenderParams {
     /// Tessera's own settings of the ambient calculation (`--amb-share-max`, ...).
     #[serde(default)]
     pub amb: AmbientSettings,
+    /// `-ax start end step` / `-axg start end ratio`: `-aa` varying with the frame.
+    #[serde(default)]
+    pub ax: Option<AccuracySchedule>,
 }
 
 impl Default for RenderParams {
@@ -102,11 +106,18 @@ impl Default for RenderParams {
             mg: 0.0,
             ms: 0.0,
             amb: AmbientSettings::default(),
+            ax: None,
         }
     }
 }
 
 impl RenderParams {
+    /// `-aa` of the frame at `position` in its animation (0 = first): the `-ax` schedule's,
+    /// or None when accuracy does not vary.
+    pub fn frame_accuracy(&self, position: u32) -> Option<f64> {
+        self.ax.map(|s| s.accuracy(position))
+    }
+
     /// Why these settings cannot be rendered, if they ask for something Tessera refuses
     /// rather than ignores: a participating medium (`-me` above zero; rpict would render
     /// one). Parsing accepts them all (`-defaults` prints them as rpict does).
@@ -210,6 +221,17 @@ impl RenderParams {
                 self.aa = range(o, f1(words)?, 0.0, inf)?;
                 2
             }
+            "-ax" | "-axg" => {
+                let v = f3(words)?;
+                let s = AccuracySchedule::new(v[0], v[1], v[2], o == "-axg").map_err(|e| {
+                    OptError::BadValue {
+                        option: o.to_string(),
+                        reason: e,
+                    }
+                })?;
+                self.ax = Some(s);
+                4
+            }
             "-ar" => {
                 self.ar = nonneg_i32(o, i1(words)?)?;
                 2
@@ -310,6 +332,10 @@ impl RenderParams {
         push("-aw", &i(self.aw));
         push("-ab", &i(self.ab));
         push("-aa", &f(self.aa));
+        if let Some(ax) = &self.ax {
+            let w = ax.to_words();
+            push(&w[0], &w[1..]);
+        }
         push("-ar", &i(self.ar));
         push("-ad", &i(self.ad));
         push("-as", &i(self.as_));

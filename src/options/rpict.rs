@@ -54,6 +54,9 @@ pub fn help_text() -> String {
            --amb-flush N           values per log write (default 128)\n\
            --amb-force             use a log made for another scene or other options\n\
            --no-overture           no cache-filling pass before the picture's own\n\
+           --same-seeds            every frame samples each pixel as the first (less flicker)\n\
+           -ax START END STEP      -aa per frame: START, less STEP each frame, down to END\n\
+           -axg START END RATIO    -aa per frame: START, times RATIO each frame, down to END\n\
            --help, -h              this text; --version, -version: the version\n\
          \n\
          The ambient calculation's additions to Radiance's (docs/ambient.md):\n",
@@ -204,6 +207,8 @@ mod tests {
             "--amb-flush",
             "--amb-force",
             "--no-overture",
+            "--same-seeds",
+            "-ax START",
             "-n N",
         ] {
             assert!(h.contains(name), "{name} missing from the help");

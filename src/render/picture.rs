@@ -36,6 +36,9 @@ pub struct FrameSetup<'a> {
     /// that only fills the ambient cache (its colours are discarded), so that the picture's
     /// own pass interpolates every pixel from all the values around it. 0: no overture.
     pub overture: usize,
+    /// `-aa` of this frame when it varies with time (`-ax`): the session sets it before
+    /// rendering. None: the options' `-aa`.
+    pub aa: Option<f64>,
 }
 
 /// Counters updated while rendering.

@@ -204,6 +204,9 @@ impl Session {
         r: Region,
         progress: &RenderProgress,
     ) -> Result<Vec<[f32; 3]>> {
+        if let (Some(a), Some(aa)) = (&self.ambient, fs.aa) {
+            a.set_accuracy(aa);
+        }
         let tracer = self.tracer();
         let pixels = self
             .pool

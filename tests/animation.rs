@@ -1,0 +1,168 @@
+//! Animations: ambient accuracy that varies with time (`-ax`, `-axg`, the seed paper's
+//! §4.1) spreads the ambient calculation over the first frames of a job and ends at the
+//! final accuracy; per-frame costs are reported by `tstat`.
+
+mod common;
+
+use common::*;
+use std::path::{Path, PathBuf};
+use std::process::Command;
+
+fn demo() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("demo")
+}
+
+fn tool(name: &str) -> Command {
+    let exe = match name {
+        "tplan" => env!("CARGO_BIN_EXE_tplan"),
+        "tpiece" => env!("CARGO_BIN_EXE_tpiece"),
+        "tstat" => env!("CARGO_BIN_EXE_tstat"),
+        _ => env!("CARGO_BIN_EXE_tassemble"),
+    };
+    let mut c = Command::new(exe);
+    c.current_dir(demo())
+        .env_remove("SLURM_ARRAY_JOB_ID")
+        .env_remove("SLURM_JOB_ID")
+        .env_remove("SLURM_CPUS_PER_TASK");
+    c
+}
+
+/// New ambient values per frame of a job of `frames` identical views with `accuracy`.
+fn values_per_frame(dir: &Path, frames: usize, accuracy: &[&str]) -> Vec<u64> {
+    let vf = dir.join("frames.vf");
+    let line = std::fs::read_to_string(demo().join("demo.vf")).unwrap();
+    std::fs::write(&vf, format!("{}\n", line.trim()).repeat(frames)).unwrap();
+    let job = dir.join(format!("job{}", accuracy.join("_")));
+    run_ok(
+        tool("tplan")
+            .args(["--workers", "1", "--frames"])
+            .arg(&vf)
+            .arg("-o")
+            .arg(&job)
+            .arg("--")
+            .args(["-vf", "demo.vf", "-x", "64", "-y", "48", "-ab", "1"])
+            .args(accuracy)
+            .arg("demo.rad"),
+    );
+    run_ok(tool("tpiece").arg(&job).args(["--threads", "1", "-q"]));
+    let out = run_ok(tool("tstat").arg(&job).arg("--json"));
+    let v: serde_json::Value = serde_json::from_slice(&out).unwrap();
+    v["frames"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|f| f["new_values"].as_u64().unwrap())
+        .collect()
+}
+
+#[test]
+fn time_varying_accuracy_spreads_the_first_frames_cost() {
+    let t = tempfile::tempdir().unwrap();
+    let constant = values_per_frame(t.path(), 5, &["-aa", ".1"]);
+    let varying = values_per_frame(t.path(), 5, &["-ax", ".5", ".1", ".1"]);
+    eprintln!("new values per frame: -aa .1 {constant:?}, -ax .5 .1 .1 {varying:?}");
+    assert!(constant[0] > 0);
+    // Frame 0 at -aa .5 makes far fewer values than at .1 (about (.1/.5)² as many).
+    assert!(
+        varying[0] * 3 < constant[0],
+        "-ax: {varying:?} vs -aa: {constant:?}"
+    );
+    // The peak is lower and the whole animation makes fewer values.
+    let peak = |v: &[u64]| *v.iter().max().unwrap();
+    assert!(peak(&varying) < peak(&constant));
+    assert!(varying.iter().sum::<u64>() < constant.iter().sum::<u64>());
+}
+
+#[test]
+fn ax_options_are_checked_and_recorded() {
+    let t = tempfile::tempdir().unwrap();
+    // A tightening schedule only; a ratio below 1.
+    for bad in [
+        &["-ax", ".1", ".5", ".1"][..],
+        &["-ax", ".5", "0", ".1"],
+        &["-axg", ".5", ".1", "2"],
+    ] {
+        let out = Command::new(tpict_bin())
+            .current_dir(demo())
+            .args(["-vf", "demo.vf", "-x", "8", "-y", "8", "-ab", "1"])
+            .args(bad)
+            .arg("demo.rad")
+            .output()
+            .unwrap();
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert!(!out.status.success(), "{bad:?} accepted");
+        assert!(err.contains(bad[0]), "{bad:?}: {err}");
+    }
+    // The schedule is in the picture header (with the other options) and in the
+    // manifest's fingerprint: a job planned with -ax differs from one without.
+    let pic = t.path().join("p.hdr");
+    run_ok(
+        Command::new(tpict_bin())
+            .current_dir(demo())
+            .args(["-vf", "demo.vf", "-x", "8", "-y", "8", "-ab", "1"])
+            .args(["-axg", ".4", ".1", ".5", "-o"])
+            .arg(&pic)
+            .arg("demo.rad"),
+    );
+    let bytes = std::fs::read(&pic).unwrap();
+    let header = String::from_utf8_lossy(&bytes[..bytes.len().min(4000)]).to_string();
+    assert!(header.contains("-axg .4 .1 .5"), "{header}");
+    let fp = |args: &[&str]| {
+        let job = t.path().join(format!("j{}", args.len()));
+        run_ok(
+            tool("tplan")
+                .args(["--workers", "1", "-o"])
+                .arg(&job)
+                .arg("--")
+                .args(["-vf", "demo.vf", "-x", "8", "-y", "8", "-ab", "1"])
+                .args(args)
+                .arg("demo.rad"),
+        );
+        let m: serde_json::Value =
+            serde_json::from_slice(&std::fs::read(job.join("manifest.json")).unwrap()).unwrap();
+        m["fingerprint"].as_str().unwrap().to_string()
+    };
+    assert_ne!(fp(&[]), fp(&["-ax", ".4", ".2", ".1"]));
+}
+
+/// `--same-seeds`: frames of a static view sample every pixel as the first frame did, so
+/// at `-ab 0` (no cache) they are identical; with per-frame seeds (rpict's way) they differ.
+#[test]
+fn same_seeds_keep_static_frames_still() {
+    let t = tempfile::tempdir().unwrap();
+    let line = std::fs::read_to_string(demo().join("demo.vf")).unwrap();
+    let vf = t.path().join("frames.vf");
+    std::fs::write(&vf, format!("{}\n", line.trim()).repeat(3)).unwrap();
+    let frames = |extra: &[&str]| {
+        let job = t.path().join(format!("job{}", extra.len()));
+        run_ok(
+            tool("tplan")
+                .args(["--workers", "1", "--frames"])
+                .arg(&vf)
+                .arg("-o")
+                .arg(&job)
+                .arg("--")
+                .args(["-vf", "demo.vf", "-x", "32", "-y", "24", "-ab", "0"])
+                .args(extra)
+                .arg("demo.rad"),
+        );
+        run_ok(tool("tpiece").arg(&job).args(["--threads", "1", "-q"]));
+        (0..3)
+            .map(|k| {
+                let out = t.path().join(format!("f{}-{k}.hdr", extra.len()));
+                run_ok(
+                    tool("tassemble")
+                        .arg(&job)
+                        .args(["--frame", &k.to_string(), "-o"])
+                        .arg(&out),
+                );
+                tessera::image::read_picture(&out).unwrap().pixels
+            })
+            .collect::<Vec<_>>()
+    };
+    let per_frame = frames(&[]);
+    assert_ne!(per_frame[0], per_frame[1], "per-frame seeds should differ");
+    let same = frames(&["--same-seeds"]);
+    assert_eq!(same[0], same[1]);
+    assert_eq!(same[0], same[2]);
+}
