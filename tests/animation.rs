@@ -166,3 +166,72 @@ fn same_seeds_keep_static_frames_still() {
     assert_eq!(same[0], same[1]);
     assert_eq!(same[0], same[2]);
 }
+
+/// A keyframed path makes its frames (ends on the keys), and tassemble makes a contact
+/// sheet of them and PNG frames with a smoothed exposure.
+#[test]
+fn keyframed_paths_and_previews() {
+    let t = tempfile::tempdir().unwrap();
+    let keys = t.path().join("keys.vf");
+    std::fs::write(
+        &keys,
+        "-vtv -vp 7.6 .35 2.1 -vd -5.2 4.6 -1.5 -vu 0 0 1 -vh 80 -vv 60\n\
+         # a comment line\n\
+         rview -vp 6.2 2.4 1.7 -vd -1 .25 -.25\n\
+         VIEW= -vp 4.6 4.6 1.7 -vd -.7 -1 -.2\n",
+    )
+    .unwrap();
+    let job = t.path().join("job");
+    run_ok(
+        tool("tplan")
+            .args(["--workers", "1", "--path"])
+            .arg(&keys)
+            .args(["--path-frames", "5", "-o"])
+            .arg(&job)
+            .arg("--")
+            .args(["-x", "40", "-y", "30", "-ab", "0", "demo.rad"]),
+    );
+    let m: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(job.join("manifest.json")).unwrap()).unwrap();
+    let frames = m["frames"].as_array().unwrap();
+    assert_eq!(frames.len(), 5);
+    let vp = |k: usize| frames[k]["view"]["vp"].clone();
+    assert_eq!(vp(0), serde_json::json!([7.6, 0.35, 2.1]));
+    assert_eq!(vp(2), serde_json::json!([6.2, 2.4, 1.7]));
+    assert_eq!(vp(4), serde_json::json!([4.6, 4.6, 1.7]));
+    run_ok(tool("tpiece").arg(&job).args(["--threads", "1", "-q"]));
+    let sheet = t.path().join("sheet.png");
+    let pattern = t.path().join("f%d.png");
+    run_ok(
+        tool("tassemble")
+            .arg(&job)
+            .args(["--all-frames", "--temporal-exposure", "--thumb-width", "20"])
+            .arg("--contact-sheet")
+            .arg(&sheet)
+            .arg("-o")
+            .arg(&pattern),
+    );
+    let s = image::open(&sheet).unwrap();
+    // 5 thumbnails 20 pixels across on a 3×2 grid with 2-pixel gaps.
+    let (w, h) = (
+        frames[0]["xres"].as_u64().unwrap() as f64,
+        frames[0]["yres"].as_u64().unwrap() as f64,
+    );
+    let th = (h * 20.0 / w).round() as u32;
+    assert_eq!((s.width(), s.height()), (3 * 22 - 2, 2 * (th + 2) - 2));
+    for k in 0..5 {
+        assert!(t.path().join(format!("f{k}.png")).is_file());
+    }
+    // Bad path inputs are refused with a reason.
+    std::fs::write(&keys, "-vp 1 1 1\n").unwrap();
+    let out = tool("tplan")
+        .args(["--path"])
+        .arg(&keys)
+        .args(["--path-frames", "5", "-o"])
+        .arg(t.path().join("job2"))
+        .args(["--", "demo.rad"])
+        .output()
+        .unwrap();
+    assert!(!out.status.success());
+    assert!(String::from_utf8_lossy(&out.stderr).contains("at least two key views"));
+}

@@ -72,7 +72,17 @@ pub fn auto_exposure(img: &Image) -> f64 {
 
 /// The 8-bit sRGB preview of `img` as packed RGB bytes, top row first.
 pub fn tone_map(img: &Image) -> Vec<u8> {
-    let k = auto_exposure(img) as f32;
+    tone_map_with(img, auto_exposure(img))
+}
+
+/// [`tone_map`] with the exposure multiplier `k` given (e.g. one smoothed over the frames
+/// of an animation).
+pub fn tone_map_with(img: &Image, k: f64) -> Vec<u8> {
+    let k = if k.is_finite() && k > 0.0 {
+        k as f32
+    } else {
+        1.0
+    };
     let lut: Vec<u8> = (0..LUT_SIZE)
         .map(|i| {
             (srgb_encode(i as f64 / (LUT_SIZE - 1) as f64) * 255.0)
@@ -95,6 +105,11 @@ pub fn tone_map(img: &Image) -> Vec<u8> {
 /// Write an 8-bit sRGB PNG preview of `img` (tone-mapped as the module docs describe),
 /// atomically.
 pub fn write_png(path: &Path, img: &Image) -> Result<(), ImageError> {
+    write_png_with(path, img, auto_exposure(img))
+}
+
+/// [`write_png`] with the exposure multiplier `k` given.
+pub fn write_png_with(path: &Path, img: &Image, k: f64) -> Result<(), ImageError> {
     let invalid = |reason: String| ImageError::Invalid {
         path: Some(path.to_path_buf()),
         reason,
@@ -109,7 +124,7 @@ pub fn write_png(path: &Path, img: &Image) -> Result<(), ImageError> {
             )))
         }
     };
-    let bytes = tone_map(img);
+    let bytes = tone_map_with(img, k);
     super::output::write_atomic(path, |f| {
         let mut bw = io::BufWriter::new(f);
         PngEncoder::new(&mut bw)

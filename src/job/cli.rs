@@ -410,6 +410,17 @@ struct TassembleArgs {
     /// Fill missing tiles with black (and say so) instead of failing.
     #[arg(long)]
     partial: bool,
+    /// Also write a contact sheet of every frame (a PNG of thumbnails, each with the
+    /// temporal exposure).
+    #[arg(long, value_name = "PNG")]
+    contact_sheet: Option<PathBuf>,
+    /// Thumbnail width of the contact sheet, in pixels.
+    #[arg(long, default_value_t = 160, value_name = "PX")]
+    thumb_width: usize,
+    /// PNG frames get an exposure smoothed over the neighbouring frames (±3) instead of
+    /// their own.
+    #[arg(long)]
+    temporal_exposure: bool,
 }
 
 /// Entry point of `tassemble`.
@@ -422,15 +433,33 @@ fn tassemble(a: TassembleArgs) -> Result<i32> {
     let job = JobDir::new(&a.job);
     let m = Manifest::load(&job)?;
     let cmd = command_line();
-    let frames: Vec<u32> = if a.all_frames {
+    if a.all_frames && a.output.is_none() {
+        bail!("--all-frames needs -o PATTERN with a %d");
+    }
+    if a.temporal_exposure && !a.all_frames {
+        bail!("--temporal-exposure needs --all-frames -o PATTERN.png");
+    }
+    let every = a.all_frames || a.contact_sheet.is_some();
+    let frames: Vec<u32> = if every {
         m.frames.iter().map(|f| f.index).collect()
     } else {
         vec![a.frame]
     };
-    if a.all_frames && a.output.is_none() {
-        bail!("--all-frames needs -o PATTERN with a %d");
-    }
+    // Where each frame goes: every frame with --all-frames, else only --frame (to -o or
+    // standard output, unless only a contact sheet was asked for).
+    let target = |f: u32| -> Result<Option<Option<PathBuf>>> {
+        Ok(match &a.output {
+            Some(p) if a.all_frames => Some(Some(PathBuf::from(crate::runinfo::frame_name(
+                &p.display().to_string(),
+                f,
+            )?))),
+            Some(p) if f == a.frame => Some(Some(p.clone())),
+            None if f == a.frame && a.contact_sheet.is_none() => Some(None),
+            _ => None,
+        })
+    };
     let mut failed = false;
+    let mut pictures = Vec::new();
     for f in frames {
         let (img, missing) = super::assemble::assemble_frame(&job, &m, f, &cmd)?;
         if !missing.is_empty() {
@@ -454,17 +483,34 @@ fn tassemble(a: TassembleArgs) -> Result<i32> {
                 list.join(", ")
             );
         }
-        let path = match &a.output {
-            None => None,
-            Some(p) if a.all_frames => Some(PathBuf::from(crate::runinfo::frame_name(
-                &p.display().to_string(),
-                f,
-            )?)),
-            Some(p) => Some(p.clone()),
-        };
-        crate::image::write_picture(path.as_deref(), &img)?;
+        pictures.push((target(f)?, img));
     }
-    Ok(if failed { 1 } else { 0 })
+    if failed {
+        return Ok(1);
+    }
+    let ks = if a.temporal_exposure {
+        let imgs: Vec<_> = pictures.iter().map(|(_, i)| i.clone()).collect();
+        Some(super::sheet::smoothed_exposures(
+            &imgs,
+            super::sheet::EXPOSURE_RADIUS,
+        ))
+    } else {
+        None
+    };
+    for (i, (to, img)) in pictures.iter().enumerate() {
+        let Some(path) = to else { continue };
+        match (path, &ks) {
+            (Some(p), Some(ks)) if p.extension().is_some_and(|e| e.eq_ignore_ascii_case("png")) => {
+                crate::image::png::write_png_with(p, img, ks[i])?
+            }
+            _ => crate::image::write_picture(path.as_deref(), img)?,
+        }
+    }
+    if let Some(sheet) = &a.contact_sheet {
+        let imgs: Vec<_> = pictures.into_iter().map(|(_, i)| i).collect();
+        super::sheet::write_contact_sheet(sheet, &imgs, a.thumb_width)?;
+    }
+    Ok(0)
 }
 
 /// `tstat`: progress and metrics.

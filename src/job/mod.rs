@@ -31,6 +31,7 @@ pub mod merge;
 pub mod path;
 pub mod plan;
 pub mod share;
+pub mod sheet;
 pub mod status;
 pub mod task;
 pub mod tile;

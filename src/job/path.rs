@@ -57,6 +57,13 @@ pub fn view_at(keys: &[View], s: f64) -> View {
     let i = (x.floor() as usize).min(n - 2);
     let t = x - i as f64;
     let (a, b) = (&keys[i], &keys[i + 1]);
+    // Frames on a key are that key exactly.
+    if t < 1e-12 {
+        return a.clone();
+    }
+    if t > 1.0 - 1e-12 {
+        return b.clone();
+    }
     let p0 = keys[i.saturating_sub(1)].vp;
     let p3 = keys[(i + 2).min(n - 1)].vp;
     let lerp = |x: f64, y: f64| x + (y - x) * t;
