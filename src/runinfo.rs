@@ -98,7 +98,14 @@ pub fn process_origin_id() -> u64 {
 
 /// User + system CPU seconds of this process (Linux `/proc/self/stat`), or None.
 pub fn process_cpu_seconds() -> Option<f64> {
-    let text = std::fs::read_to_string("/proc/self/stat").ok()?;
+    // One read into a stack buffer (a worker asks twice per tile): the line is far shorter.
+    use std::io::Read;
+    let mut buf = [0u8; 1024];
+    let n = std::fs::File::open("/proc/self/stat")
+        .ok()?
+        .read(&mut buf)
+        .ok()?;
+    let text = std::str::from_utf8(&buf[..n]).ok()?;
     // Fields after the parenthesised command name; utime and stime are fields 14 and 15.
     let rest = &text[text.rfind(')')? + 2..];
     let f: Vec<&str> = rest.split_whitespace().collect();

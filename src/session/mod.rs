@@ -111,9 +111,14 @@ impl Session {
         let ambient = Ambient::new(&params, scene.size, origin_id).map(Arc::new);
         let (threads, cut) = thread_count(threads);
         warnings.extend(cut);
+        // The calling thread is one of the pool's threads, so that rendering a region runs
+        // on it directly instead of waking another thread and waiting for it (a worker
+        // renders thousands of tiles); a thread already in a pool gets a pool of its own.
         let pool = rayon::ThreadPoolBuilder::new()
             .num_threads(threads)
+            .use_current_thread()
             .build()
+            .or_else(|_| rayon::ThreadPoolBuilder::new().num_threads(threads).build())
             .context("cannot start render threads")?;
         Ok(Session {
             params,
