@@ -262,6 +262,8 @@ fn sun_solid_angle() -> f64 {
 }
 
 const SOLAR_CONSTANT: f64 = 1367.0;
+/// Direct normal illuminance above which the input is refused (lux).
+const SOLAR_ILLUMINANCE: f64 = 127_500.0;
 const KAPPA: f64 = 1.041;
 
 /// The model's state for one sky.
@@ -406,7 +408,7 @@ impl DaylitArgs {
         };
         let sz_model = (PI / 2.0 - z).sin();
         // Irradiances (W/m²) and ε, Δ.
-        let input = self.input.unwrap_or(Input::W(0.0, 0.0));
+        let input = self.input.unwrap_or(Input::P(0.0, 0.0));
         let (edn, edh, eps, delta) = match input {
             Input::W(n, h) => (n, h, model.clearness(n, h), model.brightness(h)),
             Input::G(hdir, h) => {
@@ -427,6 +429,14 @@ impl DaylitArgs {
                 (n, h, model.clearness(n, h), model.brightness(h))
             }
             Input::P(eps, delta) => {
+                let eps = if eps < 1.0 {
+                    1.0
+                } else if eps >= 12.01 {
+                    12.009
+                } else {
+                    eps
+                };
+                let delta = delta.clamp(0.01, 0.6);
                 let h = delta * SOLAR_CONSTANT * e0 / m;
                 let k = KAPPA * z.powi(3);
                 let n = (eps * (1.0 + k) - k - 1.0) * h;
@@ -448,6 +458,11 @@ impl DaylitArgs {
         };
         let (eff_d, eff_b) = model.efficacies(eps, delta);
         let (evdh, evdn) = (edh * eff_d, edn * eff_b);
+        // No light, or more direct light than the sun gives outside the atmosphere: the
+        // real program prints the error sky.
+        if (edn <= 0.0 && edh <= 0.0) || edn > SOLAR_CONSTANT || evdn > SOLAR_ILLUMINANCE {
+            return DaylitSky::Error { dir };
+        }
         let coef = model.coefficients(eps, delta);
         let i = integral(&coef, z);
         let (diffnorm, sun) = match self.output {

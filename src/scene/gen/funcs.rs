@@ -6,7 +6,8 @@
 //!
 //! As in the real programs, `-e` and `-f` definitions are compiled in command-line order
 //! into the global context (a `-f` file is found along the RAYPATH), then the functions
-//! named on the command line, which replace any earlier definition of the same name.
+//! given on the command line, under names of their own (so `-e 'x(t)=t*t'` with the
+//! argument `'x(t)'` means t², and does not change an argument `t`).
 
 use std::path::PathBuf;
 use std::sync::Arc;
@@ -79,10 +80,17 @@ impl Funcs {
         }
         let mut funcs = Vec::new();
         for (name, params, body) in defs {
-            let stmt = format!("{name}({params})={body};");
+            // Under a name of its own: as in the real programs, `-e 'x(t)=…'` neither
+            // replaces the command line's x(t) nor is hidden by it, and the command line
+            // may call a function x(t) defined by `-e`.
+            let internal = format!("{name}_tessera_gen_");
+            let stmt = format!("{internal}({params})={body};");
             b.load_text(stmt.as_bytes(), &format!("<{name}({params})>"), Ctx::GLOBAL)
-                .map_err(|e| bad(format!("{name}({params})={body}: {e}")))?;
-            funcs.push(b.func(name, Ctx::GLOBAL).map_err(|e| bad(e.to_string()))?);
+                .map_err(|e| bad(format!("{name}({params}) = {body}: {e}")))?;
+            funcs.push(
+                b.func(&internal, Ctx::GLOBAL)
+                    .map_err(|e| bad(e.to_string()))?,
+            );
         }
         let valid = b
             .definitions()

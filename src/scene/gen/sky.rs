@@ -220,8 +220,10 @@ impl SkyArgs {
                 z.max(0.0) * 1000.0 / SKY_EFFICACY
             }
         };
-        let has_sun = self.with_sun && cie && alt > 0.0;
-        let sun = if has_sun {
+        // The sun's radiance counts in the ground's brightness whenever the sky is clear or
+        // intermediate with the sun above the horizon, even when the sun itself is not
+        // emitted (`-s`, `-i`), as in real gensky.
+        let sun_l = if cie && alt > 0.0 {
             let l = match self.solar {
                 Some(Given::Radiance(l)) => l,
                 Some(Given::Irradiance(e)) => e / (5.98e-5 * sz),
@@ -238,7 +240,8 @@ impl SkyArgs {
         } else {
             None
         };
-        let sun_ground = sun.map_or(0.0, |l| 6e-5 / PI * l * sz);
+        let sun = sun_l.filter(|_| self.with_sun);
+        let sun_ground = sun_l.map_or(0.0, |l| 6e-5 / PI * l * sz);
         SkyValues {
             zenith,
             ground: (zenith * norm + sun_ground) * self.ground_refl,

@@ -12,8 +12,9 @@
 //! one-sided differences next to invalid vertices), fitted over the cell's four corners
 //! as N(u,w) = m1·uw + m2·u + m3·w + m4, where `axis` is the dominant axis of the corner
 //! normals' sum and (u, w) are the next two axes cyclically; m4 is reduced by the
-//! polygon's own normal. A cell with an invalid corner, or a singular fit, gets no
-//! texture.
+//! polygon's own normal; a singular fit gives no texture. `-s` on a grid where
+//! `valid(s,t)` removes vertices is not built in (reported as unsupported): the real
+//! program's textures next to removed vertices are not reproduced.
 //!
 //! Not built in: data files for z (or for x, y, z named alike) and `-` (standard input),
 //! reported as unsupported; `-o` (Wavefront output, not a scene) is refused.
@@ -118,6 +119,9 @@ impl Grid {
     /// Vertex normal ∂P/∂s × ∂P/∂t (unit) by differences, one-sided next to invalid
     /// neighbours.
     fn normal(&self, i: isize, j: isize) -> DVec3 {
+        if !self.ok(i, j) {
+            return DVec3::ZERO;
+        }
         let lo_i = if self.ok(i - 1, j) { i - 1 } else { i };
         let hi_i = if self.ok(i + 1, j) { i + 1 } else { i };
         let lo_j = if self.ok(i, j - 1) { j - 1 } else { j };
@@ -209,6 +213,11 @@ impl SurfArgs {
     /// The primitives, as real gensurf prints them.
     pub fn generate(&self, cx: &GenContext) -> Result<Vec<Primitive>, ArgError> {
         let g = self.grid(cx)?;
+        if self.smooth && (0..=g.m as isize).any(|i| (0..=g.n as isize).any(|j| !g.ok(i, j))) {
+            return Err(ArgError::Unsupported(
+                "gensurf -s with vertices that valid(s,t) removes is not built in".to_string(),
+            ));
+        }
         let loc = cx.loc;
         let mut out = Vec::new();
         let mut k = 0usize;
@@ -234,14 +243,14 @@ impl SurfArgs {
                     .then(|| (p[2] - p[3]).cross(p[1] - p[3]).normalize_or_zero())
                     .filter(|v| *v != DVec3::ZERO);
                 // Texture fit over the four corners.
-                let fit = if self.smooth && ok.iter().all(|&v| v) {
+                let fit = if self.smooth {
                     let sign = if self.invert { -1.0 } else { 1.0 };
                     let nv = c.map(|(a, b)| sign * g.normal(a, b));
                     let sum = nv[0] + nv[1] + nv[2] + nv[3];
                     let s = sum.abs();
-                    let axis = if s.x >= s.y && s.x >= s.z {
+                    let axis = if s.x > s.y && s.x > s.z {
                         0
-                    } else if s.y >= s.z {
+                    } else if s.y > s.z {
                         1
                     } else {
                         2
