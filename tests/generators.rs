@@ -412,3 +412,106 @@ fn pipelines_into_xform() {
     let n = check_all(&bin, dir.path(), &cmds);
     eprintln!("pipelines: {} commands, {n} primitives equal", cmds.len());
 }
+
+/// Options that are not built in are reported so (the reader then runs the real program
+/// with `--allow-commands`, or names the command and the option); invalid arguments are
+/// errors naming the program.
+#[test]
+fn unsupported_and_bad_arguments() {
+    use tessera::scene::gen::{generate, ArgError, GenContext};
+    use tessera::scene::Location;
+    let loc = Location::new("t", 1);
+    let cx = GenContext {
+        loc: &loc,
+        raypath: &[],
+    };
+    let run = |s: &str| {
+        let w: Vec<String> = s.split_whitespace().map(String::from).collect();
+        generate(&w, &cx).expect("a built-in generator")
+    };
+    for s in [
+        "gendaylit 3 21 12 -W 600 100 -i 60",
+        "gendaylit 3 21 12 -W 600 100 -C",
+        "genprism m p 3 0 0 1 0 0 1 -r .1",
+        "genbox m b 1 2 3 -r .1 -i",
+        "gensurf m s s t - 2 2",
+        "gensurf m s s t s*t 2 2 -s -e valid(s,t)=.5-s",
+    ] {
+        assert!(matches!(run(s), Err(ArgError::Unsupported(_))), "{s}");
+    }
+    for (s, msg) in [
+        ("gensky 3 21", "gensky: too few"),
+        ("gensky 13 21 12", "gensky: bad month"),
+        ("gensky 3 21 12:30XYZ", "unknown time zone: XYZ"),
+        ("gensky 3 21 +12PST", "bad time format"),
+        ("gensky 3 21 12 -a", "missing value for -a"),
+        ("gensky 3 21 12 -a x", "'x' is not a number"),
+        ("gensky 3 21 12 -x", "unknown option: -x"),
+        ("gensky -defaults", "-defaults"),
+        ("gendaylit 3 21 12 -W 600", "missing value for -W"),
+        ("gendaylit 3 21 12 -O 7", "-O takes"),
+        ("genprism m p 2 0 0 1 1", "not enough vertices"),
+        ("genprism m p 3 0 0 1 0 0 1 -l 0 0 0", "illegal extrusion"),
+        ("genrev m r t 1 0", "nseg must be at least 1"),
+        ("genrev m r t sqrt(-1) 2", "genrev: evaluating r(t)"),
+        ("genworm m w t 0 0", "genworm: too few"),
+        ("gensurf m s s t 0 2 2 -o", "Wavefront"),
+        ("genblinds m b .05 1 .2 2", "genblinds: wrong number"),
+        ("genblinds m b .5 1 .2 2 0 -r .1", "at least half the depth"),
+    ] {
+        match run(s) {
+            Err(ArgError::Bad(e)) => assert!(e.contains(msg), "{s}: {e}"),
+            other => panic!("{s}: {other:?}"),
+        }
+    }
+}
+
+/// Reading an inline command with an option that is not built in, without
+/// `--allow-commands`, names the command and the option.
+#[test]
+fn unsupported_option_names_command_and_option() {
+    let e = parse_scene_text(
+        "\n!genprism m p 3 0 0 1 0 0 1 -r .1 | xform -rz 10\n",
+        "e.rad",
+        &ReadOptions::default(),
+    )
+    .unwrap_err()
+    .to_string();
+    assert!(
+        e.starts_with("e.rad:2: inline command 'genprism' needs --allow-commands")
+            && e.contains("genprism option -r"),
+        "{e}"
+    );
+}
+
+use proptest::prelude::*;
+
+proptest! {
+    #![proptest_config(ProptestConfig::with_cases(2000))]
+    /// No word list makes a generator panic.
+    #[test]
+    fn generator_arguments_never_panic(
+        prog in proptest::sample::select(tessera::scene::gen::GENERATORS.to_vec()),
+        words in proptest::collection::vec(
+            proptest::prop_oneof![
+                proptest::sample::select(vec![
+                    "-s", "+s", "-i", "+i", "-c", "-u", "-ang", "-a", "-o", "-m", "-y", "-b",
+                    "-B", "-r", "+r", "-R", "-g", "-t", "-W", "-G", "-L", "-E", "-P", "-O", "-d",
+                    "-e", "-f", "-l", "-defaults", "-", "3", "21", "12:30", "+10", "12:30EST",
+                    "0", "1", "2", "4", "-1", "0.5", "1e9", "1e308", "nan", "x", "t", "s*t",
+                    "valid(s,t)=s-.5", "z(t)=t", "sqrt(-1)", "1/0", "t*t", "0 0", "87", "-90",
+                    "hermite(0,1,0,0,t)", "a.cal",
+                ]).prop_map(String::from),
+                "[ -~]{0,6}",
+            ],
+            0..14,
+        ),
+    ) {
+        use tessera::scene::gen::{generate, GenContext};
+        let loc = tessera::scene::Location::new("p", 1);
+        let cx = GenContext { loc: &loc, raypath: &[] };
+        let mut w = vec![prog.to_string()];
+        w.extend(words);
+        let _ = generate(&w, &cx);
+    }
+}
