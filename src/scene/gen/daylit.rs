@@ -121,8 +121,11 @@ pub fn parse_gendaylit_args(args: &[String]) -> Result<DaylitArgs, ArgError> {
     while i < args.len() {
         let w = args[i].as_str();
         let two = |i: usize| -> Result<(f64, f64), ArgError> {
-            let x = num(P, &format!("first value for {w}"), value(P, args, i)?)?;
-            let y = num(P, &format!("second value for {w}"), value(P, args, i + 1)?)?;
+            if args.len() < i + 3 {
+                return Err(bad(format!("missing value for {w} (it takes two)")));
+            }
+            let x = num(P, &format!("first value for {w}"), &args[i + 1])?;
+            let y = num(P, &format!("second value for {w}"), &args[i + 2])?;
             Ok((x, y))
         };
         match w {
