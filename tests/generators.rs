@@ -453,7 +453,7 @@ fn unsupported_and_bad_arguments() {
         ("genprism m p 2 0 0 1 1", "not enough vertices"),
         ("genprism m p 3 0 0 1 0 0 1 -l 0 0 0", "illegal extrusion"),
         ("genrev m r t 1 0", "nseg must be at least 1"),
-        ("genrev m r t sqrt(-1) 2", "genrev: evaluating r(t)"),
+        ("genrev m r t sqrt(-1-t) 2", "genrev: evaluating r(t)"),
         ("genworm m w t 0 0", "genworm: too few"),
         ("gensurf m s s t 0 2 2 -o", "Wavefront"),
         ("genblinds m b .05 1 .2 2", "genblinds: wrong number"),
