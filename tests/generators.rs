@@ -76,8 +76,16 @@ fn difference(ours: &[Primitive], real: &[Primitive]) -> Option<String> {
         if !same {
             return Some(format!(
                 "primitive {k}:\n ours {} {} {} {:?} {:?}\n real {} {} {} {:?} {:?}",
-                a.modifier, a.ptype, a.name, a.sargs, a.rargs, b.modifier, b.ptype, b.name,
-                b.sargs, b.rargs
+                a.modifier,
+                a.ptype,
+                a.name,
+                a.sargs,
+                a.rargs,
+                b.modifier,
+                b.ptype,
+                b.name,
+                b.sargs,
+                b.rargs
             ));
         }
     }
@@ -148,7 +156,7 @@ fn gensky_dates_times_sites_and_sky_types() {
             for (k, site) in SITES.iter().enumerate() {
                 for (j, sky) in ["+s", "-s", "+i", "-i", "-c", "-u"].iter().enumerate() {
                     // Every sky type on every site, not every combination of all.
-                    if (j + k + month as usize) % 3 == 0 || time == "12" {
+                    if (j + k + month as usize).is_multiple_of(3) || time == "12" {
                         cmds.push(format!("gensky {month} {day} {time} {sky} {site}"));
                     }
                 }
@@ -204,14 +212,29 @@ fn gensky_options() {
     .map(|a| format!("gensky {a}"))
     .collect();
     for ang in [
-        "88 10", "89 10 -i", "88 10 -c", "88 10 -u", "-1 10", "-1 10 -c", "-1 10 -i", "0 10",
-        "0.5 10", "5 10 +i", "-5 10 +i", "30 10 -b 0", "30 -170 -g .3", "45 90 -t 6",
+        "88 10",
+        "89 10 -i",
+        "88 10 -c",
+        "88 10 -u",
+        "-1 10",
+        "-1 10 -c",
+        "-1 10 -i",
+        "0 10",
+        "0.5 10",
+        "5 10 +i",
+        "-5 10 +i",
+        "30 10 -b 0",
+        "30 -170 -g .3",
+        "45 90 -t 6",
         "60 -90 +i -r 2e6",
     ] {
         cmds.push(format!("gensky -ang {ang}"));
     }
     let n = check_all(&bin, dir.path(), &cmds);
-    eprintln!("gensky options: {} commands, {n} primitives equal", cmds.len());
+    eprintln!(
+        "gensky options: {} commands, {n} primitives equal",
+        cmds.len()
+    );
 }
 
 #[test]
@@ -313,14 +336,20 @@ fn genprism_genblinds() {
         cmds.push(format!("genblinds {a}"));
     }
     let n = check_all(&bin, dir.path(), &cmds);
-    eprintln!("genprism/genblinds: {} commands, {n} primitives equal", cmds.len());
+    eprintln!(
+        "genprism/genblinds: {} commands, {n} primitives equal",
+        cmds.len()
+    );
 }
 
 #[test]
 fn genrev_genworm() {
     let Some((bin, dir)) = setup() else { return };
-    std::fs::write(dir.path().join("curve.cal"), "zz(t) = 2*t;\nrr(t) = 1 + .3*sin(3*PI*t);\n")
-        .unwrap();
+    std::fs::write(
+        dir.path().join("curve.cal"),
+        "zz(t) = 2*t;\nrr(t) = 1 + .3*sin(3*PI*t);\n",
+    )
+    .unwrap();
     let mut cmds: Vec<String> = [
         "mat vase t '0.5+0.2*sin(PI*t)' 3",
         "mat d 0 1-t 2",
@@ -353,7 +382,10 @@ fn genrev_genworm() {
         cmds.push(format!("genworm {a}"));
     }
     let n = check_all(&bin, dir.path(), &cmds);
-    eprintln!("genrev/genworm: {} commands, {n} primitives equal", cmds.len());
+    eprintln!(
+        "genrev/genworm: {} commands, {n} primitives equal",
+        cmds.len()
+    );
 }
 
 #[test]

@@ -401,7 +401,9 @@ mod tests {
 
     #[test]
     fn pipelines() {
-        let p = split_pipeline("genrev a b 't|1' 2 | xform -rx 90").unwrap().unwrap();
+        let p = split_pipeline("genrev a b 't|1' 2 | xform -rx 90")
+            .unwrap()
+            .unwrap();
         assert_eq!(p.len(), 2);
         assert_eq!(p[0][3], "t|1");
         assert_eq!(p[1], vec!["xform", "-rx", "90"]);

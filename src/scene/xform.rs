@@ -65,8 +65,7 @@ pub fn parse_xform_stdin_args(args: &[String]) -> Result<XformCommand, XformArgE
             Ok(c)
         }
         _ => Err(XformArgError::Bad(
-            "xform: a pipeline stage reads standard input; it cannot also name files"
-                .to_string(),
+            "xform: a pipeline stage reads standard input; it cannot also name files".to_string(),
         )),
     }
 }

@@ -27,8 +27,7 @@ pub struct BlindsArgs {
     pub curve: Option<f64>,
 }
 
-const USAGE: &str =
-    "usage: genblinds material name depth width height nslats angle [-r|+r rcurv]";
+const USAGE: &str = "usage: genblinds material name depth width height nslats angle [-r|+r rcurv]";
 
 /// Parse the arguments after the word `genblinds`.
 pub fn parse_genblinds_args(args: &[String]) -> Result<BlindsArgs, ArgError> {
@@ -60,7 +59,7 @@ pub fn parse_genblinds_args(args: &[String]) -> Result<BlindsArgs, ArgError> {
         });
         if r == 0.0 || a.depth.abs() > 2.0 * r.abs() {
             return Err(bad(
-                "the curvature radius must be at least half the depth".to_string(),
+                "the curvature radius must be at least half the depth".to_string()
             ));
         }
     }
@@ -101,7 +100,12 @@ impl BlindsArgs {
             let (mut x, mut z) = (0.0, z0);
             for (k, t) in tilts.iter().enumerate() {
                 let (x1, z1) = (x + chord * t.cos(), z + chord * t.sin());
-                let pts = [(x, 0.0, z), (x, self.width, z), (x1, self.width, z1), (x1, 0.0, z1)];
+                let pts = [
+                    (x, 0.0, z),
+                    (x, self.width, z),
+                    (x1, self.width, z1),
+                    (x1, 0.0, z1),
+                ];
                 let r = pts
                     .iter()
                     .flat_map(|&(a, b, c)| [g12(a), g12(b), g12(c)])

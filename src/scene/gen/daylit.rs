@@ -105,10 +105,7 @@ pub fn parse_gendaylit_args(args: &[String]) -> Result<DaylitArgs, ArgError> {
         water: 2.0,
     };
     if args[0] == "-ang" {
-        a.angles = (
-            num(P, "altitude", &args[1])?,
-            num(P, "azimuth", &args[2])?,
-        );
+        a.angles = (num(P, "altitude", &args[1])?, num(P, "azimuth", &args[2])?);
     } else {
         let (m, d) = solar::parse_date(P, &args[0], &args[1])?;
         let w = args[2].as_str();
@@ -185,10 +182,22 @@ const EFFICACY: [([f64; 4], [f64; 4]); 8] = [
     ([97.24, -0.46, 12.00, -8.91], [57.20, -4.55, -2.98, 117.12]),
     ([107.22, 1.15, 0.59, -3.95], [98.99, -3.46, -1.21, 12.38]),
     ([104.97, 2.96, -5.53, -8.77], [109.83, -4.90, -1.71, -8.81]),
-    ([102.39, 5.59, -13.95, -13.90], [110.34, -5.84, -1.99, -4.56]),
-    ([100.71, 5.94, -22.75, -23.74], [106.36, -3.97, -1.75, -6.16]),
-    ([106.42, 3.83, -36.15, -28.83], [107.19, -1.25, -1.51, -26.73]),
-    ([141.88, 1.90, -53.24, -14.03], [105.75, 0.77, -1.26, -34.44]),
+    (
+        [102.39, 5.59, -13.95, -13.90],
+        [110.34, -5.84, -1.99, -4.56],
+    ),
+    (
+        [100.71, 5.94, -22.75, -23.74],
+        [106.36, -3.97, -1.75, -6.16],
+    ),
+    (
+        [106.42, 3.83, -36.15, -28.83],
+        [107.19, -1.25, -1.51, -26.73],
+    ),
+    (
+        [141.88, 1.90, -53.24, -14.03],
+        [105.75, 0.77, -1.26, -34.44],
+    ),
     ([152.23, 0.35, -45.27, -7.98], [101.18, 1.58, -1.10, -8.29]),
 ];
 
@@ -284,9 +293,7 @@ impl Model {
     fn clearness(&self, edn: f64, edh: f64) -> f64 {
         let k = KAPPA * self.z.powi(3);
         let e = ((edh + edn) / edh + k) / (1.0 + k);
-        if e.is_nan() {
-            1.0
-        } else if e < 1.0 {
+        if e.is_nan() || e < 1.0 {
             1.0
         } else if e >= 12.01 {
             12.009
@@ -382,8 +389,7 @@ impl DaylitArgs {
             Some((m, d, hour, solar)) => {
                 let s = solar::sun_position(m, d, hour, solar, self.year, &self.site);
                 // Before sunrise or after sunset (in solar time): the error sky.
-                let half_day =
-                    (-self.site.lat.tan() * s.dec.tan()).acos() * 12.0 / PI;
+                let half_day = (-self.site.lat.tan() * s.dec.tan()).acos() * 12.0 / PI;
                 if s.solar_time < 12.0 - half_day || s.solar_time > 12.0 + half_day {
                     return DaylitSky::Error {
                         dir: solar::sun_direction(s.alt, s.az),
@@ -400,7 +406,10 @@ impl DaylitArgs {
         let z = (PI / 2.0 - alt).min(PI / 2.0);
         let zdeg = z / DEG;
         let da = 2.0 * PI * (jd - 1.0) / 365.0;
-        let e0 = 1.00011 + 0.034221 * da.cos() + 0.00128 * da.sin() + 0.000719 * (2.0 * da).cos()
+        let e0 = 1.00011
+            + 0.034221 * da.cos()
+            + 0.00128 * da.sin()
+            + 0.000719 * (2.0 * da).cos()
             + 0.000077 * (2.0 * da).sin();
         let m = 1.0 / (z.cos() + 0.15 * (93.885 - zdeg).powf(-1.253));
         let model = Model {

@@ -69,7 +69,9 @@ impl Funcs {
                     .map_err(|e| bad(e.to_string()))?,
                 CalDef::File(f) => {
                     let path = super::find_on_raypath(f, raypath).ok_or_else(|| {
-                        bad(format!("cannot find function file '{f}' on RAYPATH {raypath:?}"))
+                        bad(format!(
+                            "cannot find function file '{f}' on RAYPATH {raypath:?}"
+                        ))
                     })?;
                     let text = std::fs::read(&path)
                         .map_err(|e| bad(format!("cannot read '{}': {e}", path.display())))?;
@@ -104,10 +106,7 @@ impl Funcs {
             funcs,
             valid,
             prog_name,
-            names: defs
-                .iter()
-                .map(|(n, p, _)| format!("{n}({p})"))
-                .collect(),
+            names: defs.iter().map(|(n, p, _)| format!("{n}({p})")).collect(),
         })
     }
 

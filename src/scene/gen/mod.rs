@@ -94,7 +94,11 @@ pub(crate) fn value<'a>(prog: &str, args: &'a [String], i: usize) -> Result<&'a 
 
 /// A number following option `args[i]`.
 pub(crate) fn opt_num(prog: &str, args: &[String], i: usize) -> Result<f64, ArgError> {
-    num(prog, &format!("value for {}", args[i]), value(prog, args, i)?)
+    num(
+        prog,
+        &format!("value for {}", args[i]),
+        value(prog, args, i)?,
+    )
 }
 
 /// `x` as printed by `%.Ng`-style `%.{digits-1}e` (`digits` significant digits) and read

@@ -54,11 +54,7 @@ pub fn parse_genrev_args(args: &[String]) -> Result<RevArgs, ArgError> {
                 i += 1;
                 continue;
             }
-            w => {
-                return Err(ArgError::Bad(format!(
-                    "genrev: bad option '{w}'; {USAGE}"
-                )))
-            }
+            w => return Err(ArgError::Bad(format!("genrev: bad option '{w}'; {USAGE}"))),
         }
         i += 2;
     }

@@ -62,7 +62,8 @@ pub struct SkyArgs {
     pub year: Option<i64>,
 }
 
-const USAGE: &str = "usage: gensky month day hour [options] | gensky -ang altitude azimuth [options]";
+const USAGE: &str =
+    "usage: gensky month day hour [options] | gensky -ang altitude azimuth [options]";
 
 /// Parse the arguments after the word `gensky`.
 pub fn parse_gensky_args(args: &[String]) -> Result<SkyArgs, ArgError> {
@@ -70,7 +71,7 @@ pub fn parse_gensky_args(args: &[String]) -> Result<SkyArgs, ArgError> {
     let bad = |s: String| ArgError::Bad(format!("gensky: {s}"));
     if args.first().map(String::as_str) == Some("-defaults") {
         return Err(bad(
-            "-defaults prints gensky's settings, not a scene".to_string(),
+            "-defaults prints gensky's settings, not a scene".to_string()
         ));
     }
     if args.len() < 3 {

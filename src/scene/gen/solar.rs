@@ -207,7 +207,10 @@ pub fn sun_position(
         }
         Some(y) => {
             let leap = (month > 2 && y % 4 == 0) as i64 as f64;
-            let n = jd + leap + 365.0 * (y - 1949) as f64 + ((y - 1949) / 4) as f64
+            let n = jd
+                + leap
+                + 365.0 * (y - 1949) as f64
+                + ((y - 1949) / 4) as f64
                 + (hour + 12.0 * site.mer / PI) / 24.0
                 - 18628.5;
             let l = (280.460 + 0.9856474 * n).rem_euclid(360.0) * DEG;
@@ -262,7 +265,9 @@ mod tests {
             parse_time("g", "12:30est").unwrap().zone_meridian,
             Some(75.0 * DEG)
         );
-        for bad in ["12.5:30", "+12PST", "12:30.5", "-3", "", "+", "12:30XYZ", "1e1"] {
+        for bad in [
+            "12.5:30", "+12PST", "12:30.5", "-3", "", "+", "12:30XYZ", "1e1",
+        ] {
             assert!(parse_time("g", bad).is_err(), "{bad}");
         }
     }

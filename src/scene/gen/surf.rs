@@ -86,7 +86,7 @@ pub fn parse_gensurf_args(args: &[String]) -> Result<SurfArgs, ArgError> {
             }
             "-o" => {
                 return Err(bad(
-                    "-o writes a Wavefront OBJ file, not a scene".to_string(),
+                    "-o writes a Wavefront OBJ file, not a scene".to_string()
                 ))
             }
             w => return Err(bad(format!("bad option '{w}'; {USAGE}"))),
@@ -149,8 +149,9 @@ fn solve4(mut a: [[f64; 4]; 4], mut b: [DVec3; 4]) -> Option<[DVec3; 4]> {
         for r in 0..4 {
             if r != c {
                 let f = a[r][c] / a[c][c];
-                for k in c..4 {
-                    a[r][k] -= f * a[c][k];
+                let pivot_row = a[c];
+                for (x, p) in a[r].iter_mut().zip(pivot_row).skip(c) {
+                    *x -= f * p;
                 }
                 b[r] -= f * b[c];
             }

@@ -23,8 +23,7 @@ pub struct WormArgs {
     pub defs: Vec<CalDef>,
 }
 
-const USAGE: &str =
-    "usage: genworm material name x(t) y(t) z(t) r(t) nseg [-e expr] [-f file]";
+const USAGE: &str = "usage: genworm material name x(t) y(t) z(t) r(t) nseg [-e expr] [-f file]";
 
 /// Parse the arguments after the word `genworm`.
 pub fn parse_genworm_args(args: &[String]) -> Result<WormArgs, ArgError> {
@@ -51,11 +50,7 @@ pub fn parse_genworm_args(args: &[String]) -> Result<WormArgs, ArgError> {
         match args[i].as_str() {
             "-e" => a.defs.push(CalDef::Expr(value(P, args, i)?.to_string())),
             "-f" => a.defs.push(CalDef::File(value(P, args, i)?.to_string())),
-            w => {
-                return Err(ArgError::Bad(format!(
-                    "genworm: bad option '{w}'; {USAGE}"
-                )))
-            }
+            w => return Err(ArgError::Bad(format!("genworm: bad option '{w}'; {USAGE}"))),
         }
         i += 2;
     }
@@ -86,7 +81,13 @@ impl WormArgs {
         let sphere = |i: usize, p: DVec3, r: f64| {
             let mut a = v(p).to_vec();
             a.push(g12(r));
-            prim(&self.material, "sphere", format!("{}.s{i}", self.name), a, cx.loc)
+            prim(
+                &self.material,
+                "sphere",
+                format!("{}.s{i}", self.name),
+                a,
+                cx.loc,
+            )
         };
         let (mut p0, mut r0) = at(0.0)?;
         let mut out = vec![sphere(0, p0, r0)];
