@@ -1,11 +1,12 @@
 //! Built-in `genblinds`: venetian blinds.
 //!
 //! `genblinds mat name depth width height nslats angle [-r|+r rcurv]`. Slat n (1..nslats)
-//! starts at height·(n − ½)/nslats on the z axis and runs along y for `width`; flat slats
-//! are one polygon `name.n.0` tilted `angle` degrees up from +x. Curved slats (`-r R`
-//! bends toward +z at the ends … as genblinds 6.0a; `+r` the other way) span an arc of
-//! θ = 2 asin(depth/2R), cut into trunc(θ/3° + 0.99999) strips `name.n.k` of chord
-//! 2R sin(θ/2·strips), each tilted one step more than the last and chained from the axis.
+//! starts at height·(n − ½)/nslats on the z axis and runs along y for `width`; a flat slat
+//! is one polygon `name.n.0` tilted `angle` degrees up from +x. A curved slat spans an arc
+//! of θ = 2 asin(depth/2R), cut into trunc(θ/3° + 0.99999) strips `name.n.k` of chord
+//! 2R sin(θ/2·strips), chained from the axis: strip k is tilted angle − θ/2 + (k + ½)·θ/strips
+//! with `-r` (the tilt grows along the slat) and angle + θ/2 − (k + ½)·θ/strips with `+r`,
+//! as genblinds 6.0a prints them.
 
 use super::{g12, num, prim, ArgError, GenContext};
 use crate::scene::primitive::{Location, Primitive};
