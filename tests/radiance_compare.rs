@@ -274,6 +274,38 @@ fn daylit_room_with_a_gensky_sky() {
     }
 }
 
+/// The daylit room under skies made by the built-in generators (tests/scenes/generators:
+/// inline `!gensky … | xform -rz 20` and `!gendaylit … -W`, read by tpict without a
+/// shell; rpict's oconv runs the real programs), at `-ab 0` and `-ab 1` (reduced to 32×32
+/// at `-ab 1`, as the gensky room above). tpict's RAYPATH is the test's: without
+/// Radiance's library it uses its own skybright.cal and perezlum.cal.
+#[test]
+fn daylit_room_with_builtin_gensky_and_gendaylit() {
+    for sky in ["gensky.rad", "gendaylit.rad"] {
+        for ab in ["0", "1"] {
+            let tol = if ab == "0" {
+                SUITE
+            } else {
+                Tol {
+                    size: "32",
+                    ..SUITE
+                }
+            };
+            check_tol(
+                &Case {
+                    dir: "generators",
+                    files: &[sky, "../daylight/room.rad"],
+                    view: "../daylight/room.vf",
+                    opts: &["-ab", ab, "-ps", "1", "-pj", "0"],
+                    ours_extra: &[],
+                    res: RES,
+                },
+                &tol,
+            );
+        }
+    }
+}
+
 /// A room lit by an IES luminaire converted by real `ies2rad -dm` (tests/scenes/ies:
 /// `brightdata` over a 2-D candela table with `source.cal`'s `flatcorr`, `src_phi4`,
 /// `src_theta`), placed by `xform -rz 30`, at `-ab 0` and `-ab 1` (means measured equal to

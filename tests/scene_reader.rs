@@ -212,10 +212,15 @@ fn error_classes_name_file_and_line() {
     );
     let e = err("void plastic x 1 'abc\n");
     assert!(e.starts_with("e.rad:1: unterminated"), "{e}");
-    let e = err("\n\n!gensky 3 21 12 +s\n");
+    let e = err("\n\n!mkillum 3 21 12 +s\n");
     assert_eq!(
         e,
-        "e.rad:3: inline command 'gensky' needs --allow-commands (or TESSERA_ALLOW_COMMANDS=1): !gensky 3 21 12 +s"
+        "e.rad:3: inline command 'mkillum' needs --allow-commands (or TESSERA_ALLOW_COMMANDS=1): !mkillum 3 21 12 +s"
+    );
+    let e = err("\n!gendaylit 3 21 12 -W 600 100 -i 60\n");
+    assert_eq!(
+        e,
+        "e.rad:2: inline command 'gendaylit' needs --allow-commands (or TESSERA_ALLOW_COMMANDS=1) (gendaylit option -i is not built in): !gendaylit 3 21 12 -W 600 100 -i 60"
     );
     let e = err("!genbox m b 1 2 3 -r .1 -i\n");
     assert!(
@@ -392,15 +397,21 @@ fn examp_expands_like_flat_file() {
     assert_eq!(ours[1].loc.line, 10);
 }
 
+/// The daffodil's `genrev … | xform -rx -90` and `genworm` are built in: it reads without
+/// `--allow-commands`, primitive for primitive as the flat file made by the real programs.
 #[test]
-fn daffodil_needs_commands_room_is_plain() {
+fn daffodil_reads_with_builtin_generators() {
     let o = ReadOptions::default();
-    let e = read_scene_files(&[data("daffodil/daffodil")], &o).unwrap_err();
-    let s = e.to_string();
-    assert!(
-        s.contains("daffodil/daffodil:15: inline command 'genrev' needs --allow-commands"),
-        "{s}"
-    );
+    let ours = read_scene_files(&[data("daffodil/daffodil")], &o).unwrap();
+    let flat = read_scene_files(&[data("daffodil/daffodil.flat.rad")], &o).unwrap();
+    let moved = parse_scene_text(
+        &format!("!xform -rz -40 -t 50 40 20 {}\n", data("daffodil/daffodil")),
+        "x",
+        &o,
+    )
+    .unwrap();
+    assert_same(&moved, &flat, "daffodil");
+    assert!(ours.iter().any(|p| p.name == "trumpet.16"));
     let room = read_scene_files(&[data("daffodil/room")], &o).unwrap();
     let flat = read_scene_files(&[data("daffodil/room.flat.rad")], &o).unwrap();
     assert_same(&room, &flat, "room");

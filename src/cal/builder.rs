@@ -14,9 +14,12 @@ pub const BUILTIN_RAYINIT: &str = include_str!("rayinit.cal");
 
 /// Tessera's own versions of Radiance library files that generated scenes name (written
 /// from the published models, `src/cal/lib/`), used when the RAYPATH has none.
-pub const BUILTIN_LIBRARY: [(&str, &str); 2] = [
+pub const BUILTIN_LIBRARY: [(&str, &str); 5] = [
     ("skybright.cal", include_str!("lib/skybright.cal")),
     ("source.cal", include_str!("lib/source.cal")),
+    ("perezlum.cal", include_str!("lib/perezlum.cal")),
+    ("rev.cal", include_str!("lib/rev.cal")),
+    ("surf.cal", include_str!("lib/surf.cal")),
 ];
 
 /// The built-in text of library file `name`, if Tessera has one.
@@ -166,7 +169,8 @@ impl CalBuilder {
                 (text, path)
             }
             // Radiance's library files a scene names most (gensky's skybright.cal,
-            // ies2rad's source.cal): Tessera's own versions when Radiance's are not found.
+            // gendaylit's perezlum.cal, genrev's rev.cal, gensurf's surf.cal, ies2rad's
+            // source.cal): Tessera's own versions when Radiance's are not found.
             None => match builtin_library(name) {
                 Some(t) => (
                     t.as_bytes().to_vec(),

@@ -167,6 +167,45 @@ const SHELL_META: &[char] = &[
     '|', '&', ';', '<', '>', '(', ')', '$', '`', '*', '?', '[', ']', '{', '}', '~', '\n',
 ];
 
+/// Split a pipeline `cmd1 | cmd2 | ...` into its simple commands' words (see
+/// [`split_command_words`]). `Ok(None)` when any part needs a real shell (including `||`
+/// and an empty stage), `Err` for an unterminated quote.
+pub fn split_pipeline(cmd: &str) -> Result<Option<Vec<Vec<String>>>, String> {
+    let mut stages = Vec::new();
+    let mut start = 0;
+    let mut quote: Option<char> = None;
+    let mut escaped = false;
+    for (i, c) in cmd.char_indices() {
+        if escaped {
+            escaped = false;
+            continue;
+        }
+        match (quote, c) {
+            (Some('\''), '\'') => quote = None,
+            (Some('\''), _) => {}
+            (Some(_), '\\') => escaped = true,
+            (Some(_), '"') => quote = None,
+            (Some(_), _) => {}
+            (None, '\\') => escaped = true,
+            (None, '\'' | '"') => quote = Some(c),
+            (None, '|') => {
+                stages.push(&cmd[start..i]);
+                start = i + 1;
+            }
+            (None, _) => {}
+        }
+    }
+    stages.push(&cmd[start..]);
+    let mut out = Vec::with_capacity(stages.len());
+    for st in stages {
+        match split_command_words(st)? {
+            Some(w) if !w.is_empty() => out.push(w),
+            _ => return Ok(None),
+        }
+    }
+    Ok(Some(out))
+}
+
 /// Split a command line into words like a POSIX shell would for a simple command
 /// (single quotes literal, double quotes with `\"` `\\` `\$` `` \` `` escapes, backslash
 /// escapes outside quotes). Returns `Ok(None)` when the line uses shell features (pipes,
@@ -358,6 +397,21 @@ mod tests {
             Some(vec!["xform".to_string(), "a|b".to_string()])
         );
         assert!(split_command_words("xform 'a").is_err());
+    }
+
+    #[test]
+    fn pipelines() {
+        let p = split_pipeline("genrev a b 't|1' 2 | xform -rx 90")
+            .unwrap()
+            .unwrap();
+        assert_eq!(p.len(), 2);
+        assert_eq!(p[0][3], "t|1");
+        assert_eq!(p[1], vec!["xform", "-rx", "90"]);
+        assert_eq!(split_pipeline("a || b").unwrap(), None);
+        assert_eq!(split_pipeline("a | b > c").unwrap(), None);
+        assert_eq!(split_pipeline("a |").unwrap(), None);
+        assert_eq!(split_pipeline("a \\| b").unwrap().unwrap().len(), 1);
+        assert!(split_pipeline("a 'b | c").is_err());
     }
 
     #[test]

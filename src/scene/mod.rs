@@ -1,8 +1,11 @@
-//! The scene language: lexer → primitives (with inline commands, `xform`, `genbox`) → [`Scene`].
+//! The scene language: lexer → primitives (with inline commands, `xform` and the built-in
+//! generators of [`gen`]) → [`Scene`].
 pub mod primitive;
 pub use primitive::{Location, Primitive};
 pub mod error;
-pub mod genbox;
+pub mod gen;
+/// The built-in genbox (now in [`gen::genbox`]).
+pub use gen::genbox;
 pub mod lexer;
 pub mod reader;
 pub mod transform;

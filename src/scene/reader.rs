@@ -3,10 +3,12 @@
 //! - Primitives are `modifier type identifier`, then `nS s..`, `nI i..`, `nR r..`; `alias`
 //!   takes a single word (the aliased identifier) instead of counts, which ends up as its only
 //!   string argument.
-//! - `!xform ...` and `!genbox ...` are built in (no shell). Other commands, commands using
-//!   shell syntax, and built-in options that are not implemented run through `sh -c` only when
-//!   [`ReadOptions::allow_commands`] is set; their standard output is read as scene text
-//!   located at `<command: ...>`.
+//! - `!xform ...` and the generators of [`super::gen`] (`genbox gensky gendaylit genprism
+//!   genrev genworm gensurf genblinds`) are built in (no shell), alone or piped into any
+//!   number of `xform` stages (`!genrev ... | xform -rx 90`). Other commands, commands using
+//!   other shell syntax, and built-in options that are not implemented run through `sh -c`
+//!   only when [`ReadOptions::allow_commands`] is set; their standard output is read as
+//!   scene text located at `<command: ...>`.
 //! - Files named by `xform` are looked up like real xform does: an absolute path as is, a
 //!   relative one in each [`ReadOptions::raypath`] directory in turn (Radiance's default
 //!   RAYPATH `.` is the current directory, *not* the including file's directory).
@@ -18,10 +20,10 @@ use std::path::{Path, PathBuf};
 use std::sync::Arc;
 
 use super::error::SceneError;
-use super::genbox;
-use super::lexer::{is_int, is_real, split_command_words, Lexer, Token, TokenKind};
+use super::gen;
+use super::lexer::{is_int, is_real, split_pipeline, Lexer, Token, TokenKind};
 use super::primitive::{Location, Primitive};
-use super::xform::{parse_xform_args, XformArgError};
+use super::xform::{parse_xform_args, parse_xform_stdin_args, XformArgError};
 
 /// Maximum nesting of inline commands (a file that includes itself hits this).
 pub const MAX_DEPTH: u32 = 32;
@@ -92,7 +94,8 @@ pub const KNOWN_TYPES: &[&str] = &[
 /// How to read scenes.
 #[derive(Clone, Debug, Default)]
 pub struct ReadOptions {
-    /// Run inline commands other than the built-in `xform`/`genbox` through `sh -c`.
+    /// Run inline commands other than the built-in ones (`xform`, the generators) through
+    /// `sh -c`.
     pub allow_commands: bool,
     /// Directories searched for files named by `xform` (Radiance's RAYPATH).
     pub raypath: Vec<PathBuf>,
@@ -383,25 +386,16 @@ fn expand_command(
             command: cmd.to_string(),
         });
     }
-    let words = split_command_words(cmd).map_err(|e| SceneError::syntax(loc.clone(), e))?;
+    let stages = split_pipeline(cmd).map_err(|e| SceneError::syntax(loc.clone(), e))?;
     let mut unsupported = None;
-    if let Some(words) = &words {
-        match words.first().map(String::as_str) {
-            None => return Err(SceneError::syntax(loc.clone(), "empty inline command '!'")),
-            Some("xform") => match parse_xform_args(&words[1..]) {
-                Ok(x) => return run_xform(&x, loc, opts, depth, out),
-                Err(XformArgError::Bad(r)) => return Err(SceneError::syntax(loc.clone(), r)),
-                Err(XformArgError::Unsupported(r)) => unsupported = Some(r),
-            },
-            Some("genbox") => match genbox::genbox(&words[1..], loc) {
-                Ok(p) => {
-                    out.extend(p);
-                    return Ok(());
-                }
-                Err(genbox::ArgError::Bad(r)) => return Err(SceneError::syntax(loc.clone(), r)),
-                Err(genbox::ArgError::Unsupported(r)) => unsupported = Some(r),
-            },
-            Some(_) => {}
+    if let Some(stages) = &stages {
+        match builtin_pipeline(stages, loc, opts, depth)? {
+            Builtin::Done(prims) => {
+                out.extend(prims);
+                return Ok(());
+            }
+            Builtin::Unsupported(r) => unsupported = Some(r),
+            Builtin::NotBuiltIn => {}
         }
     }
     if !opts.allow_commands {
@@ -420,6 +414,76 @@ fn expand_command(
         depth + 1,
         out,
     )
+}
+
+/// What the built-in commands made of a pipeline.
+enum Builtin {
+    /// Its output.
+    Done(Vec<Primitive>),
+    /// A stage uses an option that is not built in (why).
+    Unsupported(String),
+    /// A stage is not a built-in command.
+    NotBuiltIn,
+}
+
+/// Run a pipeline of built-in commands: a first stage `xform` (with files), `genbox` or
+/// another built-in generator ([`gen::GENERATORS`]), then any number of `xform` stages
+/// reading their standard input.
+fn builtin_pipeline(
+    stages: &[Vec<String>],
+    loc: &Location,
+    opts: &ReadOptions,
+    depth: u32,
+) -> Result<Builtin, SceneError> {
+    let syntax = |r: String| SceneError::syntax(loc.clone(), r);
+    let first = &stages[0];
+    let name = first[0].as_str();
+    if name != "xform" && !gen::GENERATORS.contains(&name) {
+        return Ok(Builtin::NotBuiltIn);
+    }
+    let mut later = Vec::new();
+    for st in &stages[1..] {
+        if st[0] != "xform" {
+            return Ok(Builtin::NotBuiltIn);
+        }
+        match parse_xform_stdin_args(&st[1..]) {
+            Ok(x) => later.push(x),
+            Err(XformArgError::Bad(r)) => return Err(syntax(r)),
+            Err(XformArgError::Unsupported(r)) => return Ok(Builtin::Unsupported(r)),
+        }
+    }
+    let mut prims = Vec::new();
+    if name == "xform" {
+        match parse_xform_args(&first[1..]) {
+            Ok(x) => run_xform(&x, loc, opts, depth, &mut prims)?,
+            Err(XformArgError::Bad(r)) => return Err(syntax(r)),
+            Err(XformArgError::Unsupported(r)) => return Ok(Builtin::Unsupported(r)),
+        }
+    } else {
+        let cx = gen::GenContext {
+            loc,
+            raypath: &opts.raypath,
+        };
+        match gen::generate(first, &cx) {
+            Some(Ok(p)) => prims = p,
+            Some(Err(gen::ArgError::Bad(r))) => return Err(syntax(r)),
+            Some(Err(gen::ArgError::Unsupported(r))) => return Ok(Builtin::Unsupported(r)),
+            None => return Ok(Builtin::NotBuiltIn),
+        }
+    }
+    for x in &later {
+        let mut next = Vec::with_capacity(prims.len() * x.copies.len());
+        for copy in &x.copies {
+            for p in &prims {
+                let q = x
+                    .apply(copy, p)
+                    .map_err(|r| SceneError::syntax(p.loc.clone(), format!("xform: {r}")))?;
+                next.push(q);
+            }
+        }
+        prims = next;
+    }
+    Ok(Builtin::Done(prims))
 }
 
 fn run_shell(cmd: &str, loc: &Location) -> Result<String, SceneError> {

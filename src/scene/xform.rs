@@ -51,6 +51,26 @@ const MAX_COPIES: u64 = 1_000_000;
 
 /// Parse the arguments after the word `xform`.
 pub fn parse_xform_args(args: &[String]) -> Result<XformCommand, XformArgError> {
+    parse_xform(args, false)
+}
+
+/// Parse the arguments of an `xform` that reads its standard input (a later stage of a
+/// pipeline): no file may be named (`-` alone stands for standard input).
+pub fn parse_xform_stdin_args(args: &[String]) -> Result<XformCommand, XformArgError> {
+    let mut c = parse_xform(args, true)?;
+    match c.files.as_slice() {
+        [] => Ok(c),
+        [f] if f == "-" => {
+            c.files.clear();
+            Ok(c)
+        }
+        _ => Err(XformArgError::Bad(
+            "xform: a pipeline stage reads standard input; it cannot also name files".to_string(),
+        )),
+    }
+}
+
+fn parse_xform(args: &[String], stdin: bool) -> Result<XformCommand, XformArgError> {
     let bad = |s: String| XformArgError::Bad(format!("xform: {s}"));
     let mut prefix: Option<String> = None;
     let mut modifier = None;
@@ -106,7 +126,7 @@ pub fn parse_xform_args(args: &[String]) -> Result<XformCommand, XformArgError> 
         }
     }
     let files: Vec<String> = args[i..].to_vec();
-    if files.is_empty() {
+    if files.is_empty() && !stdin {
         return Err(bad(
             "no file named (xform reading standard input is not allowed inline)".to_string(),
         ));

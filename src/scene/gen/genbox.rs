@@ -17,7 +17,7 @@
 
 use glam::DVec3;
 
-use super::primitive::{Location, Primitive};
+use crate::scene::primitive::{Location, Primitive};
 
 /// How box edges are finished.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -45,17 +45,10 @@ pub struct GenboxArgs {
     pub style: BoxStyle,
 }
 
-/// Why genbox arguments were not accepted.
-#[derive(Clone, Debug, PartialEq, Eq)]
-pub enum ArgError {
-    /// Valid for real genbox but not built in (run the real program if allowed).
-    Unsupported(String),
-    /// Invalid arguments.
-    Bad(String),
-}
+pub use super::ArgError;
 
 fn num(what: &str, w: &str) -> Result<f64, ArgError> {
-    if !super::lexer::is_real(w) {
+    if !crate::scene::lexer::is_real(w) {
         return Err(ArgError::Bad(format!(
             "genbox: {what} '{w}' is not a number"
         )));
