@@ -1,0 +1,96 @@
+#!/bin/bash
+# Load, build and render times and peak memory of instanced scenes, tpict against
+# oconv + rpict (docs/benchmarks.md, "Instances and meshes").
+#
+#   bench/instances.sh [WORKDIR]
+#
+# Makes (with awk, oconv and obj2mesh):
+#   piece.oct  50,000 surfaces (polygons and spheres), unfrozen
+#   city.rad   a floor, a light and 16×16 = 256 instances of piece.oct (12.8 million
+#              surfaces once expanded)
+#   grid.rtm   a 710×710 height field of 1,008,200 triangles with normals and (u,v)
+#   terrain.rad  4 instances of the mesh (one file, built once)
+# and times: tpict at 64×64 (the scene's load and build dominate), tpict and rpict at
+# 512×512 -ab 0. Peak memory is /usr/bin/time's maximum resident set size.
+# Needs Radiance's oconv, obj2mesh and rpict on PATH, and tpict (TPICT=...).
+set -euo pipefail
+W=${1:-/tmp/tessera-bench-instances}
+TPICT=${TPICT:-$(dirname "$0")/../target/release/tpict}
+TPICT=$(realpath "$TPICT")
+mkdir -p "$W"
+cd "$W"
+export RAYPATH=${RAYPATH:-.}
+
+if [ ! -f piece.oct ]; then
+  awk 'BEGIN {
+    srand(7);
+    print "void plastic pm 0 0 5 .6 .5 .4 .02 .05";
+    print "void plastic pb 0 0 5 .2 .3 .6 0 0";
+    for (i = 0; i < 25000; i++) {
+      x = rand() * 4; y = rand() * 4; z = rand() * 2; s = 0.01 + rand() * 0.04;
+      printf "pm polygon q%d 0 0 12 %g %g %g %g %g %g %g %g %g %g %g %g\n", i,
+        x, y, z, x + s, y, z, x + s, y + s, z + s, x, y + s, z + s;
+      printf "pb sphere s%d 0 0 4 %g %g %g %g\n", i, 4 - x, 4 - y, z, s / 2;
+    }
+  }' > piece.rad
+  oconv piece.rad > piece.oct
+fi
+if [ ! -f city.rad ]; then
+  {
+    echo "void light sun 0 0 3 1e3 1e3 1e3"
+    echo "sun source s 0 0 4 .3 .4 1 2"
+    echo "void plastic ground 0 0 5 .4 .4 .4 0 0"
+    echo "ground polygon floor 0 0 12 -1 -1 0 81 -1 0 81 81 0 -1 81 0"
+    for i in $(seq 0 15); do for j in $(seq 0 15); do
+      echo "void instance p$i.$j 7 piece.oct -rz $(( (i * 37 + j * 11) % 360 )) -t $((i * 5 + 2)) $((j * 5 + 2)) 0 0 0"
+    done; done
+  } > city.rad
+  oconv city.rad > city.oct
+fi
+if [ ! -f grid.rtm ]; then
+  awk 'BEGIN {
+    n = 710;
+    for (j = 0; j <= n; j++) for (i = 0; i <= n; i++) {
+      x = i / n * 10; y = j / n * 10; z = 0.5 * sin(x * 1.3) * cos(y * 0.9);
+      nx = -0.5 * 1.3 * cos(x * 1.3) * cos(y * 0.9); ny = 0.5 * 0.9 * sin(x * 1.3) * sin(y * 0.9);
+      printf "v %g %g %g\nvn %g %g 1\nvt %g %g\n", x, y, z, -nx, -ny, i / n, j / n;
+    }
+    for (j = 0; j < n; j++) for (i = 0; i < n; i++) {
+      a = j * (n + 1) + i + 1; b = a + 1; c = a + n + 2; d = a + n + 1;
+      printf "f %d/%d/%d %d/%d/%d %d/%d/%d\n", a, a, a, b, b, b, c, c, c;
+      printf "f %d/%d/%d %d/%d/%d %d/%d/%d\n", a, a, a, c, c, c, d, d, d;
+    }
+  }' > grid.obj
+  echo "void plastic terrain 0 0 5 .5 .6 .4 0 0" > grid.mat
+  obj2mesh -a grid.mat grid.obj grid.rtm
+  rm -f grid.obj
+fi
+cat > terrain.rad <<'T'
+void light sun 0 0 3 1e3 1e3 1e3
+sun source s 0 0 4 .3 .4 1 2
+void mesh t1 1 grid.rtm 0 0
+void mesh t2 4 grid.rtm -t 10 0 0 0 0
+void mesh t3 4 grid.rtm -t 0 10 0 0 0
+void mesh t4 4 grid.rtm -t 10 10 0 0 0
+T
+oconv terrain.rad > terrain.oct
+
+measure() { # label command...
+  local label=$1; shift
+  /usr/bin/time -f "%e %M" -o time.txt "$@" > /dev/null 2> err.txt || { cat err.txt; exit 1; }
+  read -r secs kb < time.txt
+  printf "%-44s %8.2f s %8.0f MB\n" "$label" "$secs" "$((kb / 1024))"
+}
+CITY="-vp 40 -30 40 -vd 0 1 -0.8 -vh 60 -vv 60"
+TERR="-vp 10 -8 12 -vd 0 1 -0.9 -vh 70 -vv 60"
+echo "surfaces: piece $(grep -c . piece.rad) primitives, city 256 instances; grid $(getinfo grid.rtm >/dev/null; echo 1008200) triangles ×4"
+measure "oconv city.rad" oconv city.rad
+measure "tpict city.rad 64x64 (load+build)" "$TPICT" $CITY -x 64 -y 64 -ab 0 city.rad
+measure "rpict city.oct 64x64" rpict $CITY -x 64 -y 64 -ab 0 city.oct
+measure "tpict city.rad 512x512 -ab 0" "$TPICT" $CITY -x 512 -y 512 -ab 0 city.rad
+measure "rpict city.oct 512x512 -ab 0" rpict $CITY -x 512 -y 512 -ab 0 city.oct
+measure "obj2mesh (done above) / oconv terrain.rad" oconv terrain.rad
+measure "tpict terrain.rad 64x64 (load+build)" "$TPICT" $TERR -x 64 -y 64 -ab 0 terrain.rad
+measure "rpict terrain.oct 64x64" rpict $TERR -x 64 -y 64 -ab 0 terrain.oct
+measure "tpict terrain.rad 512x512 -ab 0" "$TPICT" $TERR -x 512 -y 512 -ab 0 terrain.rad
+measure "rpict terrain.oct 512x512 -ab 0" rpict $TERR -x 512 -y 512 -ab 0 terrain.oct
