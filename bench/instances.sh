@@ -19,7 +19,7 @@ TPICT=${TPICT:-$(dirname "$0")/../target/release/tpict}
 TPICT=$(realpath "$TPICT")
 mkdir -p "$W"
 cd "$W"
-export RAYPATH=${RAYPATH:-.}
+export RAYPATH=${RAYPATH:-.:$(dirname "$(command -v rpict)")/../lib}
 
 if [ ! -f piece.oct ]; then
   awk 'BEGIN {
@@ -69,9 +69,9 @@ cat > terrain.rad <<'T'
 void light sun 0 0 3 1e3 1e3 1e3
 sun source s 0 0 4 .3 .4 1 2
 void mesh t1 1 grid.rtm 0 0
-void mesh t2 4 grid.rtm -t 10 0 0 0 0
-void mesh t3 4 grid.rtm -t 0 10 0 0 0
-void mesh t4 4 grid.rtm -t 10 10 0 0 0
+void mesh t2 5 grid.rtm -t 10 0 0 0 0
+void mesh t3 5 grid.rtm -t 0 10 0 0 0
+void mesh t4 5 grid.rtm -t 10 10 0 0 0
 T
 oconv terrain.rad > terrain.oct
 

@@ -12,12 +12,13 @@ pub const MAX_HEADER: usize = 16 << 20;
 pub struct BinReader<'a> {
     buf: &'a [u8],
     pos: usize,
+    kind: &'static str,
 }
 
 impl<'a> BinReader<'a> {
-    /// A reader at the start of `buf`.
-    pub fn new(buf: &'a [u8]) -> BinReader<'a> {
-        BinReader { buf, pos: 0 }
+    /// A reader at the start of `buf`, a file of `kind` (`octree`, `mesh`: for messages).
+    pub fn new(buf: &'a [u8], kind: &'static str) -> BinReader<'a> {
+        BinReader { buf, pos: 0, kind }
     }
 
     /// The current byte offset.
@@ -31,7 +32,7 @@ impl<'a> BinReader<'a> {
     }
 
     fn truncated(&self, what: &str) -> String {
-        format!("truncated file (reading {what} at byte {})", self.pos)
+        format!("truncated {} (reading {what} at byte {})", self.kind, self.pos)
     }
 
     /// An error about `what` at the current offset.
@@ -116,7 +117,8 @@ impl<'a> BinReader<'a> {
     /// The text header: `#?RADIANCE` first, lines up to an empty one. Returns the lines
     /// (without the first) and checks a `FORMAT=` line, when there is one, against
     /// `format`.
-    pub fn header(&mut self, format: &str, kind: &str) -> Result<Vec<String>, String> {
+    pub fn header(&mut self, format: &str) -> Result<Vec<String>, String> {
+        let kind = self.kind;
         const MAGIC: &[u8] = b"#?RADIANCE\n";
         if !self.buf.starts_with(MAGIC) {
             return Err(format!("not a Radiance {kind} (no #?RADIANCE header)"));
@@ -166,10 +168,10 @@ mod tests {
             (&[0, 0, 0, 0, 0], 0.0),
         ];
         for (b, want) in cases {
-            let v = BinReader::new(b).real("r").unwrap();
+            let v = BinReader::new(b, "octree").real("r").unwrap();
             assert!((v - want).abs() < 1e-8, "{v} vs {want}");
         }
-        let mut r = BinReader::new(&[0xff, 0xff, 0x01, 0x1f]);
+        let mut r = BinReader::new(&[0xff, 0xff, 0x01, 0x1f], "octree");
         assert_eq!(r.int(2, "i").unwrap(), -1);
         assert_eq!(r.int(2, "i").unwrap(), 287);
         assert!(r.int(1, "i").unwrap_err().contains("truncated"));
@@ -177,12 +179,12 @@ mod tests {
 
     #[test]
     fn headers() {
-        let mut r = BinReader::new(b"#?RADIANCE\noconv x\nFORMAT=Radiance_octree\n\n\x01");
-        assert_eq!(r.header("Radiance_octree", "octree").unwrap().len(), 2);
+        let mut r = BinReader::new(b"#?RADIANCE\noconv x\nFORMAT=Radiance_octree\n\n\x01", "octree");
+        assert_eq!(r.header("Radiance_octree").unwrap().len(), 2);
         assert_eq!(r.byte("b").unwrap(), 1);
-        let mut r = BinReader::new(b"#?RADIANCE\nFORMAT=Radiance_tmesh\n\n");
-        assert!(r.header("Radiance_octree", "octree").unwrap_err().contains("FORMAT"));
-        assert!(BinReader::new(b"hello").header("x", "octree").is_err());
-        assert!(BinReader::new(b"#?RADIANCE\nno end").header("x", "octree").is_err());
+        let mut r = BinReader::new(b"#?RADIANCE\nFORMAT=Radiance_tmesh\n\n", "octree");
+        assert!(r.header("Radiance_octree").unwrap_err().contains("FORMAT"));
+        assert!(BinReader::new(b"hello", "octree").header("x").is_err());
+        assert!(BinReader::new(b"#?RADIANCE\nno end", "octree").header("x").is_err());
     }
 }

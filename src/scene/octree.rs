@@ -151,8 +151,8 @@ pub fn read_frozen_scene(
 
 /// Parse an octree's bytes (`name`: the file, for locations).
 pub fn parse_octree(bytes: &[u8], name: &str) -> Result<OctreeFile, String> {
-    let mut r = BinReader::new(bytes);
-    let header = r.header("Radiance_octree", "octree")?;
+    let mut r = BinReader::new(bytes, "octree");
+    let header = r.header("Radiance_octree")?;
     let at = r.pos();
     let magic = r.int(2, "the magic number")?;
     let objsize = magic - 283;

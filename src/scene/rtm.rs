@@ -79,8 +79,8 @@ pub fn decode_normal(code: u32) -> Option<Vec3> {
 
 /// Parse a mesh file's bytes (`name`: the file, for locations).
 pub fn parse_mesh(bytes: &[u8], name: &str) -> Result<MeshFile, String> {
-    let mut r = BinReader::new(bytes);
-    let header = r.header("Radiance_tmesh", "mesh")?;
+    let mut r = BinReader::new(bytes, "mesh");
+    let header = r.header("Radiance_tmesh")?;
     let at = r.pos();
     let magic = r.int(2, "the magic number")?;
     let objsize = magic - 319;
