@@ -55,6 +55,7 @@ if [ ! -f grid.rtm ]; then
       nx = -0.5 * 1.3 * cos(x * 1.3) * cos(y * 0.9); ny = 0.5 * 0.9 * sin(x * 1.3) * sin(y * 0.9);
       printf "v %g %g %g\nvn %g %g 1\nvt %g %g\n", x, y, z, -nx, -ny, i / n, j / n;
     }
+    print "usemtl terrain";
     for (j = 0; j < n; j++) for (i = 0; i < n; i++) {
       a = j * (n + 1) + i + 1; b = a + 1; c = a + n + 2; d = a + n + 1;
       printf "f %d/%d/%d %d/%d/%d %d/%d/%d\n", a, a, a, b, b, b, c, c, c;

@@ -215,7 +215,8 @@ fn scene_file_path(f: &str, octree: &Path, opts: &ReadOptions) -> PathBuf {
     let beside = octree.parent().map(|d| d.join(p));
     match beside {
         Some(b) if b.is_file() => b,
-        _ => p.to_path_buf(),
+        // Not found: "./name" (never "-", which the reader takes for standard input).
+        _ => Path::new(".").join(p),
     }
 }
 
