@@ -315,29 +315,35 @@ impl Bvh {
     /// Build from f64 bounds (relative frame). Empty input is fine (every query misses).
     /// Boxes with non-finite coordinates are never candidates; `min > max` is reordered.
     pub fn build(bounds: &[(DVec3, DVec3)], eps: f64) -> Bvh {
-        let mut s: f64 = 0.0;
-        let mut boxes: Vec<(DVec3, DVec3)> = Vec::with_capacity(bounds.len());
-        let mut ids = Vec::with_capacity(bounds.len());
-        for (i, &(a, b)) in bounds.iter().enumerate() {
+        Bvh::build_from(bounds.len(), |i| bounds[i], eps)
+    }
+
+    /// [`Bvh::build`] over `n` boxes given by `bound(i)` (called twice per box), without a
+    /// list of them: large meshes build with less memory.
+    pub fn build_from(n: usize, bound: impl Fn(usize) -> (DVec3, DVec3), eps: f64) -> Bvh {
+        let clamped = |i: usize| -> Option<(DVec3, DVec3)> {
+            let (a, b) = bound(i);
             if !(a.is_finite() && b.is_finite()) || i > u32::MAX as usize {
-                continue;
+                return None;
             }
-            let lo = a
-                .min(b)
-                .clamp(DVec3::splat(-COORD_LIMIT), DVec3::splat(COORD_LIMIT));
-            let hi = a
-                .max(b)
-                .clamp(DVec3::splat(-COORD_LIMIT), DVec3::splat(COORD_LIMIT));
-            s = s.max(lo.abs().max_element()).max(hi.abs().max_element());
-            boxes.push((lo, hi));
-            ids.push(i as u32);
+            let lim = DVec3::splat(COORD_LIMIT);
+            Some((a.min(b).clamp(-lim, lim), a.max(b).clamp(-lim, lim)))
+        };
+        let mut s: f64 = 0.0;
+        let mut ids = Vec::new();
+        for i in 0..n {
+            if let Some((lo, hi)) = clamped(i) {
+                s = s.max(lo.abs().max_element()).max(hi.abs().max_element());
+                ids.push(i as u32);
+            }
         }
         let pad = PAD_REL * (s + MARGIN) + PAD_EPS * eps;
         let mut tlo = DVec3::splat(f64::INFINITY);
         let mut thi = DVec3::splat(f64::NEG_INFINITY);
-        let prims: Vec<BoxPrim> = boxes
+        let prims: Vec<BoxPrim> = ids
             .iter()
-            .map(|&(lo, hi)| {
+            .filter_map(|&i| clamped(i as usize))
+            .map(|(lo, hi)| {
                 let lo = lo - DVec3::splat(pad);
                 let hi = hi + DVec3::splat(pad);
                 tlo = tlo.min(lo);
@@ -360,7 +366,7 @@ impl Bvh {
             hi: thi,
             pad,
             eps,
-            count: bounds.len(),
+            count: n,
         }
     }
 

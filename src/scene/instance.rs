@@ -373,8 +373,7 @@ impl Builder<'_> {
             eps: super::build::length_tolerance(size),
         };
         mesh.pos.shrink_to_fit();
-        let bounds: Vec<(DVec3, DVec3)> = (0..mesh.tris.len()).map(|i| mesh.bounds(i)).collect();
-        let bvh = Bvh::build(&bounds, mesh.eps);
+        let bvh = Bvh::build_from(mesh.tris.len(), |i| mesh.bounds(i), mesh.eps);
         let expanded = mesh.tris.len() as u64;
         Ok(ObjectSet {
             file: name.to_string(),
