@@ -10,16 +10,18 @@
 #              surfaces once expanded)
 #   grid.rtm   a 710×710 height field of 1,008,200 triangles with normals and (u,v)
 #   terrain.rad  4 instances of the mesh (one file, built once)
-# and times: tpict at 64×64 (the scene's load and build dominate), tpict and rpict at
-# 512×512 -ab 0. Peak memory is /usr/bin/time's maximum resident set size.
-# Needs Radiance's oconv, obj2mesh and rpict on PATH, and tpict (TPICT=...).
+# and times: oconv and obj2mesh (Radiance's build), tpict at 64×64 (the scene's load and
+# build dominate), tpict and rpict at 512×512 -ab 0; tpict on one thread (-n 1) like rpict.
+# CPU = user + system seconds; peak memory is /usr/bin/time's maximum resident set size.
+# Radiance is found as the tests find it (bench/common.sh); tpict is built unless
+# NO_BUILD=1 or TPICT=path.
 set -euo pipefail
+ROOT=$(cd "$(dirname "$0")/.." && pwd)
+NAME=instances
+source "$ROOT/bench/common.sh"
 W=${1:-/tmp/tessera-bench-instances}
-TPICT=${TPICT:-$(dirname "$0")/../target/release/tpict}
-TPICT=$(realpath "$TPICT")
 mkdir -p "$W"
 cd "$W"
-export RAYPATH=${RAYPATH:-.:$(dirname "$(command -v rpict)")/../lib}
 
 if [ ! -f piece.oct ]; then
   awk 'BEGIN {
@@ -64,7 +66,6 @@ if [ ! -f grid.rtm ]; then
   }' > grid.obj
   echo "void plastic terrain 0 0 5 .5 .6 .4 0 0" > grid.mat
   obj2mesh -a grid.mat grid.obj grid.rtm
-  rm -f grid.obj
 fi
 cat > terrain.rad <<'T'
 void light sun 0 0 3 1e3 1e3 1e3
@@ -78,20 +79,24 @@ oconv terrain.rad > terrain.oct
 
 measure() { # label command...
   local label=$1; shift
-  /usr/bin/time -f "%e %M" -o time.txt "$@" > /dev/null 2> err.txt || { cat err.txt; exit 1; }
-  read -r secs kb < time.txt
-  printf "%-44s %8.2f s %8.0f MB\n" "$label" "$secs" "$((kb / 1024))"
+  /usr/bin/time -f "%e %U %S %M" -o time.txt "$@" > /dev/null 2> err.txt || { cat err.txt; exit 1; }
+  read -r wall user sys kb < time.txt
+  printf "%-40s wall %6.2f s  CPU %6.2f s  %6d MB\n" "$label" "$wall" \
+    "$(echo "$user + $sys" | bc)" "$((kb / 1024))"
 }
 CITY="-vp 40 -30 40 -vd 0 1 -0.8 -vh 60 -vv 60"
 TERR="-vp 10 -8 12 -vd 0 1 -0.9 -vh 70 -vv 60"
-echo "surfaces: piece $(grep -c . piece.rad) primitives, city 256 instances; grid $(getinfo grid.rtm >/dev/null; echo 1008200) triangles ×4"
+T1="$TPICT -n 1"
+echo "piece.rad: $(grep -c . piece.rad) primitives; city: 256 instances (12.8 million surfaces)"
+echo "grid.rtm: 1,008,200 triangles; terrain: 4 instances of it"
+measure "oconv piece.rad" oconv piece.rad
 measure "oconv city.rad" oconv city.rad
-measure "tpict city.rad 64x64 (load+build)" "$TPICT" $CITY -x 64 -y 64 -ab 0 city.rad
+measure "tpict city.rad 64x64 (load+build)" $T1 $CITY -x 64 -y 64 -ab 0 city.rad
 measure "rpict city.oct 64x64" rpict $CITY -x 64 -y 64 -ab 0 city.oct
-measure "tpict city.rad 512x512 -ab 0" "$TPICT" $CITY -x 512 -y 512 -ab 0 city.rad
+measure "tpict city.rad 512x512 -ab 0" $T1 $CITY -x 512 -y 512 -ab 0 city.rad
 measure "rpict city.oct 512x512 -ab 0" rpict $CITY -x 512 -y 512 -ab 0 city.oct
-measure "obj2mesh (done above) / oconv terrain.rad" oconv terrain.rad
-measure "tpict terrain.rad 64x64 (load+build)" "$TPICT" $TERR -x 64 -y 64 -ab 0 terrain.rad
+measure "obj2mesh grid.obj (1M triangles)" obj2mesh -a grid.mat grid.obj /dev/stdout
+measure "tpict terrain.rad 64x64 (load+build)" $T1 $TERR -x 64 -y 64 -ab 0 terrain.rad
 measure "rpict terrain.oct 64x64" rpict $TERR -x 64 -y 64 -ab 0 terrain.oct
-measure "tpict terrain.rad 512x512 -ab 0" "$TPICT" $TERR -x 512 -y 512 -ab 0 terrain.rad
+measure "tpict terrain.rad 512x512 -ab 0" $T1 $TERR -x 512 -y 512 -ab 0 terrain.rad
 measure "rpict terrain.oct 512x512 -ab 0" rpict $TERR -x 512 -y 512 -ab 0 terrain.oct

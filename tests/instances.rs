@@ -48,7 +48,11 @@ fn ball_obj() -> String {
             let ph = std::f64::consts::TAU * i as f64 / nu as f64;
             let (x, y, z) = (th.sin() * ph.cos(), th.sin() * ph.sin(), th.cos());
             s += &format!("v {x:.6} {y:.6} {:.6}\nvn {x:.6} {y:.6} {z:.6}\n", z + 1.2);
-            s += &format!("vt {:.6} {:.6}\n", i as f64 / nu as f64, j as f64 / nv as f64);
+            s += &format!(
+                "vt {:.6} {:.6}\n",
+                i as f64 / nu as f64,
+                j as f64 / nv as f64
+            );
         }
     }
     s += "usemtl stripes\n";
@@ -84,11 +88,12 @@ fn workdir(bin: &Path) -> tempfile::TempDir {
     oconv(&["pobj.rad"], "pobj.oct");
     oconv(&["-f", "row.rad"], "row.oct");
     std::fs::write(t.path().join("ball.obj"), ball_obj()).unwrap();
-    run_ok(
-        radiance(bin, "obj2mesh")
-            .current_dir(t.path())
-            .args(["-a", "ballmat.rad", "ball.obj", "ball.rtm"]),
-    );
+    run_ok(radiance(bin, "obj2mesh").current_dir(t.path()).args([
+        "-a",
+        "ballmat.rad",
+        "ball.obj",
+        "ball.rtm",
+    ]));
     t
 }
 
@@ -103,7 +108,12 @@ fn tpict(dir: &Path) -> Command {
 fn check(bin: &Path, dir: &Path, input: &[&str], octree: &str, opts: &[&str], tol: &Tol) {
     let name = format!("{}{}", input.join("_"), opts.join(""));
     let reff = dir.join(format!("ref-{name}.hdr"));
-    let data = run_ok(radiance(bin, "rpict").current_dir(dir).args(opts).arg(octree));
+    let data = run_ok(
+        radiance(bin, "rpict")
+            .current_dir(dir)
+            .args(opts)
+            .arg(octree),
+    );
     std::fs::write(&reff, data).unwrap();
     let ours = dir.join(format!("ours-{name}.hdr"));
     run_ok(tpict(dir).args(opts).arg("-o").arg(&ours).args(input));
@@ -123,7 +133,11 @@ fn check(bin: &Path, dir: &Path, input: &[&str], octree: &str, opts: &[&str], to
     let b = reduce_with_pfilt(&reff);
     let c = compare(&a.pixels_f64(), &b.pixels_f64(), 0.007);
     eprintln!("{input:?} {opts:?}: {c:?}");
-    assert!(c.rms <= tol.rms, "{input:?} {opts:?}: relative RMS {:.3}", c.rms);
+    assert!(
+        c.rms <= tol.rms,
+        "{input:?} {opts:?}: relative RMS {:.3}",
+        c.rms
+    );
     assert!(c.max <= tol.max, "{input:?} {opts:?}: max {:.3}", c.max);
     assert!(
         c.mean_lum <= tol.mean,
@@ -148,18 +162,39 @@ fn octree_instances_void_and_modified() {
     let d = t.path();
     let oct = run_ok(radiance(&bin, "oconv").current_dir(d).arg("inst.rad"));
     std::fs::write(d.join("inst.oct"), oct).unwrap();
-    let frozen = run_ok(radiance(&bin, "oconv").current_dir(d).args(["-f", "inst.rad"]));
+    let frozen = run_ok(
+        radiance(&bin, "oconv")
+            .current_dir(d)
+            .args(["-f", "inst.rad"]),
+    );
     std::fs::write(d.join("instf.oct"), frozen).unwrap();
     for ab in ["0", "1"] {
         let tol = if ab == "0" { &SUITE } else { &AMBIENT };
-        check(&bin, d, &["inst.rad"], "inst.oct", &opts("inst.vf", ab), tol);
+        check(
+            &bin,
+            d,
+            &["inst.rad"],
+            "inst.oct",
+            &opts("inst.vf", ab),
+            tol,
+        );
     }
-    check(&bin, d, &["instf.oct"], "instf.oct", &opts("inst.vf", "0"), &SUITE);
+    check(
+        &bin,
+        d,
+        &["instf.oct"],
+        "instf.oct",
+        &opts("inst.vf", "0"),
+        &SUITE,
+    );
     // The unfrozen octree is its scene file: the same picture, bit for bit.
     let o = opts("inst.vf", "0");
     run_ok(tpict(d).args(&o).args(["-o", "a.hdr", "inst.rad"]));
     run_ok(tpict(d).args(&o).args(["-o", "b.hdr", "inst.oct"]));
-    let (a, b) = (read_picture(&d.join("a.hdr")).unwrap(), read_picture(&d.join("b.hdr")).unwrap());
+    let (a, b) = (
+        read_picture(&d.join("a.hdr")).unwrap(),
+        read_picture(&d.join("b.hdr")).unwrap(),
+    );
     assert!(a.pixels == b.pixels, "inst.oct renders unlike inst.rad");
 }
 
@@ -175,7 +210,14 @@ fn nested_instances_with_patterns() {
     std::fs::write(d.join("nest.oct"), oct).unwrap();
     for ab in ["0", "1"] {
         let tol = if ab == "0" { &SUITE } else { &AMBIENT };
-        check(&bin, d, &["nest.rad"], "nest.oct", &opts("inst.vf", ab), tol);
+        check(
+            &bin,
+            d,
+            &["nest.rad"],
+            "nest.oct",
+            &opts("inst.vf", ab),
+            tol,
+        );
     }
 }
 
@@ -190,7 +232,14 @@ fn meshes_with_normals_and_uv() {
     std::fs::write(d.join("mesh.oct"), oct).unwrap();
     for ab in ["0", "1"] {
         let tol = if ab == "0" { &SUITE } else { &AMBIENT };
-        check(&bin, d, &["mesh.rad"], "mesh.oct", &opts("mesh.vf", ab), tol);
+        check(
+            &bin,
+            d,
+            &["mesh.rad"],
+            "mesh.oct",
+            &opts("mesh.vf", ab),
+            tol,
+        );
     }
 }
 
@@ -207,7 +256,11 @@ fn a_large_instance_count_renders() {
     );
     for i in 0..50 {
         for j in 0..50 {
-            let f = if (i + j) % 2 == 0 { "obj.oct" } else { "pobj.oct" };
+            let f = if (i + j) % 2 == 0 {
+                "obj.oct"
+            } else {
+                "pobj.oct"
+            };
             s += &format!(
                 "void instance g{i}.{j} 9 {f} -rz {} -s 0.4 -t {} {} 0 0 0\n",
                 (i * 37 + j * 11) % 360,
@@ -234,15 +287,22 @@ fn instances_moved_far_away_or_scaled_render_the_same() {
     let t = workdir(&bin);
     let d = t.path();
     let render = |xf: &str, vp: [f64; 3], s: f64, out: &str| -> Image {
-        std::fs::write(d.join("w.rad"), format!("!xform {xf} inst.rad\n!xform {xf} mesh.rad\n"))
-            .unwrap();
+        std::fs::write(
+            d.join("w.rad"),
+            format!("!xform {xf} inst.rad\n!xform {xf} mesh.rad\n"),
+        )
+        .unwrap();
         let vp: Vec<String> = vp.iter().map(|v| format!("{v:e}")).collect();
         let vh = format!("{}", 60);
         let _ = s;
         run_ok(
             tpict(d)
-                .args(["-vtv", "-vp", &vp[0], &vp[1], &vp[2], "-vd", "0", "1", "-0.6"])
-                .args(["-vh", &vh, "-vv", "45", "-x", "96", "-y", "72", "-ab", "0", "-ps", "1"])
+                .args([
+                    "-vtv", "-vp", &vp[0], &vp[1], &vp[2], "-vd", "0", "1", "-0.6",
+                ])
+                .args([
+                    "-vh", &vh, "-vv", "45", "-x", "96", "-y", "72", "-ab", "0", "-ps", "1",
+                ])
                 .args(["-pj", "0", "-o", out, "w.rad"]),
         );
         let img = read_picture(&d.join(out)).unwrap();
@@ -252,7 +312,12 @@ fn instances_moved_far_away_or_scaled_render_the_same() {
     let base = render("-t 0 0 0", [0.0, -12.0, 8.0], 1.0, "base.hdr");
     let r = reduce(&base, 24, 18);
     for (xf, vp, s, out) in [
-        ("-t 1e6 -1e6 1e6", [1e6, -1e6 - 12.0, 1e6 + 8.0], 1.0, "far.hdr"),
+        (
+            "-t 1e6 -1e6 1e6",
+            [1e6, -1e6 - 12.0, 1e6 + 8.0],
+            1.0,
+            "far.hdr",
+        ),
         ("-s 1e3", [0.0, -12e3, 8e3], 1e3, "big.hdr"),
         ("-s 1e-3", [0.0, -12e-3, 8e-3], 1e-3, "small.hdr"),
     ] {
@@ -260,7 +325,11 @@ fn instances_moved_far_away_or_scaled_render_the_same() {
         let c = compare(&reduce(&img, 24, 18), &r, 0.01);
         eprintln!("{xf}: {c:?}");
         assert!(c.rms < 0.005, "{xf}: relative RMS {}", c.rms);
-        assert!(c.mean_lum < 0.001, "{xf}: mean luminance differs by {}", c.mean_lum);
+        assert!(
+            c.mean_lum < 0.001,
+            "{xf}: mean luminance differs by {}",
+            c.mean_lum
+        );
     }
 }
 
@@ -272,7 +341,9 @@ fn output(c: &mut Command) -> Output {
 fn fails_with(dir: &Path, files: &[&str], want: &str) {
     let o = output(
         tpict(dir)
-            .args(["-x", "8", "-y", "8", "-vp", "0", "-12", "8", "-vd", "0", "1", "-0.6"])
+            .args([
+                "-x", "8", "-y", "8", "-vp", "0", "-12", "8", "-vd", "0", "1", "-0.6",
+            ])
             .args(["-o", "out.hdr"])
             .args(files),
     );
@@ -281,7 +352,11 @@ fn fails_with(dir: &Path, files: &[&str], want: &str) {
     assert!(!err.contains("panicked"), "{files:?} panicked: {err}");
     let lines: Vec<&str> = err.lines().filter(|l| l.contains("error")).collect();
     assert_eq!(lines.len(), 1, "{files:?}: {err}");
-    assert!(lines[0].contains(want), "{files:?}: want '{want}' in: {}", lines[0]);
+    assert!(
+        lines[0].contains(want),
+        "{files:?}: want '{want}' in: {}",
+        lines[0]
+    );
     assert!(!dir.join("out.hdr").exists());
 }
 
@@ -335,14 +410,19 @@ fn bad_octrees_and_meshes_are_one_line_errors() {
     // A stale unfrozen octree: its scene file changed after oconv.
     std::fs::write(
         d.join("obj.rad"),
-        std::fs::read_to_string(d.join("obj.rad.away")).unwrap() + "red sphere extra 0 0 4 0 0 3 .1\n",
+        std::fs::read_to_string(d.join("obj.rad.away")).unwrap()
+            + "red sphere extra 0 0 4 0 0 3 .1\n",
     )
     .unwrap();
     fails_with(d, &["moved.oct"], "octree stale");
     // An octree that instances itself: made over a placeholder, then copied over it.
     scene("self.rad", "void instance me 1 self.oct 0 0\n");
     std::fs::copy(d.join("objf.oct"), d.join("self.oct")).unwrap();
-    let me = run_ok(radiance(&bin, "oconv").current_dir(d).args(["-f", "self.rad"]));
+    let me = run_ok(
+        radiance(&bin, "oconv")
+            .current_dir(d)
+            .args(["-f", "self.rad"]),
+    );
     std::fs::write(d.join("self.oct"), me).unwrap();
     fails_with(d, &["self.rad"], "instance loop");
     // Bad instance arguments.
@@ -361,13 +441,58 @@ fn readers_refuse_every_truncation() {
     let frozen = std::fs::read(d.join("row.oct")).unwrap();
     assert!(tessera::scene::octree::parse_octree(&frozen, "row.oct").is_ok());
     for n in 0..frozen.len() {
-        assert!(tessera::scene::octree::parse_octree(&frozen[..n], "row.oct").is_err(), "{n}");
+        assert!(
+            tessera::scene::octree::parse_octree(&frozen[..n], "row.oct").is_err(),
+            "{n}"
+        );
     }
     let mesh = std::fs::read(d.join("ball.rtm")).unwrap();
     let m = tessera::scene::rtm::parse_mesh(&mesh, "ball.rtm").unwrap();
     assert_eq!(m.tris.len(), 24 * 12 * 2 - 48 + 2, "triangles");
     assert!(m.flags.iter().any(|f| f & tessera::scene::rtm::HAS_UV != 0));
     for n in 0..mesh.len() {
-        assert!(tessera::scene::rtm::parse_mesh(&mesh[..n], "ball.rtm").is_err(), "{n}");
+        assert!(
+            tessera::scene::rtm::parse_mesh(&mesh[..n], "ball.rtm").is_err(),
+            "{n}"
+        );
     }
+}
+
+/// A batch job over a scene of nested instances: tplan copies the octrees (and the scene
+/// file of the unfrozen one) into the job, a worker elsewhere without a RAYPATH renders
+/// tpict's picture.
+#[test]
+fn a_job_carries_its_instanced_files() {
+    let Some(bin) = radiance_bin() else { return };
+    let t = workdir(&bin);
+    let d = t.path();
+    let job = d.join("job");
+    let view = ["-vf", "inst.vf", "-x", "64", "-y", "50", "-ab", "0"];
+    run_ok(
+        Command::new(env!("CARGO_BIN_EXE_tplan"))
+            .current_dir(d)
+            .env("RAYPATH", ".")
+            .args(["--tiles", "2", "--workers", "1", "--output", "job", "--"])
+            .args(view)
+            .arg("nest.rad"),
+    );
+    for f in ["row.oct", "pobj.oct", "pobj.rad"] {
+        assert!(job.join("files").join(f).is_file(), "{f} not in the job");
+    }
+    let elsewhere = tempfile::tempdir().unwrap();
+    run_ok(
+        Command::new(env!("CARGO_BIN_EXE_tpiece"))
+            .current_dir(elsewhere.path())
+            .env_remove("RAYPATH")
+            .arg(&job),
+    );
+    let pic = run_ok(Command::new(env!("CARGO_BIN_EXE_tassemble")).arg(&job));
+    std::fs::write(d.join("job.hdr"), pic).unwrap();
+    run_ok(tpict(d).args(view).args(["-o", "direct.hdr", "nest.rad"]));
+    let a = read_picture(&d.join("job.hdr")).unwrap();
+    let b = read_picture(&d.join("direct.hdr")).unwrap();
+    assert!(
+        a.pixels == b.pixels,
+        "the job's picture differs from tpict's"
+    );
 }

@@ -251,7 +251,8 @@ fn missing_and_octree_top_level_files() {
     // Octrees are read; a missing one is an I/O error naming it.
     let e = read_scene_files(&["/nonexistent/a.oct".to_string()], &o).unwrap_err();
     assert!(
-        e.to_string().starts_with("/nonexistent/a.oct:0: cannot read"),
+        e.to_string()
+            .starts_with("/nonexistent/a.oct:0: cannot read"),
         "{e}"
     );
 }

@@ -322,6 +322,16 @@ impl Share {
     };
 }
 
+/// The object a footprint's shadow answers belong to: the scene's own objects by index,
+/// instanced ones by index and placement.
+fn vis_key(hit: &Hit) -> usize {
+    if hit.is_top() {
+        hit.obj
+    } else {
+        hit.obj ^ ((hit.inst as usize + 1) << 40)
+    }
+}
+
 #[cfg(test)]
 pub(crate) mod tests {
     use super::*;
@@ -399,15 +409,5 @@ pub(crate) mod tests {
             other: 100.0,
         };
         assert_eq!(amb.share_factor(far, 1.0), 1.0);
-    }
-}
-
-/// The object a footprint's shadow answers belong to: the scene's own objects by index,
-/// instanced ones by index and placement.
-fn vis_key(hit: &Hit) -> usize {
-    if hit.is_top() {
-        hit.obj
-    } else {
-        hit.obj ^ ((hit.inst as usize + 1) << 40)
     }
 }

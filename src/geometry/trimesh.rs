@@ -58,7 +58,7 @@ impl TriMesh {
         let [a, b, c] = self.verts(i);
         let n = (b - a).cross(c - a);
         let nl = n.length();
-        if !(nl > 0.0) {
+        if nl.is_nan() || nl <= 0.0 {
             return None;
         }
         let nu = n / nl;
@@ -87,7 +87,7 @@ impl TriMesh {
         let [a, b, c] = self.verts(i);
         let n = (b - a).cross(c - a);
         let n2 = n.length_squared();
-        if !(n2 > 0.0) {
+        if n2.is_nan() || n2 <= 0.0 {
             return [1.0 / 3.0; 3];
         }
         let wa = (c - b).cross(point - b).dot(n) / n2;
@@ -162,15 +162,23 @@ mod tests {
         let m = square();
         assert_eq!(m.normal(0), DVec3::Z);
         let down = -DVec3::Z;
-        let t = m.intersect(0, DVec3::new(0.75, 0.25, 1.0), down, 10.0).unwrap();
+        let t = m
+            .intersect(0, DVec3::new(0.75, 0.25, 1.0), down, 10.0)
+            .unwrap();
         assert!((t - 1.0).abs() < 1e-12);
-        assert!(m.intersect(1, DVec3::new(0.75, 0.25, 1.0), down, 10.0).is_none());
+        assert!(m
+            .intersect(1, DVec3::new(0.75, 0.25, 1.0), down, 10.0)
+            .is_none());
         // On the shared diagonal: both triangles count it.
         let o = DVec3::new(0.5, 0.5, 1.0);
         assert!(m.intersect(0, o, down, 10.0).is_some() && m.intersect(1, o, down, 10.0).is_some());
         // Parallel and behind.
-        assert!(m.intersect(0, DVec3::new(-1.0, 0.5, 0.0), DVec3::X, 10.0).is_none());
-        assert!(m.intersect(0, DVec3::new(0.75, 0.25, -1.0), down, 10.0).is_none());
+        assert!(m
+            .intersect(0, DVec3::new(-1.0, 0.5, 0.0), DVec3::X, 10.0)
+            .is_none());
+        assert!(m
+            .intersect(0, DVec3::new(0.75, 0.25, -1.0), down, 10.0)
+            .is_none());
         let (n, uv) = m.interpolate(0, DVec3::new(0.75, 0.25, 0.0));
         assert_eq!(n, Some(DVec3::Z));
         let uv = uv.unwrap();

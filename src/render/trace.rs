@@ -165,9 +165,7 @@ impl<'a> Tracer<'a> {
             if tmax <= scene.eps {
                 return None;
             }
-            let (r, t) = scene.closest(org, dir, tmax, |a, b| {
-                self.prefer(a, b, org, dir, tmax)
-            })?;
+            let (r, t) = scene.closest(org, dir, tmax, |a, b| self.prefer(a, b, org, dir, tmax))?;
             let (point, normal, flat) = scene.hit_geom(r, org, dir, t);
             let material = scene.ref_material(r);
             let back = normal.dot(dir) > 0.0;
@@ -545,10 +543,9 @@ impl<'a> Tracer<'a> {
         let src = &self.lights.sources[si];
         if let Some(relay) = &src.relay {
             // First leg: to the mirror, which must be hit from its front.
-            let (t, hit) =
-                self.shadow_walk(org, dir, dist, antimatter, rng, |h| {
-                    h.is_top() && h.obj == relay.obj
-                });
+            let (t, hit) = self.shadow_walk(org, dir, dist, antimatter, rng, |h| {
+                h.is_top() && h.obj == relay.obj
+            });
             let Some(hit) = hit else {
                 return Color::ZERO;
             };

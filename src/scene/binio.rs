@@ -32,7 +32,10 @@ impl<'a> BinReader<'a> {
     }
 
     fn truncated(&self, what: &str) -> String {
-        format!("truncated {} (reading {what} at byte {})", self.kind, self.pos)
+        format!(
+            "truncated {} (reading {what} at byte {})",
+            self.kind, self.pos
+        )
     }
 
     /// An error about `what` at the current offset.
@@ -87,7 +90,8 @@ impl<'a> BinReader<'a> {
         let Some(end) = rest.iter().position(|&b| b == 0) else {
             return Err(self.truncated(what));
         };
-        let s = std::str::from_utf8(&rest[..end]).map_err(|_| self.bad(format!("{what}: not UTF-8")))?;
+        let s = std::str::from_utf8(&rest[..end])
+            .map_err(|_| self.bad(format!("{what}: not UTF-8")))?;
         self.pos += end + 1;
         Ok(s)
     }
@@ -179,12 +183,17 @@ mod tests {
 
     #[test]
     fn headers() {
-        let mut r = BinReader::new(b"#?RADIANCE\noconv x\nFORMAT=Radiance_octree\n\n\x01", "octree");
+        let mut r = BinReader::new(
+            b"#?RADIANCE\noconv x\nFORMAT=Radiance_octree\n\n\x01",
+            "octree",
+        );
         assert_eq!(r.header("Radiance_octree").unwrap().len(), 2);
         assert_eq!(r.byte("b").unwrap(), 1);
         let mut r = BinReader::new(b"#?RADIANCE\nFORMAT=Radiance_tmesh\n\n", "octree");
         assert!(r.header("Radiance_octree").unwrap_err().contains("FORMAT"));
         assert!(BinReader::new(b"hello", "octree").header("x").is_err());
-        assert!(BinReader::new(b"#?RADIANCE\nno end", "octree").header("x").is_err());
+        assert!(BinReader::new(b"#?RADIANCE\nno end", "octree")
+            .header("x")
+            .is_err());
     }
 }

@@ -154,10 +154,7 @@ pub(super) struct Modifiers {
 }
 
 /// A name space put aside while another file's names are bound.
-pub(super) type SavedNames = (
-    HashMap<String, ModRef>,
-    HashMap<String, (String, Location)>,
-);
+pub(super) type SavedNames = (HashMap<String, ModRef>, HashMap<String, (String, Location)>);
 
 impl ModifierLookup for Modifiers {
     fn modref(&self, name: &str) -> Result<ModRef, String> {
@@ -417,8 +414,7 @@ impl Builder<'_> {
                 mods.define(&p.name, ModRef::Material(id));
                 def = Some(ModRef::Material(id));
             } else if let Some(parse) = self.types.get(t) {
-                let kind =
-                    parse(p, &*mods).map_err(|m| err(p, format!("{t} {}: {m}", p.name)))?;
+                let kind = parse(p, &*mods).map_err(|m| err(p, format!("{t} {}: {m}", p.name)))?;
                 let next = mods.modref(&p.modifier).map_err(|m| err(p, m))?;
                 if matches!(kind, ModifierKind::Mixture { .. }) && next != ModRef::Void {
                     return Err(err(

@@ -146,7 +146,11 @@ impl ObjectSet {
             SetGeom::Objects(objs) => (objs[j].chain, objs[j].material, &objs[j].modifier),
             SetGeom::Mesh { mesh, mods } => {
                 let k = mesh.tris[j].modifier;
-                match usize::try_from(k).ok().and_then(|k| mods.get(k)).and_then(|m| m.as_ref()) {
+                match usize::try_from(k)
+                    .ok()
+                    .and_then(|k| mods.get(k))
+                    .and_then(|m| m.as_ref())
+                {
                     Some(m) => (m.chain, m.material, &m.name),
                     None => (ModRef::Void, None, "void"),
                 }
@@ -248,7 +252,8 @@ impl Builder<'_> {
     /// The set of an `instance` or `mesh` primitive (read and built on first use) and its
     /// transform.
     pub(super) fn child_set(&mut self, p: &Primitive) -> Result<(usize, Transform), SceneError> {
-        let err = |m: String| SceneError::syntax(p.loc.clone(), format!("{} {}: {m}", p.ptype, p.name));
+        let err =
+            |m: String| SceneError::syntax(p.loc.clone(), format!("{} {}: {m}", p.ptype, p.name));
         let xf = instance_transform(p).map_err(err)?;
         let name = &p.sargs[0];
         let path = self.mods.files.find(name).map_err(err)?;
@@ -257,14 +262,20 @@ impl Builder<'_> {
             return Ok((id, xf));
         }
         if self.loading.contains(&key) {
-            let chain: Vec<String> = self.loading.iter().map(|k| k.display().to_string()).collect();
+            let chain: Vec<String> = self
+                .loading
+                .iter()
+                .map(|k| k.display().to_string())
+                .collect();
             return Err(err(format!(
                 "instance loop: '{name}' instances itself ({} → {name})",
                 chain.join(" → ")
             )));
         }
         if self.loading.len() >= MAX_NESTING {
-            return Err(err(format!("instances nested deeper than {MAX_NESTING} levels")));
+            return Err(err(format!(
+                "instances nested deeper than {MAX_NESTING} levels"
+            )));
         }
         self.loading.push(key.clone());
         let set = if p.ptype == "mesh" {
@@ -300,7 +311,8 @@ impl Builder<'_> {
                 level.distant.len()
             ));
         }
-        let bounds: Vec<(DVec3, DVec3)> = level.objects.iter().map(|o| o.surface.bounds()).collect();
+        let bounds: Vec<(DVec3, DVec3)> =
+            level.objects.iter().map(|o| o.surface.bounds()).collect();
         let mut direct = None;
         for b in &bounds {
             union(&mut direct, *b);
@@ -331,7 +343,8 @@ impl Builder<'_> {
             path: name.to_string(),
             reason: e.to_string(),
         })?;
-        let file = super::rtm::parse_mesh(&bytes, name).map_err(|m| SceneError::syntax(loc.clone(), m))?;
+        let file =
+            super::rtm::parse_mesh(&bytes, name).map_err(|m| SceneError::syntax(loc.clone(), m))?;
         drop(bytes);
         let level = self.in_own_namespace(|b| b.level(&file.prims))?;
         let mods: Vec<Option<MeshModifier>> = level
@@ -351,7 +364,10 @@ impl Builder<'_> {
                 if mods[k].is_none() {
                     return Err(SceneError::syntax(
                         loc,
-                        format!("triangle modifier '{}' is not a modifier", file.prims[k].name),
+                        format!(
+                            "triangle modifier '{}' is not a modifier",
+                            file.prims[k].name
+                        ),
                     ));
                 }
             }
@@ -389,11 +405,7 @@ impl Builder<'_> {
 }
 
 /// Flatten the scene's instances into placements relative to `origin`.
-pub fn flatten(
-    sets: &[ObjectSet],
-    top: &[Child],
-    origin: DVec3,
-) -> Result<Vec<Placement>, String> {
+pub fn flatten(sets: &[ObjectSet], top: &[Child], origin: DVec3) -> Result<Vec<Placement>, String> {
     let mut out = Vec::new();
     // (child, composed file → world matrix, its scale, mirrors, override)
     let mut stack: Vec<(&Child, DMat4, f64, bool, Option<Override>)> = top
@@ -484,7 +496,10 @@ impl Scene {
                 tmax,
                 |i| {
                     if i < n {
-                        self.objects[i].surface.intersect(org, dir, tmax).map(|t| (t, 0))
+                        self.objects[i]
+                            .surface
+                            .intersect(org, dir, tmax)
+                            .map(|t| (t, 0))
                     } else {
                         self.placement_hit(i - n, org, dir, tmax, &prefer)
                     }
@@ -541,7 +556,11 @@ impl Scene {
         let p = &self.placements[r.inst as usize];
         let local = p.to_local.transform_point3(point);
         let (n, flat) = self.sets[p.set].normal(r.obj, local);
-        (point, p.to_world.transform_vector3(n).normalize_or_zero(), flat)
+        (
+            point,
+            p.to_world.transform_vector3(n).normalize_or_zero(),
+            flat,
+        )
     }
 
     /// Whether the surface of `r` is hit from its front along a ray (for ties).

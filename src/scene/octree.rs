@@ -18,6 +18,9 @@ use super::error::SceneError;
 use super::primitive::{Location, Primitive};
 use super::reader::{parse_scene_text, read_text_files, ReadOptions};
 
+/// Scene files read for an unfrozen octree: the name in its header and the path found.
+pub type ScenePaths = Vec<(String, PathBuf)>;
+
 /// Deepest tree accepted (oconv's resolution limit of 16384 gives about 15 levels).
 const MAX_DEPTH: usize = 128;
 
@@ -43,7 +46,10 @@ pub fn looks_like_octree(bytes: &[u8]) -> bool {
         return false;
     }
     let head = &bytes[..bytes.len().min(1 << 16)];
-    let end = head.windows(2).position(|w| w == b"\n\n").unwrap_or(head.len());
+    let end = head
+        .windows(2)
+        .position(|w| w == b"\n\n")
+        .unwrap_or(head.len());
     head[..end]
         .split(|&b| b == b'\n')
         .any(|l| l == b"FORMAT=Radiance_octree")
@@ -69,7 +75,10 @@ pub fn skip_tree(r: &mut BinReader, objsize: usize, limit: Option<usize>) -> Res
                 for _ in 0..n {
                     let i = r.int(objsize, "a leaf object index")?;
                     if i < 0 || limit.is_some_and(|l| i as u64 >= l as u64) {
-                        return Err(format!("bad object index {i} in a tree leaf at byte {}", r.pos()));
+                        return Err(format!(
+                            "bad object index {i} in a tree leaf at byte {}",
+                            r.pos()
+                        ));
                     }
                 }
             }
@@ -122,7 +131,10 @@ pub fn read_frozen_scene(
         } else if mi >= 0 && (mi as u64) < prims.len() as u64 {
             prims[mi as usize].name.clone()
         } else {
-            return Err(format!("bad modifier index {mi} (object {}) at byte {at}", prims.len()));
+            return Err(format!(
+                "bad modifier index {mi} (object {}) at byte {at}",
+                prims.len()
+            ));
         };
         let name = r.string("an identifier")?.to_string();
         let ns = r.count(2, i16::MAX as u64, "string argument count")?;
@@ -226,7 +238,7 @@ pub fn octree_primitives(
     path: &Path,
     name: &str,
     opts: &ReadOptions,
-) -> Result<(Vec<Primitive>, Vec<(String, PathBuf)>), SceneError> {
+) -> Result<(Vec<Primitive>, ScenePaths), SceneError> {
     let loc = Location::new(name, 0);
     let io = |reason: String| SceneError::Io {
         loc: loc.clone(),
@@ -278,7 +290,9 @@ mod tests {
             b.push(0);
         }
         b.extend([0, 0, 0, 2, 1, 0, 0, 0, 1, 0, 0, 0, 1]);
-        for s in ["polygon", "cone", "sphere", "texfunc", "ring", "cylinder", "instance"] {
+        for s in [
+            "polygon", "cone", "sphere", "texfunc", "ring", "cylinder", "instance",
+        ] {
             b.extend(s.as_bytes());
             b.push(0);
         }
@@ -288,7 +302,9 @@ mod tests {
         }
         b.extend([0x0c, 0xff, 0xff, 0xff, 0xff]);
         b.extend(b"red\0");
-        b.extend([0, 0, 0, 5, 0x59, 0x99, 0x99, 0x98, 0, 0x66, 0x66, 0x66, 0x65, 0xfd]);
+        b.extend([
+            0, 0, 0, 5, 0x59, 0x99, 0x99, 0x98, 0, 0x66, 0x66, 0x66, 0x65, 0xfd,
+        ]);
         b.extend([0x66, 0x66, 0x66, 0x65, 0xfd, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0]);
         b.extend([0x02, 0, 0, 0, 0]);
         b.extend(b"ball\0");
@@ -316,16 +332,23 @@ mod tests {
     fn damaged_octrees_are_errors() {
         let good = frozen();
         for n in 0..good.len() {
-            assert!(parse_octree(&good[..n], "s.oct").is_err(), "truncated at {n}");
+            assert!(
+                parse_octree(&good[..n], "s.oct").is_err(),
+                "truncated at {n}"
+            );
         }
         let mut bad = good.clone();
         let m = bad.iter().position(|&b| b == 0x1f).unwrap();
         bad[m] = 0x30;
-        assert!(parse_octree(&bad, "s.oct").unwrap_err().contains("incompatible"));
+        assert!(parse_octree(&bad, "s.oct")
+            .unwrap_err()
+            .contains("incompatible"));
         // A modifier index pointing forward.
         let mut fwd = good.clone();
         let i = fwd.windows(4).position(|w| w == b"ball").unwrap() - 4;
         fwd[i..i + 4].copy_from_slice(&[0, 0, 0, 7]);
-        assert!(parse_octree(&fwd, "s.oct").unwrap_err().contains("modifier index"));
+        assert!(parse_octree(&fwd, "s.oct")
+            .unwrap_err()
+            .contains("modifier index"));
     }
 }

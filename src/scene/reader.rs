@@ -155,10 +155,7 @@ fn is_octree(path: &Path, named: &str) -> bool {
 }
 
 /// [`read_scene_files`] for scene text only (octrees refused).
-pub fn read_text_files(
-    paths: &[String],
-    opts: &ReadOptions,
-) -> Result<Vec<Primitive>, SceneError> {
+pub fn read_text_files(paths: &[String], opts: &ReadOptions) -> Result<Vec<Primitive>, SceneError> {
     let mut out = Vec::new();
     for p in paths {
         if p == "-" {

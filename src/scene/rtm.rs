@@ -85,7 +85,9 @@ pub fn parse_mesh(bytes: &[u8], name: &str) -> Result<MeshFile, String> {
     let magic = r.int(2, "the magic number")?;
     let objsize = magic - 319;
     if !(1..=8).contains(&objsize) {
-        return Err(format!("incompatible mesh format (magic number {magic} at byte {at})"));
+        return Err(format!(
+            "incompatible mesh format (magic number {magic} at byte {at})"
+        ));
     }
     let objsize = objsize as usize;
     let mut org = DVec3::ZERO;
