@@ -535,11 +535,14 @@ impl Scene {
         }
         let tl = tmax * k;
         let inst = pi as u32;
+        // Hits within the scene's tolerance in world units are no hits (the top level would
+        // drop them; refusing them here keeps the set's search from pruning on them).
+        let eps = self.eps;
         let (j, t) = set.bvh.closest(
             o,
             d,
             tl,
-            |j| set.intersect(j, o, d, tl),
+            |j| set.intersect(j, o, d, tl).filter(|&t| t / k > eps),
             |a, b| prefer(HitRef { inst, obj: a }, HitRef { inst, obj: b }),
         )?;
         Some((t / k, j as u32))
