@@ -1,7 +1,8 @@
 //! A mutation fuzzer for every reader of outside input: scene text (lexer, reader and scene
 //! build with its BVH), rpict's option language, view lines, RGBE and EXR pictures, Tessera's
-//! ambient log, Radiance's ambient files, job manifests, task entry names and the function
-//! language (`.cal` files and expressions: compiled and evaluated).
+//! ambient log, Radiance's ambient files, job manifests, task entry names, the function
+//! language (`.cal` files and expressions: compiled and evaluated), and octrees and meshes
+//! (read, built into an instance's object set, traced).
 //!
 //! Each target starts from valid seeds and mutates them (byte flips, inserts, deletions,
 //! duplicated runs, splices, interesting numbers); a case passes when the reader returns,
@@ -181,6 +182,24 @@ fn scratch(dir: &Path, name: &str, data: &[u8]) -> PathBuf {
     p
 }
 
+/// Build a scene of one instance (`text`) whose file is in `dir`, and trace a few rays.
+fn instance_scene(dir: &Path, text: &str) {
+    use tessera::scene::{parse_scene_text, ReadOptions, Scene};
+    let opts = ReadOptions {
+        allow_commands: false,
+        raypath: vec![dir.to_path_buf()],
+    };
+    let Ok(prims) = parse_scene_text(text, "fuzz.rad", &opts) else {
+        return;
+    };
+    if let Ok(scene) = Scene::build_read(&prims, &opts) {
+        for k in 0..8 {
+            let dir = glam::DVec3::new(k as f64 - 3.5, 1.0, (k % 3) as f64 - 1.0).normalize();
+            let _ = scene.closest(-dir * 10.0, dir, f64::INFINITY, |a, b| a.key() > b.key());
+        }
+    }
+}
+
 fn targets(dir: Arc<tempfile::TempDir>) -> Vec<Target> {
     use tessera::scene::{parse_scene_text, ReadOptions, Scene};
     let mut v = Vec::new();
@@ -248,6 +267,27 @@ fn targets(dir: Arc<tempfile::TempDir>) -> Vec<Target> {
         run: Box::new(move |b| {
             let p = scratch(d.path(), "case.exr", b);
             let _ = tessera::image::exr::read_exr(&p);
+        }),
+    });
+    // Octrees and meshes: read, then built as an instance's object set (its BVH too).
+    let d = dir.clone();
+    v.push(Target {
+        name: "octree",
+        seeds: file_seeds(&["tests/data/inst_frozen.oct"]),
+        run: Box::new(move |b| {
+            let _ = tessera::scene::octree::parse_octree(b, "case.oct");
+            scratch(d.path(), "case.oct", b);
+            instance_scene(d.path(), "void instance i 1 case.oct 0 0\n");
+        }),
+    });
+    let d = dir.clone();
+    v.push(Target {
+        name: "mesh",
+        seeds: file_seeds(&["tests/data/inst_small.rtm"]),
+        run: Box::new(move |b| {
+            let _ = tessera::scene::rtm::parse_mesh(b, "case.rtm");
+            scratch(d.path(), "case.rtm", b);
+            instance_scene(d.path(), "void mesh m 1 case.rtm -rz 30 0 0\n");
         }),
     });
     let records: Vec<AmbRecord> = (0..6).map(record).collect();

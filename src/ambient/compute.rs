@@ -182,7 +182,7 @@ impl Ambient {
     }
 
     fn excluded(&self, tr: &Tracer, hit: &Hit) -> bool {
-        let m = &tr.scene.objects[hit.obj].modifier;
+        let m = tr.scene.hit_info(hit.href()).modifier;
         match &self.include {
             Some(inc) => !inc.contains(m),
             None => self.exclude.contains(m),
@@ -311,7 +311,7 @@ impl IndirectLight for Ambient {
         let s = &ray.sample;
         let reuse = if self.settings.shadow_reuse && s.spread > 0.0 {
             let footprint = (s.reach + hit.t) * s.spread;
-            VisQuery::new(self.owner, hit.obj, hit.back, footprint, hit.point)
+            VisQuery::new(self.owner, vis_key(hit), hit.back, footprint, hit.point)
         } else {
             None
         };
@@ -343,6 +343,16 @@ impl Share {
         refl: 1.0,
         other: 0.0,
     };
+}
+
+/// The object a footprint's shadow answers belong to: the scene's own objects by index,
+/// instanced ones by index and placement.
+fn vis_key(hit: &Hit) -> usize {
+    if hit.is_top() {
+        hit.obj
+    } else {
+        hit.obj ^ ((hit.inst as usize + 1) << 40)
+    }
 }
 
 #[cfg(test)]

@@ -46,6 +46,9 @@ const MARGIN: f64 = 1e-3;
 /// starts inside the clamped region, so a surface beyond it is still found: its clamped box
 /// holds the ray's start and the exact f64 intersection has no such limit.
 const COORD_LIMIT: f64 = 1e15;
+/// [`Bvh::closest_sub`] packs a candidate and a surface index into one `usize`.
+const _: () = assert!(usize::BITS >= 64);
+
 /// Capacity of the coincident-hit window of [`Bvh::closest`].
 pub const WINDOW: usize = 16;
 
@@ -312,29 +315,35 @@ impl Bvh {
     /// Build from f64 bounds (relative frame). Empty input is fine (every query misses).
     /// Boxes with non-finite coordinates are never candidates; `min > max` is reordered.
     pub fn build(bounds: &[(DVec3, DVec3)], eps: f64) -> Bvh {
-        let mut s: f64 = 0.0;
-        let mut boxes: Vec<(DVec3, DVec3)> = Vec::with_capacity(bounds.len());
-        let mut ids = Vec::with_capacity(bounds.len());
-        for (i, &(a, b)) in bounds.iter().enumerate() {
+        Bvh::build_from(bounds.len(), |i| bounds[i], eps)
+    }
+
+    /// [`Bvh::build`] over `n` boxes given by `bound(i)` (called twice per box), without a
+    /// list of them: large meshes build with less memory.
+    pub fn build_from(n: usize, bound: impl Fn(usize) -> (DVec3, DVec3), eps: f64) -> Bvh {
+        let clamped = |i: usize| -> Option<(DVec3, DVec3)> {
+            let (a, b) = bound(i);
             if !(a.is_finite() && b.is_finite()) || i > u32::MAX as usize {
-                continue;
+                return None;
             }
-            let lo = a
-                .min(b)
-                .clamp(DVec3::splat(-COORD_LIMIT), DVec3::splat(COORD_LIMIT));
-            let hi = a
-                .max(b)
-                .clamp(DVec3::splat(-COORD_LIMIT), DVec3::splat(COORD_LIMIT));
-            s = s.max(lo.abs().max_element()).max(hi.abs().max_element());
-            boxes.push((lo, hi));
-            ids.push(i as u32);
+            let lim = DVec3::splat(COORD_LIMIT);
+            Some((a.min(b).clamp(-lim, lim), a.max(b).clamp(-lim, lim)))
+        };
+        let mut s: f64 = 0.0;
+        let mut ids = Vec::new();
+        for i in 0..n {
+            if let Some((lo, hi)) = clamped(i) {
+                s = s.max(lo.abs().max_element()).max(hi.abs().max_element());
+                ids.push(i as u32);
+            }
         }
         let pad = PAD_REL * (s + MARGIN) + PAD_EPS * eps;
         let mut tlo = DVec3::splat(f64::INFINITY);
         let mut thi = DVec3::splat(f64::NEG_INFINITY);
-        let prims: Vec<BoxPrim> = boxes
+        let prims: Vec<BoxPrim> = ids
             .iter()
-            .map(|&(lo, hi)| {
+            .filter_map(|&i| clamped(i as usize))
+            .map(|(lo, hi)| {
                 let lo = lo - DVec3::splat(pad);
                 let hi = hi + DVec3::splat(pad);
                 tlo = tlo.min(lo);
@@ -357,7 +366,7 @@ impl Bvh {
             hi: thi,
             pad,
             eps,
-            count: bounds.len(),
+            count: n,
         }
     }
 
@@ -440,17 +449,43 @@ impl Bvh {
         mut intersect: impl FnMut(usize) -> Option<f64>,
         prefer: impl Fn(usize, usize) -> bool,
     ) -> Option<(usize, f64)> {
+        self.closest_sub(
+            org,
+            dir,
+            tmax,
+            |i| intersect(i).map(|t| (t, 0)),
+            |a, b| prefer(a.0, b.0),
+        )
+        .map(|(i, _, t)| (i, t))
+    }
+
+    /// [`Bvh::closest`] for candidates that hold several surfaces (a two-level BVH's
+    /// instances): `intersect(i)` returns the distance and which surface `j` of candidate `i`
+    /// was hit; ties compare `(t, i, j)`. Returns `(i, j, t)`.
+    pub fn closest_sub(
+        &self,
+        org: DVec3,
+        dir: DVec3,
+        tmax: f64,
+        mut intersect: impl FnMut(usize) -> Option<(f64, u32)>,
+        prefer: impl Fn((usize, u32), (usize, u32)) -> bool,
+    ) -> Option<(usize, u32, f64)> {
         let (ray, shift) = self.setup(org, dir, tmax)?;
         let mut win = Window::new(self.eps);
         let pad2 = 2.0 * self.pad;
+        // Candidate and surface in one key: (i, 0) is i itself, so ties between plain
+        // candidates order exactly as by index.
+        let key = |i: usize, j: u32| i | ((j as usize) << 32);
+        let split = |k: usize| (k & 0xffff_ffff, (k >> 32) as u32);
         self.traverse(ray, |i| match intersect(i) {
-            Some(t) if t > self.eps && t < tmax && win.push(i, t) => {
+            Some((t, j)) if t > self.eps && t < tmax && win.push(key(i, j), t) => {
                 // A new closest distance: prune (conservatively) beyond it plus eps.
                 f32_up((t + self.eps - shift) * (1.0 + 1e-6) + pad2)
             }
             _ => f32::INFINITY,
         });
-        win.select(&prefer)
+        win.select(&|a, b| prefer(split(a), split(b)))
+            .map(|(k, t)| (split(k).0, split(k).1, t))
     }
 
     /// Every candidate whose box the ray touches (for tests/diagnostics), in any order.

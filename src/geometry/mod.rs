@@ -33,6 +33,7 @@ pub mod polygon;
 pub mod ring;
 pub mod source;
 pub mod sphere;
+pub mod trimesh;
 
 /// A finite surface.
 #[derive(Clone, Debug)]

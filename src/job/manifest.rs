@@ -331,7 +331,7 @@ pub fn create_job(dir: &Path, req: &PlanRequest) -> Result<Manifest> {
     let mut ro = ReadOptions::from_env();
     ro.allow_commands |= opts.run.allow_commands;
     let prims = read_scene_files(&opts.scene_files, &ro)?;
-    let scene = Scene::build_on(&prims, &ro.raypath)?;
+    let scene = Scene::build_read(&prims, &ro)?;
     for w in &scene.warnings {
         eprintln!("tplan: warning - {w}");
     }

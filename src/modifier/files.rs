@@ -61,6 +61,14 @@ impl SceneFiles {
         all
     }
 
+    /// Record a file the scene reads by name (the first record of a name wins).
+    pub fn note_input(&self, name: &str, path: PathBuf) {
+        let mut used = self.used.lock().unwrap_or_else(|e| e.into_inner());
+        if !used.iter().any(|(n, _)| n == name) {
+            used.push((name.to_string(), path));
+        }
+    }
+
     /// The scene's function language state (function files found along the RAYPATH).
     pub fn functions(&self) -> &SceneFunctions {
         &self.functions

@@ -38,11 +38,11 @@ pub fn help_text() -> String {
     let mut s = String::from(
         "usage: tpict [rpict options] [Tessera options] scene.rad [more.rad ...]\n\
          \n\
-         Renders Radiance scene files (where rpict takes an octree; '-' or none: stdin) with\n\
-         rpict's options: views (-vt? -vp -vd -vu -vh -vv -vo -va -vs -vl -vf), picture\n\
-         (-x -y -pa -pj -ps -pt), direct light (-dt -dc -dj -ds -dr -dp -dv), specular\n\
-         (-ss -st), limits (-lr -lw), ambient (-av -aw -ab -aa -ar -ad -as -ae -ai -aE -aI\n\
-         -af), -i -u -bv -w -t -e -o -S, @file and $VAR. 'tpict -defaults' prints every\n\
+         Renders Radiance scene files or octrees ('-' or none: stdin) with rpict's\n\
+         options: views (-vt? -vp -vd -vu -vh -vv -vo -va -vs -vl -vf), picture (-x -y\n\
+         -pa -pj -ps -pt), direct light (-dt -dc -dj -ds -dr -dp -dv), specular (-ss -st),\n\
+         limits (-lr -lw), ambient (-av -aw -ab -aa -ar -ad -as -ae -ai -aE -aI -af), -i -u\n\
+         -bv -w -t -e -o -S, @file and $VAR. 'tpict -defaults' prints every\n\
          value, as rpict does.\n\
          \n\
          Tessera's own options:\n\

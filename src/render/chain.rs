@@ -12,6 +12,7 @@ use crate::color::{sanitize, Color};
 use crate::material::MatId;
 use crate::modifier::{MixCoefficient, ModRef, ModifierKind};
 use crate::scene::build::DistantObject;
+use crate::scene::transform::Transform;
 use crate::{FHUGE, FTINY};
 
 /// Where a walk over patterns and textures stopped.
@@ -93,6 +94,7 @@ impl Tracer<'_> {
     pub fn distant_pattern(&self, ray: &Ray, d: &DistantObject) -> Color {
         let hit = Hit {
             obj: 0,
+            inst: crate::scene::instance::NO_INST,
             t: FHUGE,
             point: ray.org + ray.dir * FHUGE,
             normal: -ray.dir,
@@ -107,15 +109,30 @@ impl Tracer<'_> {
     /// Shade a hit: its surface's modifier chain, then its material. An antimatter exit
     /// face (shaded with the antimatter's first listed material) skips the surface's chain.
     pub fn shade_hit(&self, ray: &Ray, hit: &Hit, rng: &mut Sampler) -> Color {
-        let obj = &self.scene.objects[hit.obj];
+        let info = self.scene.hit_info(hit.href());
         let mut sp = ShadingPoint::new(ray, hit, self.scene.origin);
-        if hit.material != obj.material {
+        if !hit.is_top() {
+            self.instanced(&mut sp, info.frame);
+        }
+        if hit.material != info.material {
             return match hit.material {
                 Some(m) => self.shade_material(ray, &sp, m, rng),
                 None => self.pass_through(ray, hit, rng),
             };
         }
-        self.shade_chain(ray, &mut sp, obj.chain, rng)
+        self.shade_chain(ray, &mut sp, info.chain, rng)
+    }
+
+    /// What an instanced hit adds to its shading point: the frame its patterns see, and
+    /// for a mesh triangle the interpolated normal (a perturbation of the geometric one)
+    /// and (u,v).
+    fn instanced<'s>(&self, sp: &mut ShadingPoint<'s>, frame: Option<&'s Transform>) {
+        sp.transform = frame;
+        let (n, uv) = self.scene.mesh_detail(sp.hit.href(), sp.hit.point);
+        sp.uv = uv;
+        if let Some(n) = n {
+            sp.perturb(n - sp.hit.normal);
+        }
     }
 
     /// Shade `sp` by the chain from `r`.
@@ -167,15 +184,18 @@ impl Tracer<'_> {
     /// What a shadow ray keeps when it crosses `hit` (not its target), through the hit
     /// surface's chain.
     pub(super) fn shadow_through(&self, ray: &Ray, hit: &Hit) -> Color {
-        let obj = &self.scene.objects[hit.obj];
+        let info = self.scene.hit_info(hit.href());
         let mut sp = ShadingPoint::new(ray, hit, self.scene.origin);
-        if hit.material != obj.material {
+        if !hit.is_top() {
+            self.instanced(&mut sp, info.frame);
+        }
+        if hit.material != info.material {
             return match hit.material {
                 Some(m) => self.shadow_material(&sp, m),
                 None => Color::ONE,
             };
         }
-        self.shadow_chain(&mut sp, obj.chain)
+        self.shadow_chain(&mut sp, info.chain)
     }
 
     fn shadow_chain(&self, sp: &mut ShadingPoint, r: ModRef) -> Color {

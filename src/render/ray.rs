@@ -129,11 +129,33 @@ impl Ray {
     }
 }
 
+impl Hit {
+    /// The surface hit.
+    #[inline]
+    pub fn href(&self) -> crate::scene::instance::HitRef {
+        crate::scene::instance::HitRef {
+            inst: self.inst,
+            obj: self.obj,
+        }
+    }
+
+    /// True for a surface of the scene itself (not instanced): only those can be light
+    /// sources.
+    #[inline]
+    pub fn is_top(&self) -> bool {
+        self.inst == crate::scene::instance::NO_INST
+    }
+}
+
 /// A ray–surface hit.
 #[derive(Clone, Copy, Debug)]
 pub struct Hit {
-    /// Index of the object in [`crate::scene::Scene::objects`].
+    /// Index of the object in [`crate::scene::Scene::objects`], or in the set of placement
+    /// `inst`.
     pub obj: usize,
+    /// The placement of an instanced surface ([`crate::scene::Scene::placements`]), or
+    /// [`crate::scene::instance::NO_INST`] for the scene's own surfaces.
+    pub inst: u32,
     /// Distance from the ray origin.
     pub t: f64,
     /// Hit point (relative frame).

@@ -11,6 +11,7 @@ use crate::material::emitter::EmitterKind;
 use crate::material::{MatId, Material};
 use crate::options::render::RenderParams;
 use crate::scene::build::Scene;
+use crate::scene::instance::HitRef;
 use glam::DVec3;
 
 /// Everything a ray needs to be traced.
@@ -123,9 +124,9 @@ impl<'a> Tracer<'a> {
 
     /// Radiance's rule for coincident surfaces: a material beats none, opaque beats
     /// transparent, front-facing beats back-facing, else the later-defined material wins.
-    fn prefer(&self, a: usize, b: usize, org: DVec3, dir: DVec3, tmax: f64) -> bool {
-        let objs = &self.scene.objects;
-        let (ma, mb) = (objs[a].material, objs[b].material);
+    fn prefer(&self, a: HitRef, b: HitRef, org: DVec3, dir: DVec3, tmax: f64) -> bool {
+        let scene = self.scene;
+        let (ma, mb) = (scene.ref_material(a), scene.ref_material(b));
         if ma.is_some() != mb.is_some() {
             return ma.is_some();
         }
@@ -133,19 +134,15 @@ impl<'a> Tracer<'a> {
         if ta != tb {
             return !ta;
         }
-        let facing = |i: usize| -> bool {
-            let s = &objs[i].surface;
-            match s.intersect(org, dir, tmax) {
-                Some(t) => s.normal_at(org + dir * t).dot(dir) < 0.0,
-                None => false,
-            }
-        };
-        let (fa, fb) = (facing(a), facing(b));
+        let (fa, fb) = (
+            scene.facing(a, org, dir, tmax),
+            scene.facing(b, org, dir, tmax),
+        );
         if fa != fb {
             return fa;
         }
         let order = |m: Option<MatId>| m.map(|i| self.scene.materials[i].order).unwrap_or(0);
-        order(ma) > order(mb) || (order(ma) == order(mb) && a > b)
+        order(ma) > order(mb) || (order(ma) == order(mb) && a.key() > b.key())
     }
 
     fn cuts(&self, am: &[Option<MatId>; MAX_ANTIMATTER], m: Option<MatId>) -> bool {
@@ -168,36 +165,30 @@ impl<'a> Tracer<'a> {
             if tmax <= scene.eps {
                 return None;
             }
-            let (i, t) = scene.bvh.closest(
-                org,
-                dir,
-                tmax,
-                |i| scene.objects[i].surface.intersect(org, dir, tmax),
-                |a, b| self.prefer(a, b, org, dir, tmax),
-            )?;
-            let obj = &scene.objects[i];
-            let point = org + dir * t;
-            let normal = obj.surface.normal_at(point);
+            let (r, t) = scene.closest(org, dir, tmax, |a, b| self.prefer(a, b, org, dir, tmax))?;
+            let (point, normal, flat) = scene.hit_geom(r, org, dir, t);
+            let material = scene.ref_material(r);
             let back = normal.dot(dir) > 0.0;
             let mut hit = Hit {
-                obj: i,
+                obj: r.obj,
+                inst: r.inst,
                 t: travelled + t,
                 point,
                 normal,
                 back,
-                flat: obj.surface.is_flat(),
-                material: obj.material,
+                flat,
+                material,
                 antimatter: am,
             };
             let advance = |org: &mut DVec3, travelled: &mut f64| {
                 *org = point;
                 *travelled += t;
             };
-            if self.cuts(&am, obj.material) {
+            if self.cuts(&am, material) {
                 advance(&mut org, &mut travelled);
                 continue;
             }
-            if let Some(m) = obj.material {
+            if let Some(m) = material {
                 if let Material::Antimatter(list) = scene.material(m) {
                     if !back {
                         // Entering the volume.
@@ -395,7 +386,10 @@ impl<'a> Tracer<'a> {
                         return Color::ZERO;
                     }
                     // A glow source the value samples explicitly is not seen by its rays.
-                    if ray.sample.glow_sampled && self.lights.is_sampled_glow(hit.obj) {
+                    if ray.sample.glow_sampled
+                        && hit.is_top()
+                        && self.lights.is_sampled_glow(hit.obj)
+                    {
                         return Color::ZERO;
                     }
                     let spot = e.spot_factor(hit.point, ray.org);
@@ -549,8 +543,9 @@ impl<'a> Tracer<'a> {
         let src = &self.lights.sources[si];
         if let Some(relay) = &src.relay {
             // First leg: to the mirror, which must be hit from its front.
-            let (t, hit) =
-                self.shadow_walk(org, dir, dist, antimatter, rng, |h| h.obj == relay.obj);
+            let (t, hit) = self.shadow_walk(org, dir, dist, antimatter, rng, |h| {
+                h.is_top() && h.obj == relay.obj
+            });
             let Some(hit) = hit else {
                 return Color::ZERO;
             };
@@ -582,7 +577,9 @@ impl<'a> Tracer<'a> {
         rng: &mut Sampler,
     ) -> Color {
         let src = &self.lights.sources[si];
-        let (t, hit) = self.shadow_walk(org, dir, dist, am, rng, |h| src.obj == Some(h.obj));
+        let (t, hit) = self.shadow_walk(org, dir, dist, am, rng, |h| {
+            h.is_top() && src.obj == Some(h.obj)
+        });
         if t == Color::ZERO {
             return t;
         }
@@ -593,7 +590,7 @@ impl<'a> Tracer<'a> {
             Some(h) if h.back && h.flat => Color::ZERO,
             Some(h) => {
                 ray.prior = ((h.point - org).length() - h.t).max(0.0);
-                t * self.emission_pattern(&ray, &h, self.scene.objects[h.obj].chain)
+                t * self.emission_pattern(&ray, &h, self.scene.hit_info(h.href()).chain)
             }
             // Left the scene: reached a distant source, missed a local one.
             None => match src.distant {

@@ -10,7 +10,9 @@ use crate::material::{MatId, Material, MaterialLookup, MATERIAL_TYPES};
 use crate::modifier::{
     func::FuncShared, ModRef, ModifierDef, ModifierKind, ModifierLookup, ModifierTypes, SceneFiles,
 };
-use crate::scene::reader::KNOWN_TYPES;
+use crate::scene::instance::{flatten, map_box, Child, ObjectSet, Placement};
+use crate::scene::reader::{ReadOptions, KNOWN_TYPES};
+use crate::scene::transform::Transform;
 use crate::FTINY;
 use glam::DVec3;
 use std::collections::HashMap;
@@ -123,8 +125,13 @@ pub struct Scene {
     /// no primitive uses functions.
     pub functions: Option<Arc<FuncShared>>,
     /// The files its primitives read by relative name (data files, pictures, fonts, text
-    /// and function files): the name as given and the path found along the RAYPATH.
+    /// and function files, instanced octrees and meshes and the scene files of unfrozen
+    /// ones): the name as given and the path found along the RAYPATH.
     pub inputs: Vec<(String, PathBuf)>,
+    /// The octrees and meshes its instances place, each read and built once.
+    pub sets: Vec<ObjectSet>,
+    /// Every placement of a set (nested instances flattened; [`crate::scene::instance`]).
+    pub placements: Vec<Placement>,
 }
 
 impl Scene {
@@ -135,16 +142,19 @@ impl Scene {
     }
 }
 
-struct Modifiers {
+pub(super) struct Modifiers {
     /// The current definition of each modifier name.
     current: HashMap<String, ModRef>,
     /// Names defined with an unsupported type, for a precise error.
     unsupported: HashMap<String, (String, Location)>,
     /// The patterns, textures and mixtures defined so far.
-    defs: Vec<ModifierDef>,
+    pub(super) defs: Vec<ModifierDef>,
     /// The files modifiers read, found along the RAYPATH.
-    files: SceneFiles,
+    pub(super) files: SceneFiles,
 }
+
+/// A name space put aside while another file's names are bound.
+pub(super) type SavedNames = (HashMap<String, ModRef>, HashMap<String, (String, Location)>);
 
 impl ModifierLookup for Modifiers {
     fn modref(&self, name: &str) -> Result<ModRef, String> {
@@ -168,6 +178,19 @@ impl ModifierLookup for Modifiers {
 }
 
 impl Modifiers {
+    /// Start a fresh name space (an instanced file's), returning the current one.
+    pub(super) fn enter(&mut self) -> SavedNames {
+        (
+            std::mem::take(&mut self.current),
+            std::mem::take(&mut self.unsupported),
+        )
+    }
+
+    /// Go back to a name space put aside by [`Modifiers::enter`].
+    pub(super) fn leave(&mut self, saved: SavedNames) {
+        (self.current, self.unsupported) = saved;
+    }
+
     /// Define `name` as `r` (a later definition replaces an earlier one for what follows).
     fn define(&mut self, name: &str, r: ModRef) {
         self.unsupported.remove(name);
@@ -176,7 +199,7 @@ impl Modifiers {
 
     /// The material a chain starting at `r` ends in: patterns and textures lead on to their
     /// modifier; `void` and mixtures end in none.
-    fn terminal(&self, mut r: ModRef) -> Option<MatId> {
+    pub(super) fn terminal(&self, mut r: ModRef) -> Option<MatId> {
         // Names resolve to earlier definitions, so a chain never loops; bound it anyway.
         for _ in 0..=self.defs.len() {
             match r {
@@ -237,6 +260,203 @@ impl MaterialLookup for Modifiers {
     }
 }
 
+/// State shared while building a scene and the sets it instances: the modifiers (one
+/// name space per file, definitions shared), the materials, the sets read so far.
+pub(super) struct Builder<'t> {
+    pub(super) mods: Modifiers,
+    pub(super) materials: Vec<MaterialDef>,
+    pub(super) warnings: Vec<String>,
+    types: &'t ModifierTypes,
+    pub(super) opts: ReadOptions,
+    pub(super) sets: Vec<ObjectSet>,
+    pub(super) set_ids: HashMap<PathBuf, usize>,
+    /// The files being read (instance loops are refused).
+    pub(super) loading: Vec<PathBuf>,
+}
+
+/// The objects of one file's primitives (the scene, or an instanced octree or mesh).
+pub(super) struct Level {
+    pub(super) origin: DVec3,
+    pub(super) size: f64,
+    pub(super) eps: f64,
+    pub(super) objects: Vec<Object>,
+    pub(super) distant: Vec<DistantObject>,
+    /// Its instances and meshes.
+    pub(super) children: Vec<Child>,
+    /// Bounds of everything, instances included (the file's coordinates).
+    pub(super) full: Option<(DVec3, DVec3)>,
+    /// The modifier each primitive defined.
+    pub(super) defined: Vec<Option<ModRef>>,
+}
+
+impl Builder<'_> {
+    /// Objects, distant sources and instances of `prims` (names bound in the current name
+    /// space), relative to the centre of their bounds.
+    pub(super) fn level(&mut self, prims: &[Primitive]) -> Result<Level, SceneError> {
+        let err = |p: &Primitive, msg: String| SceneError::syntax(p.loc.clone(), msg);
+        // Pass 1: bounds of finite geometry, to choose the origin. Surfaces are parsed once
+        // with a zero origin for bounds, then re-parsed relative to the chosen origin.
+        // Instanced files are read and built here (their bounds count).
+        let mut lo = DVec3::splat(f64::INFINITY);
+        let mut hi = DVec3::splat(f64::NEG_INFINITY);
+        let mut pending: Vec<(usize, Transform)> = Vec::new();
+        for p in prims {
+            if p.ptype == "instance" || p.ptype == "mesh" {
+                let (set, xf) = self.child_set(p)?;
+                if let Some(full) = self.sets[set].full {
+                    let (a, b) = map_box(full, |c| xf.point(c));
+                    lo = lo.min(a);
+                    hi = hi.max(b);
+                }
+                pending.push((set, xf));
+            } else if SURFACE_TYPES.contains(&p.ptype.as_str()) && p.ptype != "source" {
+                let s = match Surface::from_primitive(p, DVec3::ZERO) {
+                    Ok(s) => s,
+                    Err(m) if !surface_counts_ok(p) => {
+                        return Err(err(p, format!("{} {}: {m}", p.ptype, p.name)))
+                    }
+                    Err(_) => continue,
+                };
+                let (a, b) = s.bounds();
+                lo = lo.min(a);
+                hi = hi.max(b);
+            }
+        }
+        let full = (lo.x.is_finite() && hi.x.is_finite()).then_some((lo, hi));
+        let (origin, size) = if let Some((lo, hi)) = full {
+            let c = (lo + hi) * 0.5;
+            let ext = (hi - lo).max_element();
+            (c, if ext > 0.0 { ext } else { 1.0 })
+        } else {
+            (DVec3::ZERO, 1.0)
+        };
+        let eps = length_tolerance(size);
+
+        let mut objects = Vec::new();
+        let mut distant = Vec::new();
+        let mut children = Vec::new();
+        let mut defined = Vec::with_capacity(prims.len());
+        let mut pending = pending.into_iter();
+        let (mods, materials) = (&mut self.mods, &mut self.materials);
+        for p in prims {
+            let t = p.ptype.as_str();
+            let mut def = None;
+            if t == "alias" {
+                let r = alias(p, mods, materials).map_err(|m| err(p, m))?;
+                mods.define(&p.name, r);
+                def = Some(r);
+            } else if t == "instance" || t == "mesh" {
+                let chain = mods.modref(&p.modifier).map_err(|m| err(p, m))?;
+                if let Some((set, xf)) = pending.next() {
+                    children.push(Child {
+                        set,
+                        xf,
+                        chain,
+                        material: mods.terminal(chain),
+                        modifier: p.modifier.clone(),
+                    });
+                }
+            } else if SURFACE_TYPES.contains(&t) {
+                let chain = mods.modref(&p.modifier).map_err(|m| err(p, m))?;
+                let material = mods.terminal(chain);
+                if t == "source" {
+                    let source = DistantSource::from_primitive(p)
+                        .map_err(|m| err(p, format!("source {}: {m}", p.name)))?;
+                    distant.push(DistantObject {
+                        source,
+                        material,
+                        chain,
+                        name: p.name.clone(),
+                        modifier: p.modifier.clone(),
+                    });
+                } else {
+                    let surface = match Surface::from_primitive_warn(p, origin) {
+                        Ok((mut s, w)) => {
+                            if let Some(w) = w {
+                                self.warnings.push(format!("{}: {w}", p.loc));
+                            }
+                            s.set_eps(eps);
+                            s
+                        }
+                        Err(m) if !surface_counts_ok(p) => {
+                            return Err(err(p, format!("{t} {}: {m}", p.name)))
+                        }
+                        Err(m) => {
+                            self.warnings
+                                .push(format!("{}: {t} {} dropped: {m}", p.loc, p.name));
+                            defined.push(None);
+                            continue;
+                        }
+                    };
+                    objects.push(Object {
+                        surface,
+                        material,
+                        chain,
+                        name: p.name.clone(),
+                        modifier: p.modifier.clone(),
+                        loc: p.loc.clone(),
+                    });
+                }
+            } else if MATERIAL_TYPES.contains(&t) {
+                let chain = mods
+                    .material_chain(&p.modifier)
+                    .map_err(|m| err(p, format!("{t} {}: {m}", p.name)))?;
+                let material = Material::parse(t, &p.sargs, &p.rargs, &*mods)
+                    .map_err(|m| err(p, format!("{t} {}: {m}", p.name)))?;
+                let id = materials.len();
+                materials.push(MaterialDef {
+                    material,
+                    chain,
+                    name: p.name.clone(),
+                    order: id,
+                    loc: p.loc.clone(),
+                });
+                mods.define(&p.name, ModRef::Material(id));
+                def = Some(ModRef::Material(id));
+            } else if let Some(parse) = self.types.get(t) {
+                let kind = parse(p, &*mods).map_err(|m| err(p, format!("{t} {}: {m}", p.name)))?;
+                let next = mods.modref(&p.modifier).map_err(|m| err(p, m))?;
+                if matches!(kind, ModifierKind::Mixture { .. }) && next != ModRef::Void {
+                    return Err(err(
+                        p,
+                        format!("{t} {}: a mixture's modifier must be void", p.name),
+                    ));
+                }
+                let id = mods.defs.len();
+                mods.defs.push(ModifierDef {
+                    kind: std::sync::Arc::new(kind),
+                    next,
+                    name: p.name.clone(),
+                });
+                mods.define(&p.name, ModRef::Modifier(id));
+                def = Some(ModRef::Modifier(id));
+            } else if KNOWN_TYPES.contains(&t) {
+                // Every other type Radiance knows (BSDFs, prisms, ...) is not implemented.
+                return Err(err(
+                    p,
+                    format!(
+                        "unsupported primitive type {t} ({} {t} {})",
+                        p.modifier, p.name
+                    ),
+                ));
+            } else {
+                return Err(err(p, format!("unknown primitive type '{t}'")));
+            }
+            defined.push(def);
+        }
+        Ok(Level {
+            origin,
+            size,
+            eps,
+            objects,
+            distant,
+            children,
+            full,
+            defined,
+        })
+    }
+}
+
 /// What `mod alias name [target]` defines (Radiance's rules): without a target, `mod`
 /// itself; with one, the target with the alias's modifier in place of its own (`inherit`:
 /// the target's own), so `void alias` drops a material's patterns.
@@ -292,10 +512,17 @@ impl Scene {
         Scene::build_with(prims, &ModifierTypes::standard())
     }
 
-    /// [`Scene::build`] with files that modifiers name (fonts, text, data files, pictures)
-    /// looked up along `raypath` (empty: the current directory).
+    /// [`Scene::build`] with files that modifiers name (fonts, text, data files, pictures,
+    /// instanced octrees and meshes) looked up along `raypath` (empty: the current
+    /// directory).
     pub fn build_on(prims: &[Primitive], raypath: &[PathBuf]) -> Result<Scene, SceneError> {
         Scene::build_in(prims, &ModifierTypes::standard(), raypath)
+    }
+
+    /// [`Scene::build_on`] with the reader's options (the RAYPATH, and whether the scene
+    /// files of instanced octrees may run inline commands).
+    pub fn build_read(prims: &[Primitive], opts: &ReadOptions) -> Result<Scene, SceneError> {
+        Scene::build_opts(prims, &ModifierTypes::standard(), opts)
     }
 
     /// [`Scene::build`] with the modifier types `types`.
@@ -310,156 +537,66 @@ impl Scene {
         types: &ModifierTypes,
         raypath: &[PathBuf],
     ) -> Result<Scene, SceneError> {
-        let err = |p: &Primitive, msg: String| SceneError::syntax(p.loc.clone(), msg);
-        // Pass 1: bounds of finite geometry, to choose the origin. Surfaces are parsed once
-        // with a zero origin for bounds, then re-parsed relative to the chosen origin.
-        let mut lo = DVec3::splat(f64::INFINITY);
-        let mut hi = DVec3::splat(f64::NEG_INFINITY);
-        for p in prims {
-            if SURFACE_TYPES.contains(&p.ptype.as_str()) && p.ptype != "source" {
-                let s = match Surface::from_primitive(p, DVec3::ZERO) {
-                    Ok(s) => s,
-                    Err(m) if !surface_counts_ok(p) => {
-                        return Err(err(p, format!("{} {}: {m}", p.ptype, p.name)))
-                    }
-                    Err(_) => continue,
-                };
-                let (a, b) = s.bounds();
-                lo = lo.min(a);
-                hi = hi.max(b);
-            }
-        }
-        let (origin, size) = if lo.x.is_finite() && hi.x.is_finite() {
-            let c = (lo + hi) * 0.5;
-            let ext = (hi - lo).max_element();
-            (c, if ext > 0.0 { ext } else { 1.0 })
-        } else {
-            (DVec3::ZERO, 1.0)
+        let opts = ReadOptions {
+            allow_commands: false,
+            raypath: raypath.to_vec(),
         };
-        let eps = length_tolerance(size);
+        Scene::build_opts(prims, types, &opts)
+    }
 
-        let mut mods = Modifiers {
-            current: HashMap::new(),
-            unsupported: HashMap::new(),
-            defs: Vec::new(),
-            files: SceneFiles::new(raypath),
+    /// [`Scene::build`] with the modifier types `types` and the reader's options.
+    pub fn build_opts(
+        prims: &[Primitive],
+        types: &ModifierTypes,
+        opts: &ReadOptions,
+    ) -> Result<Scene, SceneError> {
+        let mut b = Builder {
+            mods: Modifiers {
+                current: HashMap::new(),
+                unsupported: HashMap::new(),
+                defs: Vec::new(),
+                files: SceneFiles::new(&opts.raypath),
+            },
+            materials: Vec::new(),
+            warnings: Vec::new(),
+            types,
+            opts: opts.clone(),
+            sets: Vec::new(),
+            set_ids: HashMap::new(),
+            loading: Vec::new(),
         };
-        let mut materials: Vec<MaterialDef> = Vec::new();
-        let mut objects = Vec::new();
-        let mut distant = Vec::new();
-        let mut warnings = Vec::new();
-        for p in prims {
-            let t = p.ptype.as_str();
-            if t == "alias" {
-                let r = alias(p, &mut mods, &mut materials).map_err(|m| err(p, m))?;
-                mods.define(&p.name, r);
-                continue;
+        let level = b.level(prims)?;
+        let bounds: Vec<(DVec3, DVec3)> =
+            level.objects.iter().map(|o| o.surface.bounds()).collect();
+        let (bvh, placements) = if level.children.is_empty() {
+            (Bvh::build(&bounds, level.eps), Vec::new())
+        } else {
+            let placements = flatten(&b.sets, &level.children, level.origin)
+                .map_err(|m| SceneError::syntax(prims[0].loc.clone(), m))?;
+            let mut all = bounds;
+            for p in &placements {
+                let set = &b.sets[p.set];
+                let bb = set.bounds.unwrap_or((DVec3::ZERO, DVec3::ZERO));
+                all.push(map_box(bb, |c| p.to_world.transform_point3(c)));
             }
-            if SURFACE_TYPES.contains(&t) {
-                let chain = mods.modref(&p.modifier).map_err(|m| err(p, m))?;
-                let material = mods.terminal(chain);
-                if t == "source" {
-                    let source = DistantSource::from_primitive(p)
-                        .map_err(|m| err(p, format!("source {}: {m}", p.name)))?;
-                    distant.push(DistantObject {
-                        source,
-                        material,
-                        chain,
-                        name: p.name.clone(),
-                        modifier: p.modifier.clone(),
-                    });
-                } else {
-                    let surface = match Surface::from_primitive_warn(p, origin) {
-                        Ok((mut s, w)) => {
-                            if let Some(w) = w {
-                                warnings.push(format!("{}: {w}", p.loc));
-                            }
-                            s.set_eps(eps);
-                            s
-                        }
-                        Err(m) if !surface_counts_ok(p) => {
-                            return Err(err(p, format!("{t} {}: {m}", p.name)))
-                        }
-                        Err(m) => {
-                            warnings.push(format!("{}: {t} {} dropped: {m}", p.loc, p.name));
-                            continue;
-                        }
-                    };
-                    objects.push(Object {
-                        surface,
-                        material,
-                        chain,
-                        name: p.name.clone(),
-                        modifier: p.modifier.clone(),
-                        loc: p.loc.clone(),
-                    });
-                }
-                continue;
-            }
-            if MATERIAL_TYPES.contains(&t) {
-                let chain = mods
-                    .material_chain(&p.modifier)
-                    .map_err(|m| err(p, format!("{t} {}: {m}", p.name)))?;
-                let material = Material::parse(t, &p.sargs, &p.rargs, &mods)
-                    .map_err(|m| err(p, format!("{t} {}: {m}", p.name)))?;
-                let id = materials.len();
-                materials.push(MaterialDef {
-                    material,
-                    chain,
-                    name: p.name.clone(),
-                    order: id,
-                    loc: p.loc.clone(),
-                });
-                mods.define(&p.name, ModRef::Material(id));
-                continue;
-            }
-            if let Some(parse) = types.get(t) {
-                let kind = parse(p, &mods).map_err(|m| err(p, format!("{t} {}: {m}", p.name)))?;
-                let next = mods.modref(&p.modifier).map_err(|m| err(p, m))?;
-                if matches!(kind, ModifierKind::Mixture { .. }) && next != ModRef::Void {
-                    return Err(err(
-                        p,
-                        format!("{t} {}: a mixture's modifier must be void", p.name),
-                    ));
-                }
-                let id = mods.defs.len();
-                mods.defs.push(ModifierDef {
-                    kind: std::sync::Arc::new(kind),
-                    next,
-                    name: p.name.clone(),
-                });
-                mods.define(&p.name, ModRef::Modifier(id));
-                continue;
-            }
-            // Every other type Radiance knows (patterns, textures, mixtures, BSDFs, instances,
-            // ...) is not implemented yet.
-            if KNOWN_TYPES.contains(&t) {
-                return Err(err(
-                    p,
-                    format!(
-                        "unsupported primitive type {t} ({} {t} {})",
-                        p.modifier, p.name
-                    ),
-                ));
-            }
-            return Err(err(p, format!("unknown primitive type '{t}'")));
-        }
-        let bounds: Vec<(DVec3, DVec3)> = objects.iter().map(|o| o.surface.bounds()).collect();
-        let bvh = Bvh::build(&bounds, eps);
-        let functions = mods.files.functions().finish();
-        let inputs = mods.files.relative_inputs();
+            (Bvh::build(&all, level.eps), placements)
+        };
+        let functions = b.mods.files.functions().finish();
+        let inputs = b.mods.files.relative_inputs();
         Ok(Scene {
-            origin,
-            size,
-            eps,
-            materials,
-            modifiers: mods.defs,
-            objects,
-            distant,
+            origin: level.origin,
+            size: level.size,
+            eps: level.eps,
+            materials: b.materials,
+            modifiers: b.mods.defs,
+            objects: level.objects,
+            distant: level.distant,
             bvh,
-            warnings,
+            warnings: b.warnings,
             functions,
             inputs,
+            sets: b.sets,
+            placements,
         })
     }
 

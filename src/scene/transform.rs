@@ -271,6 +271,18 @@ impl Transform {
         }
     }
 
+    /// A transform given by its matrix (points as column vectors), overall positive scale
+    /// and whether it mirrors; no words (the composed transform of nested instances).
+    pub fn from_matrix(m: DMat4, scale: f64, mirrors: bool) -> Transform {
+        Transform {
+            m,
+            scale,
+            mirrors,
+            invert: false,
+            words: Vec::new(),
+        }
+    }
+
     /// Transform a point.
     pub fn point(&self, p: DVec3) -> DVec3 {
         self.m.transform_point3(p)

@@ -40,6 +40,8 @@ pub struct SceneSource {
     /// Where files named by modifiers (fonts, data files, pictures) are looked up (the
     /// RAYPATH the scene was read with).
     pub raypath: Vec<std::path::PathBuf>,
+    /// Whether inline commands may run (in the scene files of instanced octrees).
+    pub allow_commands: bool,
 }
 
 impl SceneSource {
@@ -51,6 +53,7 @@ impl SceneSource {
             prims,
             fingerprint,
             raypath: ro.raypath.clone(),
+            allow_commands: ro.allow_commands,
         })
     }
 }
@@ -97,7 +100,11 @@ impl Session {
         source: SceneSource,
         threads: Option<usize>,
     ) -> Result<Session> {
-        let scene = Scene::build_on(&source.prims, &source.raypath)?;
+        let ro = ReadOptions {
+            allow_commands: source.allow_commands,
+            raypath: source.raypath.clone(),
+        };
+        let scene = Scene::build_read(&source.prims, &ro)?;
         let fingerprint =
             crate::ambient::fingerprint::with_inputs(source.fingerprint, &scene.inputs)
                 .map_err(|e| anyhow::anyhow!("cannot read a scene input: {e}"))?;

@@ -1,0 +1,498 @@
+//! Instances and meshes against real Radiance (tests/scenes/instances): octrees made by
+//! real `oconv` (unfrozen) and `oconv -f` (frozen), nested instances, the octree's own
+//! materials (`void`) and a modifier replacing them, meshes made by real `obj2mesh` with
+//! normals and (u,v); tpict's pictures against rpict's on the same octree at `-ab 0` and
+//! `-ab 1` (`-ps 1 -pj 0`), under Radiance's test-suite tolerances. A scene of thousands of
+//! instances renders; a scene moved 1e6 away or scaled renders the same picture; damaged
+//! octrees and meshes, instance loops and missing files are one error line naming the
+//! file. Skips (with a message) when Radiance is not installed.
+
+mod common;
+
+use common::*;
+use std::path::Path;
+use std::process::{Command, Output};
+use tessera::image::{read_picture, Image};
+
+/// Radiance's test-suite tolerances after reducing to `size`×`size`.
+struct Tol {
+    size: &'static str,
+    rms: f64,
+    max: f64,
+    mean: f64,
+}
+
+const SUITE: Tol = Tol {
+    size: "128",
+    rms: 0.10,
+    max: 1.50,
+    mean: 0.02,
+};
+
+/// With indirect light the two caches' noise differs pixel by pixel: compare at 32×32.
+const AMBIENT: Tol = Tol {
+    size: "32",
+    ..SUITE
+};
+
+const SRC: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/tests/scenes/instances");
+
+/// A sphere of 24×12 quads (two triangles each) with normals and (u,v), in group `ball`
+/// with material `stripes`, and a flat quad without normals or (u,v) in material `green`.
+fn ball_obj() -> String {
+    let (nu, nv) = (24, 12);
+    let mut s = String::from("g ball\n");
+    for j in 0..=nv {
+        let th = std::f64::consts::PI * j as f64 / nv as f64;
+        for i in 0..=nu {
+            let ph = std::f64::consts::TAU * i as f64 / nu as f64;
+            let (x, y, z) = (th.sin() * ph.cos(), th.sin() * ph.sin(), th.cos());
+            s += &format!("v {x:.6} {y:.6} {:.6}\nvn {x:.6} {y:.6} {z:.6}\n", z + 1.2);
+            s += &format!(
+                "vt {:.6} {:.6}\n",
+                i as f64 / nu as f64,
+                j as f64 / nv as f64
+            );
+        }
+    }
+    s += "usemtl stripes\n";
+    let idx = |i: usize, j: usize| j * (nu + 1) + i + 1;
+    for j in 0..nv {
+        for i in 0..nu {
+            let (a, b, c, d) = (idx(i, j), idx(i, j + 1), idx(i + 1, j + 1), idx(i + 1, j));
+            s += &format!("f {a}/{a}/{a} {b}/{b}/{b} {c}/{c}/{c}\n");
+            s += &format!("f {a}/{a}/{a} {c}/{c}/{c} {d}/{d}/{d}\n");
+        }
+    }
+    let base = (nv + 1) * (nu + 1);
+    s += "usemtl green\nv -3 -3 0.01\nv -1 -3 0.01\nv -1 -1 0.01\nv -3 -1 0.01\n";
+    s += &format!("f {} {} {} {}\n", base + 1, base + 2, base + 3, base + 4);
+    s
+}
+
+/// A work folder with the scene files, the octrees (`obj.oct`, `objf.oct` frozen,
+/// `pobj.oct`, `row.oct` frozen over pobj.oct) and the mesh `ball.rtm`, all made by real
+/// Radiance.
+fn workdir(bin: &Path) -> tempfile::TempDir {
+    let t = tempfile::tempdir().unwrap();
+    for e in std::fs::read_dir(SRC).unwrap() {
+        let e = e.unwrap();
+        std::fs::copy(e.path(), t.path().join(e.file_name())).unwrap();
+    }
+    let oconv = |args: &[&str], out: &str| {
+        let data = run_ok(radiance(bin, "oconv").current_dir(t.path()).args(args));
+        std::fs::write(t.path().join(out), data).unwrap();
+    };
+    oconv(&["obj.rad"], "obj.oct");
+    oconv(&["-f", "obj.rad"], "objf.oct");
+    oconv(&["pobj.rad"], "pobj.oct");
+    oconv(&["-f", "row.rad"], "row.oct");
+    std::fs::write(t.path().join("ball.obj"), ball_obj()).unwrap();
+    run_ok(radiance(bin, "obj2mesh").current_dir(t.path()).args([
+        "-a",
+        "ballmat.rad",
+        "ball.obj",
+        "ball.rtm",
+    ]));
+    t
+}
+
+fn tpict(dir: &Path) -> Command {
+    let mut c = Command::new(tpict_bin());
+    c.current_dir(dir).env("RAYPATH", ".");
+    c
+}
+
+/// Render `input` (scene files or an octree) with tpict, and `octree` with rpict, both
+/// with `opts`; compare as Radiance's test suite does.
+fn check(bin: &Path, dir: &Path, input: &[&str], octree: &str, opts: &[&str], tol: &Tol) {
+    let name = format!("{}{}", input.join("_"), opts.join(""));
+    let reff = dir.join(format!("ref-{name}.hdr"));
+    let data = run_ok(
+        radiance(bin, "rpict")
+            .current_dir(dir)
+            .args(opts)
+            .arg(octree),
+    );
+    std::fs::write(&reff, data).unwrap();
+    let ours = dir.join(format!("ours-{name}.hdr"));
+    run_ok(tpict(dir).args(opts).arg("-o").arg(&ours).args(input));
+    let full = read_picture(&ours).unwrap();
+    assert_finite(&full);
+    let reduce_with_pfilt = |p: &Path| {
+        let data = run_ok(
+            radiance(bin, "pfilt")
+                .args(["-1", "-r", "1", "-x", tol.size, "-y", tol.size, "-pa", "1"])
+                .arg(p),
+        );
+        let out = p.with_extension("small.hdr");
+        std::fs::write(&out, data).unwrap();
+        read_picture(&out).unwrap()
+    };
+    let a = reduce_with_pfilt(&ours);
+    let b = reduce_with_pfilt(&reff);
+    let c = compare(&a.pixels_f64(), &b.pixels_f64(), 0.007);
+    eprintln!("{input:?} {opts:?}: {c:?}");
+    assert!(
+        c.rms <= tol.rms,
+        "{input:?} {opts:?}: relative RMS {:.3}",
+        c.rms
+    );
+    assert!(c.max <= tol.max, "{input:?} {opts:?}: max {:.3}", c.max);
+    assert!(
+        c.mean_lum <= tol.mean,
+        "{input:?} {opts:?}: mean luminance differs by {:.2}%",
+        100.0 * c.mean_lum
+    );
+}
+
+fn opts<'a>(view: &'a str, ab: &'a str) -> Vec<&'a str> {
+    vec![
+        "-vf", view, "-x", "256", "-y", "200", "-ab", ab, "-ps", "1", "-pj", "0", "-av", ".05",
+        ".05", ".05",
+    ]
+}
+
+/// Unfrozen and frozen octrees, void and modified instances, rotated, scaled and mirrored;
+/// tpict reads the scene file, the octree oconv made of it, and a frozen octree of it.
+#[test]
+fn octree_instances_void_and_modified() {
+    let Some(bin) = radiance_bin() else { return };
+    let t = workdir(&bin);
+    let d = t.path();
+    let oct = run_ok(radiance(&bin, "oconv").current_dir(d).arg("inst.rad"));
+    std::fs::write(d.join("inst.oct"), oct).unwrap();
+    let frozen = run_ok(
+        radiance(&bin, "oconv")
+            .current_dir(d)
+            .args(["-f", "inst.rad"]),
+    );
+    std::fs::write(d.join("instf.oct"), frozen).unwrap();
+    for ab in ["0", "1"] {
+        let tol = if ab == "0" { &SUITE } else { &AMBIENT };
+        check(
+            &bin,
+            d,
+            &["inst.rad"],
+            "inst.oct",
+            &opts("inst.vf", ab),
+            tol,
+        );
+    }
+    check(
+        &bin,
+        d,
+        &["instf.oct"],
+        "instf.oct",
+        &opts("inst.vf", "0"),
+        &SUITE,
+    );
+    // The unfrozen octree is its scene file: the same picture, bit for bit.
+    let o = opts("inst.vf", "0");
+    run_ok(tpict(d).args(&o).args(["-o", "a.hdr", "inst.rad"]));
+    run_ok(tpict(d).args(&o).args(["-o", "b.hdr", "inst.oct"]));
+    let (a, b) = (
+        read_picture(&d.join("a.hdr")).unwrap(),
+        read_picture(&d.join("b.hdr")).unwrap(),
+    );
+    assert!(a.pixels == b.pixels, "inst.oct renders unlike inst.rad");
+}
+
+/// An octree holding instances (row.oct, frozen, one of them modified), instanced twice
+/// (once modified: the outermost modifier wins), with patterns in the octrees' own
+/// coordinates.
+#[test]
+fn nested_instances_with_patterns() {
+    let Some(bin) = radiance_bin() else { return };
+    let t = workdir(&bin);
+    let d = t.path();
+    let oct = run_ok(radiance(&bin, "oconv").current_dir(d).arg("nest.rad"));
+    std::fs::write(d.join("nest.oct"), oct).unwrap();
+    for ab in ["0", "1"] {
+        let tol = if ab == "0" { &SUITE } else { &AMBIENT };
+        check(
+            &bin,
+            d,
+            &["nest.rad"],
+            "nest.oct",
+            &opts("inst.vf", ab),
+            tol,
+        );
+    }
+}
+
+/// Meshes from obj2mesh: smooth normals, (u,v) patterns, a triangle without either, the
+/// mesh's materials and a modifier replacing them.
+#[test]
+fn meshes_with_normals_and_uv() {
+    let Some(bin) = radiance_bin() else { return };
+    let t = workdir(&bin);
+    let d = t.path();
+    let oct = run_ok(radiance(&bin, "oconv").current_dir(d).arg("mesh.rad"));
+    std::fs::write(d.join("mesh.oct"), oct).unwrap();
+    for ab in ["0", "1"] {
+        let tol = if ab == "0" { &SUITE } else { &AMBIENT };
+        check(
+            &bin,
+            d,
+            &["mesh.rad"],
+            "mesh.oct",
+            &opts("mesh.vf", ab),
+            tol,
+        );
+    }
+}
+
+/// 2,500 instances (a 50×50 grid, alternately of two octrees) under a light.
+#[test]
+fn a_large_instance_count_renders() {
+    let Some(bin) = radiance_bin() else { return };
+    let t = workdir(&bin);
+    let d = t.path();
+    let mut s = String::from(
+        "void light white 0 0 3 20 20 20\nwhite sphere lamp 0 0 4 25 25 40 3\n\
+         void plastic grey 0 0 5 .5 .5 .5 0 0\n\
+         grey polygon floor 0 0 12 -1 -1 0 51 -1 0 51 51 0 -1 51 0\n",
+    );
+    for i in 0..50 {
+        for j in 0..50 {
+            let f = if (i + j) % 2 == 0 {
+                "obj.oct"
+            } else {
+                "pobj.oct"
+            };
+            s += &format!(
+                "void instance g{i}.{j} 9 {f} -rz {} -s 0.4 -t {} {} 0 0 0\n",
+                (i * 37 + j * 11) % 360,
+                i as f64 + 0.5,
+                j as f64 + 0.5
+            );
+        }
+    }
+    std::fs::write(d.join("many.rad"), s).unwrap();
+    let oct = run_ok(radiance(&bin, "oconv").current_dir(d).arg("many.rad"));
+    std::fs::write(d.join("many.oct"), oct).unwrap();
+    let o = [
+        "-vp", "25", "-20", "30", "-vd", "0", "1", "-1", "-vh", "60", "-vv", "50", "-x", "256",
+        "-y", "200", "-ab", "0", "-ps", "1", "-pj", "0", "-av", ".05", ".05", ".05",
+    ];
+    check(&bin, d, &["many.rad"], "many.oct", &o, &SUITE);
+}
+
+/// The instance scene moved 1e6 away, or scaled by 1e3 and 1e-3 (instances, their
+/// transforms and the view with it), renders the same picture.
+#[test]
+fn instances_moved_far_away_or_scaled_render_the_same() {
+    let Some(bin) = radiance_bin() else { return };
+    let t = workdir(&bin);
+    let d = t.path();
+    let render = |xf: &str, vp: [f64; 3], s: f64, out: &str| -> Image {
+        std::fs::write(
+            d.join("w.rad"),
+            format!("!xform {xf} inst.rad\n!xform {xf} mesh.rad\n"),
+        )
+        .unwrap();
+        let vp: Vec<String> = vp.iter().map(|v| format!("{v:e}")).collect();
+        let vh = format!("{}", 60);
+        let _ = s;
+        run_ok(
+            tpict(d)
+                .args([
+                    "-vtv", "-vp", &vp[0], &vp[1], &vp[2], "-vd", "0", "1", "-0.6",
+                ])
+                .args([
+                    "-vh", &vh, "-vv", "45", "-x", "96", "-y", "72", "-ab", "0", "-ps", "1",
+                ])
+                .args(["-pj", "0", "-o", out, "w.rad"]),
+        );
+        let img = read_picture(&d.join(out)).unwrap();
+        assert_finite(&img);
+        img
+    };
+    let base = render("-t 0 0 0", [0.0, -12.0, 8.0], 1.0, "base.hdr");
+    let r = reduce(&base, 24, 18);
+    for (xf, vp, s, out) in [
+        (
+            "-t 1e6 -1e6 1e6",
+            [1e6, -1e6 - 12.0, 1e6 + 8.0],
+            1.0,
+            "far.hdr",
+        ),
+        ("-s 1e3", [0.0, -12e3, 8e3], 1e3, "big.hdr"),
+        ("-s 1e-3", [0.0, -12e-3, 8e-3], 1e-3, "small.hdr"),
+    ] {
+        let img = render(xf, vp, s, out);
+        let c = compare(&reduce(&img, 24, 18), &r, 0.01);
+        eprintln!("{xf}: {c:?}");
+        assert!(c.rms < 0.005, "{xf}: relative RMS {}", c.rms);
+        assert!(
+            c.mean_lum < 0.001,
+            "{xf}: mean luminance differs by {}",
+            c.mean_lum
+        );
+    }
+}
+
+fn output(c: &mut Command) -> Output {
+    c.output().expect("cannot run tpict")
+}
+
+/// tpict fails with exit status 1 and one error line that holds `want`.
+fn fails_with(dir: &Path, files: &[&str], want: &str) {
+    let o = output(
+        tpict(dir)
+            .args([
+                "-x", "8", "-y", "8", "-vp", "0", "-12", "8", "-vd", "0", "1", "-0.6",
+            ])
+            .args(["-o", "out.hdr"])
+            .args(files),
+    );
+    let err = String::from_utf8_lossy(&o.stderr).into_owned();
+    assert_eq!(o.status.code(), Some(1), "{files:?}: {err}");
+    assert!(!err.contains("panicked"), "{files:?} panicked: {err}");
+    let lines: Vec<&str> = err.lines().filter(|l| l.contains("error")).collect();
+    assert_eq!(lines.len(), 1, "{files:?}: {err}");
+    assert!(
+        lines[0].contains(want),
+        "{files:?}: want '{want}' in: {}",
+        lines[0]
+    );
+    assert!(!dir.join("out.hdr").exists());
+}
+
+/// Damaged octrees and meshes (truncated, wrong magic, wrong format), an octree that
+/// instances itself, a stale unfrozen octree, missing files: one error line naming the file,
+/// never a panic.
+#[test]
+fn bad_octrees_and_meshes_are_one_line_errors() {
+    let Some(bin) = radiance_bin() else { return };
+    let t = workdir(&bin);
+    let d = t.path();
+    let scene = |name: &str, text: &str| std::fs::write(d.join(name), text).unwrap();
+    let frozen = std::fs::read(d.join("objf.oct")).unwrap();
+    let mesh = std::fs::read(d.join("ball.rtm")).unwrap();
+    // Truncated at several points, as the scene's octree and as an instanced one.
+    for n in [0, 5, 40, frozen.len() / 3, frozen.len() - 1] {
+        std::fs::write(d.join("cut.oct"), &frozen[..n]).unwrap();
+        fails_with(d, &["cut.oct"], "cut.oct");
+        scene("i.rad", "void instance i 1 cut.oct 0 0\n");
+        fails_with(d, &["i.rad"], "cut.oct");
+    }
+    for n in [0, 30, 100, mesh.len() / 2, mesh.len() - 1] {
+        std::fs::write(d.join("cut.rtm"), &mesh[..n]).unwrap();
+        scene("m.rad", "void mesh m 1 cut.rtm 0 0\n");
+        fails_with(d, &["m.rad"], "cut.rtm");
+    }
+    // Wrong magic numbers, and a file of another format.
+    let head = frozen.windows(2).position(|w| w == b"\n\n").unwrap() + 2;
+    let mut bad = frozen.clone();
+    bad[head] = 0x7f;
+    std::fs::write(d.join("magic.oct"), &bad).unwrap();
+    fails_with(d, &["magic.oct"], "magic.oct");
+    let mhead = mesh.windows(2).position(|w| w == b"\n\n").unwrap() + 2;
+    let mut bad = mesh.clone();
+    bad[mhead + 1] ^= 0x10;
+    std::fs::write(d.join("magic.rtm"), &bad).unwrap();
+    scene("m.rad", "void mesh m 1 magic.rtm 0 0\n");
+    fails_with(d, &["m.rad"], "magic.rtm");
+    scene("m.rad", "void mesh m 1 obj.oct 0 0\n");
+    fails_with(d, &["m.rad"], "obj.oct");
+    scene("i.rad", "void instance i 1 ball.rtm 0 0\n");
+    fails_with(d, &["i.rad"], "ball.rtm");
+    // Missing files.
+    scene("i.rad", "void instance i 1 nowhere.oct 0 0\n");
+    fails_with(d, &["i.rad"], "nowhere.oct");
+    scene("m.rad", "void mesh m 1 nowhere.rtm 0 0\n");
+    fails_with(d, &["m.rad"], "nowhere.rtm");
+    std::fs::copy(d.join("obj.oct"), d.join("moved.oct")).unwrap();
+    std::fs::rename(d.join("obj.rad"), d.join("obj.rad.away")).unwrap();
+    fails_with(d, &["moved.oct"], "obj.rad");
+    // A stale unfrozen octree: its scene file changed after oconv.
+    std::fs::write(
+        d.join("obj.rad"),
+        std::fs::read_to_string(d.join("obj.rad.away")).unwrap()
+            + "red sphere extra 0 0 4 0 0 3 .1\n",
+    )
+    .unwrap();
+    fails_with(d, &["moved.oct"], "octree stale");
+    // An octree that instances itself: made over a placeholder, then copied over it.
+    scene("self.rad", "void instance me 1 self.oct 0 0\n");
+    std::fs::copy(d.join("objf.oct"), d.join("self.oct")).unwrap();
+    let me = run_ok(
+        radiance(&bin, "oconv")
+            .current_dir(d)
+            .args(["-f", "self.rad"]),
+    );
+    std::fs::write(d.join("self.oct"), me).unwrap();
+    fails_with(d, &["self.rad"], "instance loop");
+    // Bad instance arguments.
+    scene("i.rad", "void instance i 3 obj.oct -t 1 0 0\n");
+    fails_with(d, &["i.rad"], "i.rad:1");
+    scene("i.rad", "void instance i 0 0 0\n");
+    fails_with(d, &["i.rad"], "i.rad:1");
+}
+
+/// Every prefix of a real octree and mesh is an error for the readers, never a panic.
+#[test]
+fn readers_refuse_every_truncation() {
+    let Some(bin) = radiance_bin() else { return };
+    let t = workdir(&bin);
+    let d = t.path();
+    let frozen = std::fs::read(d.join("row.oct")).unwrap();
+    assert!(tessera::scene::octree::parse_octree(&frozen, "row.oct").is_ok());
+    for n in 0..frozen.len() {
+        assert!(
+            tessera::scene::octree::parse_octree(&frozen[..n], "row.oct").is_err(),
+            "{n}"
+        );
+    }
+    let mesh = std::fs::read(d.join("ball.rtm")).unwrap();
+    let m = tessera::scene::rtm::parse_mesh(&mesh, "ball.rtm").unwrap();
+    assert_eq!(m.tris.len(), 24 * 12 * 2 - 48 + 2, "triangles");
+    assert!(m.flags.iter().any(|f| f & tessera::scene::rtm::HAS_UV != 0));
+    for n in 0..mesh.len() {
+        assert!(
+            tessera::scene::rtm::parse_mesh(&mesh[..n], "ball.rtm").is_err(),
+            "{n}"
+        );
+    }
+}
+
+/// A batch job over a scene of nested instances: tplan copies the octrees (and the scene
+/// file of the unfrozen one) into the job, a worker elsewhere without a RAYPATH renders
+/// tpict's picture.
+#[test]
+fn a_job_carries_its_instanced_files() {
+    let Some(bin) = radiance_bin() else { return };
+    let t = workdir(&bin);
+    let d = t.path();
+    let job = d.join("job");
+    let view = ["-vf", "inst.vf", "-x", "64", "-y", "50", "-ab", "0"];
+    run_ok(
+        Command::new(env!("CARGO_BIN_EXE_tplan"))
+            .current_dir(d)
+            .env("RAYPATH", ".")
+            .args(["--tiles", "2", "--workers", "1", "--output", "job", "--"])
+            .args(view)
+            .arg("nest.rad"),
+    );
+    for f in ["row.oct", "pobj.oct", "pobj.rad"] {
+        assert!(job.join("files").join(f).is_file(), "{f} not in the job");
+    }
+    let elsewhere = tempfile::tempdir().unwrap();
+    run_ok(
+        Command::new(env!("CARGO_BIN_EXE_tpiece"))
+            .current_dir(elsewhere.path())
+            .env_remove("RAYPATH")
+            .arg(&job),
+    );
+    let pic = run_ok(Command::new(env!("CARGO_BIN_EXE_tassemble")).arg(&job));
+    std::fs::write(d.join("job.hdr"), pic).unwrap();
+    run_ok(tpict(d).args(view).args(["-o", "direct.hdr", "nest.rad"]));
+    let a = read_picture(&d.join("job.hdr")).unwrap();
+    let b = read_picture(&d.join("direct.hdr")).unwrap();
+    assert!(
+        a.pixels == b.pixels,
+        "the job's picture differs from tpict's"
+    );
+}
