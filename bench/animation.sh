@@ -43,7 +43,7 @@ for m in "${modes[@]}"; do
     /usr/bin/time -f "%U %S %e" -o "$TMP/$name.time" "$B/tpiece" "$job" --threads 1 -q
     "$B/tstat" "$job" --json > "$OUT/$name.json"
     "$B/tassemble" "$job" --all-frames -o "$TMP/$name-%03d.hdr" 2>/dev/null
-    "$B/tassemble" "$job" --contact-sheet "$OUT/sheet-$name.png" --thumb-width 64 2>/dev/null
+    [[ $name == ax ]] && "$B/tassemble" "$job" --contact-sheet "$OUT/sheet-$name.png" --thumb-width 64 2>/dev/null
     echo "$name: $(cat "$TMP/$name.time") (user sys wall s)" >&2
 done
 # References: the last LAST frames' views at high accuracy.
