@@ -6,16 +6,18 @@
 # last frames is measured against a high-accuracy render of the same views.
 # Usage: bash bench/animation.sh [OUTDIR (default docs/benchmarks/animation)]
 # Environment: FRAMES=60, RES="-x 160 -y 120", AMB="-ab 1 -ad 512 -as 128 -ar 64",
-#              MODES (name:options;...), REF="-aa .03 -ad 2048 -as 1024", LAST=5
+#              MODES (name:options;...), REF="-aa .03 -ad 2048 -as 1024",
+#              MID="10 20 30 40 50" (frames along the path whose error is measured), LAST=5
 set -euo pipefail
 ROOT=$(cd "$(dirname "$0")/.." && pwd)
 OUT=${1:-$ROOT/docs/benchmarks/animation}
 FRAMES=${FRAMES:-60}
 RES=${RES:-"-x 160 -y 120"}
 AMB=${AMB:-"-ab 1 -ad 512 -as 128 -ar 64"}
-MODES=${MODES:-"constant:-aa .1;ax:-ax .5 .1 .0075;axg:-axg .5 .1 .93"}
+MODES=${MODES:-"constant:-aa .1;ax:-ax .5 .1 .0075;axg:-axg .5 .1 .93;axm:-aa .1 -axm 2 5"}
 REF=${REF:-"-aa .03 -ad 2048 -as 1024"}
 LAST=${LAST:-5}
+MID=${MID:-"10 20 30 40 50"}
 NAME=animation
 NO_BUILD=1
 # shellcheck source=bench/common.sh
@@ -46,9 +48,10 @@ for m in "${modes[@]}"; do
     [[ $name == ax ]] && "$B/tassemble" "$job" --contact-sheet "$OUT/sheet-$name.png" --thumb-width 64 2>/dev/null
     echo "$name: $(cat "$TMP/$name.time") (user sys wall s)" >&2
 done
-# References: the last LAST frames' views at high accuracy.
+# References: the MID frames' and the last LAST frames' views at high accuracy.
 first=${modes[0]%%:*}
-for k in $(seq $((FRAMES - LAST)) $((FRAMES - 1))); do
+ERRF="$MID $(seq -s ' ' $((FRAMES - LAST)) $((FRAMES - 1)))"
+for k in $ERRF; do
     view=$(getinfo < "$TMP/$first-$(printf %03d "$k").hdr" | sed -n 's/^VIEW= *//p' | tail -1)
     # shellcheck disable=SC2086
     "$B/tpict" -n 2 $view $RES $AMB $REF -o "$TMP/ref-$(printf %03d "$k").hdr" demo.rad 2>/dev/null
@@ -57,7 +60,7 @@ done
 for m in "${modes[@]}"; do
     name=${m%%:*}
     : > "$OUT/$name-error.txt"
-    for k in $(seq $((FRAMES - LAST)) $((FRAMES - 1))); do
+    for k in $ERRF; do
         f=$(printf %03d "$k")
         # Reduced 8× first (Radiance's test-suite practice), so that pixel jitter does not count.
         pfilt -1 -x /8 -y /8 "$TMP/$name-$f.hdr" | pvalue -h -H -b -d > "$TMP/a.txt"
@@ -88,6 +91,6 @@ for seeds in per-frame same; do
             END {printf "%.5f\n", sqrt(s/n)/(m/n)}'
     done | awk -v s="$seeds" '{t+=$1; n++} END {printf "%s %.5f\n", s, t/n}' >> "$OUT/flicker.txt"
 done
-python3 "$ROOT/bench/plot_animation.py" "$OUT" "$MODES"
+python3 "$ROOT/bench/plot_animation.py" "$OUT" "$MODES" "$MID"
 echo "temporal noise of a still camera (RMS of consecutive-frame differences / mean):"
 cat "$OUT/flicker.txt"

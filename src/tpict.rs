@@ -162,6 +162,12 @@ fn render_command(args: &[String], opts: &RpictOptions, log: &Log) -> Result<()>
     if let Some(why) = opts.params.refused() {
         bail!("{why}");
     }
+    if opts.params.axm.is_some() {
+        bail!(
+            "-axm needs the views of the frames ahead, which a view sequence on standard input \
+             does not give: plan a batch job (tplan --frames/--path) instead"
+        );
+    }
     let mut session = start_session(opts, log)?;
     let amb_file = open_stores(&mut session, &opts.run, log)?;
     let run = Run {

@@ -423,14 +423,18 @@ prop_compose! {
         ma in prop::array::uniform3(0.0f64..1.0), mg in -1.0f64..1.0, ms in 0.0f64..1.0,
         amb in any_settings(),
         ax in prop::option::of((0.01f64..1.0, 0.01f64..1.0, 0.01f64..0.99, any::<bool>())),
+        axm in prop::option::of((1.0f64..10.0, 1u32..20)),
     ) -> RenderParams {
+        let axm = axm.map(|(r, a)| {
+            tessera::options::schedule::MotionAccuracy::new(r, a as f64).unwrap()
+        });
         let ax = ax.map(|(a, b, step, geometric)| {
             tessera::options::schedule::AccuracySchedule::new(a.max(b), a.min(b), step, geometric)
                 .unwrap()
         });
         let (ae, ai) = if include { (vec![], names) } else { (names, vec![]) };
         RenderParams { dt, dc, dj, ds, dr, dp, dv, ss, st, lr, lw, av, aw, ab, aa, ar, ad, as_,
-                       ae, ai, i, u, bv, me, ma, mg, ms, amb, ax }
+                       ae, ai, i, u, bv, me, ma, mg, ms, amb, ax, axm }
     }
 }
 

@@ -120,6 +120,9 @@ pub fn fingerprint(prims: &[Primitive], params: &RenderParams) -> [u8; 32] {
     if let Some(ax) = &params.ax {
         h.str(&ax.to_words().join(" "));
     }
+    if let Some(m) = &params.axm {
+        h.str(&m.to_words().join(" "));
+    }
     h.finish()
 }
 
@@ -143,9 +146,12 @@ pub fn options_text(params: &RenderParams) -> String {
     for m in &params.ai {
         s.push_str(&format!(" -ai {m}"));
     }
-    if let Some(ax) = &params.ax {
+    for w in [params.ax.map(|a| a.to_words()), params.axm.map(|m| m.to_words())]
+        .into_iter()
+        .flatten()
+    {
         s.push(' ');
-        s.push_str(&ax.to_words().join(" "));
+        s.push_str(&w.join(" "));
     }
     s.push(' ');
     s.push_str(&params.amb.to_text());

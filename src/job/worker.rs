@@ -547,6 +547,30 @@ impl Worker<'_> {
             .frame_setup(&self.m.params, &vf, (fp.xres, fp.yres), fp.index);
         // Frames are numbered from 0 in the job: the index is the position in the animation.
         fs.aa = self.m.params.frame_accuracy(fp.index);
+        if let Some(mo) = self.m.params.axm {
+            // Every tile sets its accuracy: the previous tile's may have been relaxed.
+            let base = fs.aa.unwrap_or(self.m.params.aa);
+            let mut aa = base;
+            if let Some(later) = self.m.frame(fp.index.saturating_add(mo.ahead)) {
+                let lvf = later
+                    .view
+                    .frame()
+                    .map_err(|e| anyhow!("frame {}: bad view: {e}", later.index))?;
+                let region = Region {
+                    x0: rect.x0,
+                    y0: rect.y0,
+                    x1: rect.x0 + rect.w,
+                    y1: rect.y0 + rect.h,
+                };
+                let share = self
+                    .session
+                    .share_still_seen(&vf, (fp.xres, fp.yres), region, &lvf);
+                if share < crate::options::schedule::MotionAccuracy::STAYING {
+                    aa = base * mo.relax;
+                }
+            }
+            fs.aa = Some(aa);
+        }
         let (made0, nanos0) = self.session.ambient_work();
         let cpu0 = process_cpu_seconds().unwrap_or(0.0);
         let t0 = Instant::now();

@@ -2,9 +2,9 @@
 //! `-l*`, `-a*` but `-af`, `-i`, `-u`, `-bv`, `-m*`, and Tessera's ambient settings
 //! `--amb-*`). Kept in job manifests and hashed (in part) into the ambient fingerprint.
 
-use super::schedule::AccuracySchedule;
+use super::schedule::{AccuracySchedule, MotionAccuracy};
 use super::words::{
-    arg, bool_option, f1, f3, i1, nonneg3, nonneg_i32, range, split_words, OptError,
+    arg, bool_option, f1, f3, i1, nonneg3, nonneg_i32, parse_f64, range, split_words, OptError,
 };
 use crate::ambient::settings::AmbientSettings;
 
@@ -72,6 +72,9 @@ pub struct RenderParams {
     /// `-ax start end step` / `-axg start end ratio`: `-aa` varying with the frame.
     #[serde(default)]
     pub ax: Option<AccuracySchedule>,
+    /// `-axm relax ahead`: relaxed `-aa` where the view moves away (batch jobs).
+    #[serde(default)]
+    pub axm: Option<MotionAccuracy>,
 }
 
 impl Default for RenderParams {
@@ -107,6 +110,7 @@ impl Default for RenderParams {
             ms: 0.0,
             amb: AmbientSettings::default(),
             ax: None,
+            axm: None,
         }
     }
 }
@@ -232,6 +236,16 @@ impl RenderParams {
                 self.ax = Some(s);
                 4
             }
+            "-axm" => {
+                let relax = f1(words)?;
+                let ahead = parse_f64(o, arg(words, 2, "2 numbers")?, 2)?;
+                let m = MotionAccuracy::new(relax, ahead).map_err(|e| OptError::BadValue {
+                    option: o.to_string(),
+                    reason: e,
+                })?;
+                self.axm = Some(m);
+                3
+            }
             "-ar" => {
                 self.ar = nonneg_i32(o, i1(words)?)?;
                 2
@@ -334,6 +348,10 @@ impl RenderParams {
         push("-aa", &f(self.aa));
         if let Some(ax) = &self.ax {
             let w = ax.to_words();
+            push(&w[0], &w[1..]);
+        }
+        if let Some(m) = &self.axm {
+            let w = m.to_words();
             push(&w[0], &w[1..]);
         }
         push("-ar", &i(self.ar));

@@ -72,6 +72,46 @@ impl AccuracySchedule {
     }
 }
 
+/// `-axm RELAX AHEAD`: moving-direction accuracy (the seed paper's §4.2, proposed there and
+/// not built): a region of frame k whose surfaces are no longer seen from frame k+AHEAD's
+/// view renders with `-aa` times RELAX; regions that stay in view keep the frame's `-aa`.
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct MotionAccuracy {
+    /// The factor on `-aa` for regions about to leave the view (> 1).
+    pub relax: f64,
+    /// How many frames ahead to look.
+    pub ahead: u32,
+}
+
+impl MotionAccuracy {
+    /// Check `-axm RELAX AHEAD`.
+    pub fn new(relax: f64, ahead: f64) -> Result<Self, String> {
+        if !(relax.is_finite() && relax >= 1.0 && relax <= 100.0) {
+            return Err(format!("factor {relax} must be between 1 and 100"));
+        }
+        if !(ahead >= 1.0 && ahead <= 10_000.0 && ahead.fract() == 0.0) {
+            return Err(format!("frames ahead {ahead} must be a whole number from 1"));
+        }
+        Ok(MotionAccuracy {
+            relax,
+            ahead: ahead as u32,
+        })
+    }
+
+    /// Share of a region's sample points still seen `ahead` frames later below which the
+    /// region counts as leaving the view.
+    pub const STAYING: f64 = 0.5;
+
+    /// The option as words.
+    pub fn to_words(&self) -> Vec<String> {
+        vec![
+            "-axm".to_string(),
+            format!("{}", self.relax),
+            format!("{}", self.ahead),
+        ]
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

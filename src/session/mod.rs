@@ -12,6 +12,7 @@
 //!   -> finish / save_ambient_file      flush the stores
 //! ```
 
+mod lookahead;
 pub mod store;
 
 use crate::ambient::cache::CachedValue;
