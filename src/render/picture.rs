@@ -135,7 +135,12 @@ fn irradiance_ignores(m: &Material) -> bool {
     match m {
         Material::Normal(n) => n.kind == NormalKind::Trans,
         Material::Glass(_) | Material::Dielectric(_) => true,
-        Material::Mirror(_) | Material::Emitter(_) | Material::Antimatter(_) => false,
+        Material::Mirror(_)
+        | Material::Emitter(_)
+        | Material::Antimatter(_)
+        | Material::Ashik(_)
+        | Material::Brdf(_)
+        | Material::Brtd(_) => false,
     }
 }
 

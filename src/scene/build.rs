@@ -235,6 +235,10 @@ impl MaterialLookup for Modifiers {
             )),
         }
     }
+
+    fn files(&self) -> &SceneFiles {
+        &self.files
+    }
 }
 
 /// What `mod alias name [target]` defines (Radiance's rules): without a target, `mod`
@@ -400,7 +404,7 @@ impl Scene {
                 let chain = mods
                     .material_chain(&p.modifier)
                     .map_err(|m| err(p, format!("{t} {}: {m}", p.name)))?;
-                let material = Material::parse(t, &p.sargs, &p.rargs, &mods)
+                let material = Material::parse(p, &mods)
                     .map_err(|m| err(p, format!("{t} {}: {m}", p.name)))?;
                 let id = materials.len();
                 materials.push(MaterialDef {
