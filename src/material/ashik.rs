@@ -8,12 +8,14 @@
 //!   specular part (total = diffuse + specular);
 //! - specular, per light sample: the published lobe `√((nu+1)(nv+1))/(8π) ·
 //!   (n·h)^((nu (h·u)² + nv (h·v)²)/(1 − (n·h)²)) / ((l·h) max(n·l, n·v)) · F(l·h)` ×
-//!   `(n·l)·ω`, with Schlick's Fresnel `F = s + (1 − s)(1 − l·h)⁵` per channel (the
-//!   specular colour is not multiplied by the pattern colour);
+//!   `(n·l)·ω`, with Schlick's Fresnel at the view angle, `F = s + (1 − s)(1 − n·v)⁵`
+//!   per channel (not `l·h` as published; the specular colour is not multiplied by the
+//!   pattern colour);
 //! - indirect: the diffuse colour times the ambient; the specular part is sampled with
 //!   `-ss` rays drawn from the lobe's half-vector distribution, each weighted by the
-//!   specular colour (a uniform sky reflects exactly `s`); below `-st` it joins the
-//!   ambient coefficient instead.
+//!   specular colour with Schlick's Fresnel at the view angle, `s + (1 − s)(1 − n·v)⁵`
+//!   (a uniform sky reflects exactly that); when `s` is below `-st` that colour joins
+//!   the ambient coefficient instead.
 
 use super::orient::Orientation;
 use super::{expect_args, reflect, MaterialLookup};
@@ -55,8 +57,15 @@ impl Ashik {
         })
     }
 
-    /// The specular BRDF times `n·l` toward `l` (view `v`, frame `(u, w)`, normal `n`).
-    fn lobe(&self, (n, u, w): (DVec3, DVec3, DVec3), v: DVec3, l: DVec3) -> Color {
+    /// The specular BRDF times `n·l` toward `l` (view `v`, frame `(u, w)`, normal `n`,
+    /// specular colour `scolor` with the Fresnel term applied).
+    fn lobe(
+        &self,
+        (n, u, w): (DVec3, DVec3, DVec3),
+        v: DVec3,
+        l: DVec3,
+        scolor: Color,
+    ) -> Color {
         let ldot = n.dot(l);
         let h = (l + v).normalize_or_zero();
         let hn = h.dot(n);
@@ -75,12 +84,10 @@ impl Ashik {
         let mut val = hn.powf(e) * ((nu + 1.0) * (nv + 1.0)).sqrt()
             / (8.0 * PI * lh * ldot.max(n.dot(v)));
         val *= ldot;
-        let f5 = (1.0 - lh).powi(5);
-        let fres = self.specular + (Color::ONE - self.specular) * f5;
         if !val.is_finite() {
             return Color::ZERO;
         }
-        fres * val
+        scolor * val
     }
 
     /// Shade a hit.
@@ -100,17 +107,19 @@ impl Ashik {
         }
         let v = -ray.dir;
         let dcolor = self.diffuse * sp.pcol;
-        let scolor = self.specular;
+        // Schlick's Fresnel at the view angle, for the whole specular part.
+        let f5 = (1.0 - n.dot(v).clamp(0.0, 1.0)).powi(5);
+        let scolor = self.specular + (Color::ONE - self.specular) * f5;
         let (u, w) = self.orient.frame(&fsp, n).unwrap_or_else(|| {
             let u = crate::geometry::any_perpendicular(n);
             (u, n.cross(u))
         });
-        let rspec = bright(scolor);
+        let rspec = bright(self.specular);
         let hasspec = rspec > FTINY;
         let rblt = hasspec && tr.params.st >= rspec - FTINY;
         let mut result = Color::ZERO;
         if hasspec && !rblt {
-            result += self.sample((tr, ray, hit), (n, u, w), rng);
+            result += self.sample((tr, ray, hit), (n, u, w), scolor, rng);
         }
         let coef = |l: DVec3, omega: f64| -> Color {
             let ldot = n.dot(l);
@@ -119,7 +128,7 @@ impl Ashik {
             }
             let mut c = dcolor * (ldot * omega / PI * (1.0 - (1.0 - ldot).powi(5)));
             if hasspec {
-                c += self.lobe((n, u, w), v, l) * omega;
+                c += self.lobe((n, u, w), v, l, scolor) * omega;
             }
             c
         };
@@ -136,11 +145,12 @@ impl Ashik {
     /// Sample the specular lobe with `-ss` rays from the half-vector distribution of
     /// Ashikhmin & Shirley (φ from `tan φ = √((nu+1)/(nv+1)) tan(πξ₁/2)` per quadrant,
     /// `cos θh = (1 − ξ₂)^(1/(nu cos²φ + nv sin²φ + 1))`), each ray weighted by the
-    /// specular colour; a direction below the surface is drawn again (up to 10 times).
+    /// specular colour; a direction below the surface is drawn again.
     fn sample(
         &self,
         (tr, ray, hit): (&Tracer, &Ray, &Hit),
         (n, u, w): (DVec3, DVec3, DVec3),
+        scolor: Color,
         rng: &mut Sampler,
     ) -> Color {
         let ss = tr.params.ss;
@@ -152,43 +162,43 @@ impl Ashik {
         let (nu, nv) = self.power;
         let ratio = ((nu + 1.0) / (nv + 1.0)).sqrt();
         let scale = 1.0 / nsamp as f64;
-        let coef = self.specular * scale;
+        let coef = scolor * scale;
         let mut sum = Color::ZERO;
-        for i in 0..nsamp {
-            let mut dir = None;
-            for _try in 0..10 {
-                let (mut r1, r2) = rng.next2();
-                if nsamp > 1 {
-                    r1 = (i as f64 + r1) / nsamp as f64;
-                } else if (0.0..1.0).contains(&ss) {
-                    r1 = 0.5 + (r1 - 0.5) * ss;
-                }
-                // φ over the four quadrants.
-                let q = (r1 * 4.0).min(3.999_999);
-                let quad = q.floor();
-                let x = q - quad;
-                let mut phi = (ratio * (0.5 * PI * x).tan()).atan();
-                phi = match quad as u32 {
-                    0 => phi,
-                    1 => PI - phi,
-                    2 => PI + phi,
-                    _ => 2.0 * PI - phi,
-                };
-                let (c, s) = (phi.cos(), phi.sin());
-                let ex = nu * c * c + nv * s * s + 1.0;
-                let cos_t = (1.0 - r2).max(0.0).powf(1.0 / ex);
-                let sin_t = (1.0 - cos_t * cos_t).max(0.0).sqrt();
-                let h = (n * cos_t + u * (sin_t * c) + w * (sin_t * s)).normalize();
-                let d = reflect(ray.dir, h);
-                if d.dot(n) > FTINY {
-                    dir = Some(d);
-                    break;
-                }
+        // Independent draws; one below the surface is drawn again, within a budget of
+        // ten draws per ray (Radiance's rule; stratifying the draws would give every
+        // azimuth stratum its full share and change the distribution the retries shape).
+        let (mut taken, mut tries) = (0, 0);
+        while taken < nsamp && tries < 10 * nsamp {
+            tries += 1;
+            let (mut r1, r2) = rng.next2();
+            if (0.0..1.0).contains(&ss) {
+                r1 = 0.5 + (r1 - 0.5) * ss;
             }
-            if let Some(d) = dir {
-                if let Some(r) = tr.spawn(ray, hit, d, RayKind::SpecReflected, coef) {
-                    sum += tr.trace(&r, rng);
-                }
+            // φ over the four quadrants.
+            let q = (r1 * 4.0).min(3.999_999);
+            let quad = q.floor();
+            let x = q - quad;
+            let mut phi = (ratio * (0.5 * PI * x).tan()).atan();
+            phi = match quad as u32 {
+                0 => phi,
+                1 => PI - phi,
+                2 => PI + phi,
+                _ => 2.0 * PI - phi,
+            };
+            let (c, s) = (phi.cos(), phi.sin());
+            let ex = nu * c * c + nv * s * s + 1.0;
+            let cos_t = (1.0 - r2).max(0.0).powf(1.0 / ex);
+            let sin_t = (1.0 - cos_t * cos_t).max(0.0).sqrt();
+            let h = (n * cos_t + u * (sin_t * c) + w * (sin_t * s)).normalize();
+            let d = reflect(ray.dir, h);
+            if d.dot(n) <= FTINY {
+                continue;
+            }
+            taken += 1;
+            // Each ray carries the whole specular colour (its weight decides whether it
+            // is traced, as Radiance's); the sum is averaged below.
+            if let Some(r) = tr.spawn(ray, hit, d, RayKind::SpecReflected, scolor) {
+                sum += tr.trace(&r, rng);
             }
         }
         coef * sum
