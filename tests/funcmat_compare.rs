@@ -72,7 +72,12 @@ fn check(scene: &str, ab: &str, tol: &Tol) {
         "1", "-pj", "0",
     ];
     let reff = tmp.path().join("ref.hdr");
-    let data = run_ok(radiance(&bin, "rpict").current_dir(&dir).args(args).arg(&oct));
+    let data = run_ok(
+        radiance(&bin, "rpict")
+            .current_dir(&dir)
+            .args(args)
+            .arg(&oct),
+    );
     std::fs::write(&reff, data).unwrap();
     let ours = tmp.path().join("ours.hdr");
     run_ok(
@@ -96,11 +101,25 @@ fn check(scene: &str, ab: &str, tol: &Tol) {
         read_picture(&out).unwrap()
     };
     let (a, b) = (reduce(&ours), reduce(&reff));
-    assert_eq!((a.width, a.height), (b.width, b.height), "resolution differs");
+    assert_eq!(
+        (a.width, a.height),
+        (b.width, b.height),
+        "resolution differs"
+    );
     let c = compare(&a.pixels_f64(), &b.pixels_f64(), 0.007);
     eprintln!("{scene} -ab {ab}: {c:?}");
-    assert!(c.rms <= tol.rms, "{scene} -ab {ab}: RMS {:.4} > {}", c.rms, tol.rms);
-    assert!(c.max <= tol.max, "{scene} -ab {ab}: max {:.3} > {}", c.max, tol.max);
+    assert!(
+        c.rms <= tol.rms,
+        "{scene} -ab {ab}: RMS {:.4} > {}",
+        c.rms,
+        tol.rms
+    );
+    assert!(
+        c.max <= tol.max,
+        "{scene} -ab {ab}: max {:.3} > {}",
+        c.max,
+        tol.max
+    );
     assert!(
         c.mean_lum <= tol.mean,
         "{scene} -ab {ab}: mean luminance differs by {:.3}%",
@@ -135,7 +154,8 @@ fn ashik2_trans2_and_oriented_plastic2_metal2() {
 // ---------------------------------------------------------------------------------------
 // Errors
 
-const LAMP: &str = "void light bright\n0\n0\n3 100 100 100\n\nbright sphere lamp\n0\n0\n4 0 0 2 .1\n";
+const LAMP: &str =
+    "void light bright\n0\n0\n3 100 100 100\n\nbright sphere lamp\n0\n0\n4 0 0 2 .1\n";
 
 /// Render `text` (as `mat.rad`, with lobes.cal and lobe.dat beside it) and return the
 /// error, asserting that tpict failed and wrote no picture.
@@ -147,7 +167,9 @@ fn error_of(text: &str) -> String {
     std::fs::write(t.path().join("mat.rad"), format!("{LAMP}\n{text}")).unwrap();
     let o = Command::new(tpict_bin())
         .current_dir(t.path())
-        .args(["-vp", "0", "0", "5", "-vd", "0", "0", "-1", "-vu", "0", "1", "0"])
+        .args([
+            "-vp", "0", "0", "5", "-vd", "0", "0", "-1", "-vu", "0", "1", "0",
+        ])
         .args(["-x", "8", "-y", "8", "-o", "out.hdr", "mat.rad"])
         .env("RAYPATH", ".")
         .stdin(Stdio::null())
@@ -172,7 +194,10 @@ fn missing_function_and_data_files_are_named() {
     let e = error_of(&format!(
         "void plasfunc m\n2 refl nosuch.cal\n0\n5 .5 .5 .5 .1 1\n{FLOOR}"
     ));
-    assert_has(&e, &["mat.rad:11", "nosuch.cal", "cannot find function file"]);
+    assert_has(
+        &e,
+        &["mat.rad:11", "nosuch.cal", "cannot find function file"],
+    );
     let e = error_of(&format!(
         "void metdata m\n5 dval nosuch.dat lobes.cal dcos delev\n0\n5 .5 .5 .5 .1 1\n{FLOOR}"
     ));
@@ -186,11 +211,26 @@ fn missing_function_and_data_files_are_named() {
 #[test]
 fn wrong_argument_counts_are_named() {
     for (text, want) in [
-        ("void plasfunc m\n1 refl\n0\n5 .5 .5 .5 .1 1\n", "bad # arguments"),
-        ("void transfunc m\n2 tlobe lobes.cal\n0\n5 .5 .5 .5 .1 1\n", "bad # arguments"),
-        ("void BRTDfunc m\n9 0 0 0 0 0 0 0 0 0\n0\n9 0 0 0 0 0 0 0 0 0\n", "bad # arguments"),
-        ("void ashik2 m\n4 1 0 0 .\n0\n6 .5 .5 .5 .1 .1 .1\n", "8 real argument"),
-        ("void trans2 m\n4 1 0 0 .\n0\n6 .5 .5 .5 .1 .1 .1\n", "8 real argument"),
+        (
+            "void plasfunc m\n1 refl\n0\n5 .5 .5 .5 .1 1\n",
+            "bad # arguments",
+        ),
+        (
+            "void transfunc m\n2 tlobe lobes.cal\n0\n5 .5 .5 .5 .1 1\n",
+            "bad # arguments",
+        ),
+        (
+            "void BRTDfunc m\n9 0 0 0 0 0 0 0 0 0\n0\n9 0 0 0 0 0 0 0 0 0\n",
+            "bad # arguments",
+        ),
+        (
+            "void ashik2 m\n4 1 0 0 .\n0\n6 .5 .5 .5 .1 .1 .1\n",
+            "8 real argument",
+        ),
+        (
+            "void trans2 m\n4 1 0 0 .\n0\n6 .5 .5 .5 .1 .1 .1\n",
+            "8 real argument",
+        ),
         (
             "void plasdata m\n4 dval lobe.dat lobes.cal dcos\n0\n5 .5 .5 .5 .1 1\n",
             "2 dimension",
@@ -239,7 +279,9 @@ fn non_finite_function_values_never_reach_a_pixel() {
     std::fs::write(t.path().join("nan.rad"), text).unwrap();
     let o = Command::new(tpict_bin())
         .current_dir(t.path())
-        .args(["-vp", "0", "0", "5", "-vd", "0", "0", "-1", "-vu", "0", "1", "0"])
+        .args([
+            "-vp", "0", "0", "5", "-vd", "0", "0", "-1", "-vu", "0", "1", "0",
+        ])
         .args(["-x", "16", "-y", "16", "-o", "out.hdr", "nan.rad"])
         .env("RAYPATH", ".")
         .stdin(Stdio::null())

@@ -59,13 +59,7 @@ impl Ashik {
 
     /// The specular BRDF times `n·l` toward `l` (view `v`, frame `(u, w)`, normal `n`,
     /// specular colour `scolor` with the Fresnel term applied).
-    fn lobe(
-        &self,
-        (n, u, w): (DVec3, DVec3, DVec3),
-        v: DVec3,
-        l: DVec3,
-        scolor: Color,
-    ) -> Color {
+    fn lobe(&self, (n, u, w): (DVec3, DVec3, DVec3), v: DVec3, l: DVec3, scolor: Color) -> Color {
         let ldot = n.dot(l);
         let h = (l + v).normalize_or_zero();
         let hn = h.dot(n);
@@ -81,8 +75,8 @@ impl Ashik {
         } else {
             0.0
         };
-        let mut val = hn.powf(e) * ((nu + 1.0) * (nv + 1.0)).sqrt()
-            / (8.0 * PI * lh * ldot.max(n.dot(v)));
+        let mut val =
+            hn.powf(e) * ((nu + 1.0) * (nv + 1.0)).sqrt() / (8.0 * PI * lh * ldot.max(n.dot(v)));
         val *= ldot;
         if !val.is_finite() {
             return Color::ZERO;

@@ -80,7 +80,13 @@ pub struct BrdfMat {
 
 /// The BRDF variables `NxP NyP NzP RdotP CrP CgP CbP` at `sp` (pattern frame) for the
 /// ray-facing perturbed normal `n`, its cosine `pdot` with the ray, and colour `c`.
-pub(crate) fn brdf_vars(call: &FuncCall, sp: &ShadingPoint, n: DVec3, pdot: f64, c: Color) -> [f64; 7] {
+pub(crate) fn brdf_vars(
+    call: &FuncCall,
+    sp: &ShadingPoint,
+    n: DVec3,
+    pdot: f64,
+    c: Color,
+) -> [f64; 7] {
     let np = call.frame().direction_to_pattern(sp, n);
     [np.x, np.y, np.z, pdot.clamp(-1.0, 1.0), c.x, c.y, c.z]
 }
@@ -218,10 +224,17 @@ impl BrdfMat {
         };
         let coef = |l: DVec3, omega: f64| -> Color {
             let ldot = n.dot(l);
-            if ldot.abs() <= FTINY || (ldot < 0.0 && trans <= FTINY) || trans >= 1.0 - FTINY && ldot > 0.0 {
+            if ldot.abs() <= FTINY
+                || (ldot < 0.0 && trans <= FTINY)
+                || trans >= 1.0 - FTINY && ldot > 0.0
+            {
                 return Color::ZERO;
             }
-            let (diff, spec) = if ldot > 0.0 { (rdiff, rspec) } else { (tdiff, tspec) };
+            let (diff, spec) = if ldot > 0.0 {
+                (rdiff, rspec)
+            } else {
+                (tdiff, tspec)
+            };
             let cosw = ldot.abs() * omega;
             let mut c = mcolor * (diff * cosw / PI);
             if spec <= FTINY {
