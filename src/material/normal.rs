@@ -274,7 +274,9 @@ impl NormalMat {
 
     /// Transmission seen by a shadow ray through this material (straight through only).
     pub fn shadow_transmission(&self, sp: &ShadingPoint) -> Color {
-        if self.kind != NormalKind::Trans || self.trans <= FTINY {
+        // `trans2` stops shadow rays whatever its roughness (measured with rtrace: the
+        // floor below a trans2 pane is black in its shadow; `trans` passes them).
+        if self.kind != NormalKind::Trans || self.trans <= FTINY || self.orient.is_some() {
             return Color::ZERO;
         }
         let (n, dir) = (sp.facing_normal(), sp.dir);
