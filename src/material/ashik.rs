@@ -189,9 +189,9 @@ impl Ashik {
                 continue;
             }
             taken += 1;
-            // Each ray carries the whole specular colour (its weight decides whether it
-            // is traced, as Radiance's); the sum is averaged below.
-            if let Some(r) = tr.spawn(ray, hit, d, RayKind::SpecReflected, scolor) {
+            // Each ray carries its share of the specular colour (as the Gaussian lobe's
+            // samples do, `normal.rs`).
+            if let Some(r) = tr.spawn(ray, hit, d, RayKind::SpecReflected, coef) {
                 sum += tr.trace(&r, rng);
             }
         }
