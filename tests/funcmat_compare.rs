@@ -293,3 +293,123 @@ fn non_finite_function_values_never_reach_a_pixel() {
     // The diffuse part is still there.
     assert!(img.pixels.iter().all(|p| p[0] > 0.0));
 }
+
+/// One pixel looking at a 2×2 panel at the origin from (0, 0, ±1), with `scene` (files
+/// `f.cal` and `g.cal` beside it) and `opts`: the pixel's colour.
+fn point_value(scene: &str, from_below: bool, opts: &[&str]) -> [f64; 3] {
+    let t = tempfile::tempdir().unwrap();
+    std::fs::write(t.path().join("f.cal"), "cst(lx,ly,lz,om) = A5;\n").unwrap();
+    std::fs::write(
+        t.path().join("g.cal"),
+        "cst(lx,ly,lz,om) = A10;\ncst2(lx,ly,lz,om) = 2*A10;\n",
+    )
+    .unwrap();
+    let panel = "pf polygon fl 0 0 12 -1 -1 0 1 -1 0 1 1 0 -1 1 0\n";
+    std::fs::write(t.path().join("s.rad"), format!("{scene}\n{panel}")).unwrap();
+    let (z, d) = if from_below { ("-1", "1") } else { ("1", "-1") };
+    let o = Command::new(tpict_bin())
+        .current_dir(t.path())
+        .args(["-vp", "0", "0", z, "-vd", "0", "0", d, "-vu", "0", "1", "0"])
+        .args([
+            "-vh", ".001", "-vv", ".001", "-x", "1", "-y", "1", "-ab", "0",
+        ])
+        .args(opts)
+        .args(["-o", "out.hdr", "s.rad"])
+        .env("RAYPATH", ".")
+        .stdin(Stdio::null())
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let img = read_picture(&t.path().join("out.hdr")).unwrap();
+    let p = img.pixels[0];
+    [p[0] as f64, p[1] as f64, p[2] as f64]
+}
+
+/// Values measured with rtrace 6.0 (a 1° distant source of radiance 1000 toward (0.3, 0,
+/// ±1), `-ab 0 -dj 0 -ds 0`, or only the constant ambient `-av 1 1 1`), checked without
+/// Radiance to the precision of a picture's pixel (RGBE, 0.4%).
+#[test]
+fn point_values_match_rtrace() {
+    let above = "void light sl 0 0 3 1000 1000 1000\nsl source s 0 0 4 0.3 0 1 1\n";
+    let below = "void light sl 0 0 3 1000 1000 1000\nsl source s 0 0 4 0.3 0 -1 1\n";
+    let dark = ["-av", "0", "0", "0", "-dj", "0", "-ds", "0"];
+    let amb = ["-av", "1", "1", "1"];
+    let plas = "void plasfunc pf 2 cst f.cal 0 5 .5 .6 .7 .2 2";
+    let met = "void metfunc pf 2 cst f.cal 0 5 .5 .6 .7 .2 2";
+    let tf = "void transfunc pf 2 cst f.cal 0 7 .5 .6 .7 .2 .5 .3 2";
+    let brtd = "void brightfunc pat 2 .5 . 0 0\npat BRTDfunc pf 10 .1 .2 .3 .25 .15 .05 \
+                cst cst2 cst g.cal 0 10 .3 .4 .5 .1 .1 .1 .2 .3 .4 1.5";
+    for (what, scene, below_view, opts, want) in [
+        (
+            "plasfunc",
+            format!("{above}{plas}"),
+            false,
+            &dark[..],
+            [0.1208387, 0.1266741, 0.1325095],
+        ),
+        (
+            "metfunc",
+            format!("{above}{met}"),
+            false,
+            &dark[..],
+            [0.0750078, 0.0900094, 0.1050109],
+        ),
+        (
+            "transfunc front",
+            format!("{above}{tf}"),
+            false,
+            &dark[..],
+            [0.0375039, 0.0404216, 0.0433393],
+        ),
+        (
+            "transfunc through",
+            format!("{below}{tf}"),
+            false,
+            &dark[..],
+            [0.0170866, 0.0205039, 0.0239212],
+        ),
+        (
+            "transfunc ambient",
+            tf.to_string(),
+            false,
+            &amb[..],
+            [0.5, 0.6, 0.7],
+        ),
+        (
+            "BRTDfunc front",
+            format!("{above}{brtd}"),
+            false,
+            &dark[..],
+            [0.3546732, 0.7020522, 0.3619675],
+        ),
+        (
+            "BRTDfunc through",
+            format!("{above}{brtd}"),
+            true,
+            &dark[..],
+            [0.3510261, 0.6984052, 0.3583204],
+        ),
+        (
+            "BRTDfunc ambient front",
+            brtd.to_string(),
+            false,
+            &amb[..],
+            [0.25, 0.35, 0.45],
+        ),
+        (
+            "BRTDfunc ambient back",
+            brtd.to_string(),
+            true,
+            &amb[..],
+            [0.15, 0.2, 0.25],
+        ),
+    ] {
+        let got = point_value(&scene, below_view, opts);
+        for c in 0..3 {
+            assert!(
+                (got[c] / want[c] - 1.0).abs() < 0.01,
+                "{what}: {got:?}, rtrace {want:?}"
+            );
+        }
+    }
+}

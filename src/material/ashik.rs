@@ -198,3 +198,67 @@ impl Ashik {
         coef * sum
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// rtrace figures: a 0.5° distant source of radiance 1000 lighting an `ashik2` plane
+    /// z = 0 (`u` = x) seen from direction `v`.
+    fn source_omega() -> f64 {
+        2.0 * PI * (1.0 - 0.25f64.to_radians().cos())
+    }
+
+    fn mat(d: f64, s: f64, nu: f64, nv: f64) -> Ashik {
+        Ashik {
+            orient: Orientation::Fixed(DVec3::X),
+            diffuse: Color::splat(d),
+            specular: Color::splat(s),
+            power: (nu, nv),
+        }
+    }
+
+    fn specular(m: &Ashik, l: [f64; 3], v: [f64; 3]) -> f64 {
+        let (l, v) = (DVec3::from(l).normalize(), DVec3::from(v).normalize());
+        let n = DVec3::Z;
+        let f5 = (1.0 - n.dot(v)).powi(5);
+        let sc = m.specular + (Color::ONE - m.specular) * f5;
+        (m.lobe((n, DVec3::X, DVec3::Y), v, l, sc) * source_omega() * 1000.0).x
+    }
+
+    #[test]
+    fn specular_lobe_matches_rtrace() {
+        let m = mat(0.0, 0.1, 10.0, 100.0);
+        for (l, v, want) in [
+            ([0.3, 0.0, 1.0], [0.0, 0.0, 1.0], 6.902979e-3),
+            ([1.0, 0.0, 1.0], [0.0, 0.0, 1.0], 2.750580e-3),
+            ([1.0, 0.0, 1.0], [0.0, 0.5, 1.0], 9.334159e-5),
+            ([1.0, 0.0, 1.0], [-1.0, 0.0, 1.0], 1.143564e-2),
+            ([0.2, 0.1, 1.0], [-0.1, -0.2, 1.0], 7.068806e-3),
+        ] {
+            let got = specular(&m, l, v);
+            assert!(
+                (got / want - 1.0).abs() < 1e-4,
+                "{l:?} {v:?}: {got} vs {want}"
+            );
+        }
+        // Fresnel at the view angle (not at l·h): off the mirror direction at 45°.
+        let m = mat(0.0, 0.05, 400.0, 40.0);
+        for (l, want) in [
+            ([1.05, 0.0, 1.0], 2.152877e-2),
+            ([1.1, 0.0, 1.0], 1.955042e-2),
+            ([1.2, 0.0, 1.0], 1.413556e-2),
+        ] {
+            let got = specular(&m, l, [-1.0, 0.0, 1.0]);
+            assert!((got / want - 1.0).abs() < 1e-4, "{l:?}: {got} vs {want}");
+        }
+    }
+
+    #[test]
+    fn diffuse_has_the_grazing_factor() {
+        // d = .5 at n·l = 0.2873 (light toward (1, 0, 0.3)): rtrace 2.232539e-3.
+        let ldot = DVec3::new(1.0, 0.0, 0.3).normalize().z;
+        let got = 0.5 * ldot * source_omega() / PI * (1.0 - (1.0 - ldot).powi(5)) * 1000.0;
+        assert!((got / 2.232539e-3 - 1.0).abs() < 1e-5, "{got}");
+    }
+}
