@@ -60,6 +60,10 @@ fn scenes() -> std::path::PathBuf {
 }
 
 fn check(scene: &str, ab: &str, tol: &Tol) {
+    check_with(scene, ab, &[], tol)
+}
+
+fn check_with(scene: &str, ab: &str, extra: &[&str], tol: &Tol) {
     let Some(bin) = radiance_bin() else { return };
     let dir = scenes();
     let files = ["room.rad", scene];
@@ -67,15 +71,16 @@ fn check(scene: &str, ab: &str, tol: &Tol) {
     let oct = tmp.path().join("scene.oct");
     let octdata = run_ok(radiance(&bin, "oconv").current_dir(&dir).args(files));
     std::fs::write(&oct, octdata).unwrap();
-    let args = [
+    let mut args = vec![
         "-vf", "room.vf", "-x", "256", "-y", "256", "-ab", ab, "-av", ".05", ".05", ".05", "-ps",
         "1", "-pj", "0",
     ];
+    args.extend_from_slice(extra);
     let reff = tmp.path().join("ref.hdr");
     let data = run_ok(
         radiance(&bin, "rpict")
             .current_dir(&dir)
-            .args(args)
+            .args(&args)
             .arg(&oct),
     );
     std::fs::write(&reff, data).unwrap();
@@ -83,7 +88,7 @@ fn check(scene: &str, ab: &str, tol: &Tol) {
     run_ok(
         Command::new(tpict_bin())
             .current_dir(&dir)
-            .args(args)
+            .args(&args)
             .arg("-o")
             .arg(&ours)
             .args(files),
@@ -107,7 +112,7 @@ fn check(scene: &str, ab: &str, tol: &Tol) {
         "resolution differs"
     );
     let c = compare(&a.pixels_f64(), &b.pixels_f64(), 0.007);
-    eprintln!("{scene} -ab {ab}: {c:?}");
+    eprintln!("{scene} -ab {ab} {extra:?}: {c:?}");
     assert!(
         c.rms <= tol.rms,
         "{scene} -ab {ab}: RMS {:.4} > {}",
@@ -143,6 +148,15 @@ fn plasdata_metdata_transdata() {
 fn brtdfunc() {
     check("brtd.rad", "0", &EXACT);
     check("brtd.rad", "1", &INDIRECT);
+}
+
+/// `-i`: irradiance rays pass through `trans2` and through a `BRTDfunc` that transmits;
+/// the other materials are shaded white (measured: rms 0.09%, mean 0.02%, all three).
+#[test]
+fn irradiance_through_the_new_materials() {
+    for scene in ["funcs.rad", "brtd.rad", "aniso.rad"] {
+        check_with(scene, "0", &["-i"], &EXACT);
+    }
 }
 
 #[test]
