@@ -334,7 +334,11 @@ impl NormalMat {
                 let (c, s) = (phi.cos(), phi.sin());
                 let h = n + u * (ax * lr2 * c) + w * (ay * lr2 * s);
                 let h = h.normalize();
-                let d = if transmit {
+                let d = if transmit && self.orient.is_some() {
+                    // trans2: offset the straight-through direction in the tangent plane
+                    // by the Gaussian's slopes, `t + √(−ln ξ)(αu cos φ u + αv sin φ v)`.
+                    (ray.dir + u * (ax * lr2 * c) + w * (ay * lr2 * s)).normalize()
+                } else if transmit {
                     // Perturb the straight-through direction by the same facet offset.
                     let t = ray.dir - 2.0 * (ray.dir.dot(h) - ray.dir.dot(n)) * (h - n);
                     t.normalize()
