@@ -226,7 +226,7 @@ impl BrdfMat {
             let ldot = n.dot(l);
             if ldot.abs() <= FTINY
                 || (ldot < 0.0 && trans <= FTINY)
-                || trans >= 1.0 - FTINY && ldot > 0.0
+                || (ldot > 0.0 && trans >= 1.0 - FTINY)
             {
                 return Color::ZERO;
             }
