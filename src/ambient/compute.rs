@@ -112,7 +112,8 @@ impl Ambient {
         // Under -ax values are filed for the schedule's loosest accuracy, so that every
         // later (tighter) lookup finds them in the cells it reads.
         // -axm relaxes regions leaving the view by its factor on top.
-        let aa_max = params.ax.map_or(aa, |s| s.start.max(aa)) * params.axm.map_or(1.0, |m| m.relax);
+        let aa_max =
+            params.ax.map_or(aa, |s| s.start.max(aa)) * params.axm.map_or(1.0, |m| m.relax);
         let settings = params.amb.clone();
         let (ad, as_) = split_divisions(params);
         Some(Ambient {

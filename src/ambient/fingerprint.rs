@@ -146,9 +146,12 @@ pub fn options_text(params: &RenderParams) -> String {
     for m in &params.ai {
         s.push_str(&format!(" -ai {m}"));
     }
-    for w in [params.ax.map(|a| a.to_words()), params.axm.map(|m| m.to_words())]
-        .into_iter()
-        .flatten()
+    for w in [
+        params.ax.map(|a| a.to_words()),
+        params.axm.map(|m| m.to_words()),
+    ]
+    .into_iter()
+    .flatten()
     {
         s.push(' ');
         s.push_str(&w.join(" "));

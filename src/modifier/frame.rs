@@ -130,6 +130,13 @@ impl PatternFrame {
         ]
     }
 
+    /// A world direction in the pattern frame, unit length for a unit `v` (a BRDF
+    /// material's light direction `lx ly lz`, its perturbed normal `NxP NyP NzP`).
+    pub fn direction_to_pattern(&self, sp: &ShadingPoint, v: DVec3) -> DVec3 {
+        let (m, s) = self.to_pattern(sp);
+        m.transform_vector3(v) / s
+    }
+
     /// A vector given in the pattern frame (a texture's perturbation) in world
     /// coordinates: the forward transform divided by its scale (through the hit object's
     /// transform, when it has one).

@@ -113,7 +113,7 @@ impl SceneFunctions {
 }
 
 /// One primitive's use of the function language: its context, frame and real arguments.
-#[derive(Debug)]
+#[derive(Clone, Debug)]
 pub struct FuncCall {
     shared: Arc<FuncShared>,
     frame: PatternFrame,

@@ -90,7 +90,9 @@ impl MotionAccuracy {
             return Err(format!("factor {relax} must be between 1 and 100"));
         }
         if !(ahead >= 1.0 && ahead <= 10_000.0 && ahead.fract() == 0.0) {
-            return Err(format!("frames ahead {ahead} must be a whole number from 1"));
+            return Err(format!(
+                "frames ahead {ahead} must be a whole number from 1"
+            ));
         }
         Ok(MotionAccuracy {
             relax,

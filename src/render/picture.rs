@@ -5,6 +5,7 @@
 
 use super::ray::Ray;
 use super::sampler::Sampler;
+use super::shading::ShadingPoint;
 use super::trace::Tracer;
 use crate::color::{bright, sanitize, Color};
 use crate::material::normal::NormalKind;
@@ -88,7 +89,8 @@ fn sample_pixel(tr: &Tracer, fs: &FrameSetup, px: usize, py_top: usize, rays: &m
 
 /// `-i`: irradiance at the first opaque, non-emitting surface, as if it were white and
 /// Lambertian. As in rpict, rays pass straight through transparent materials (`trans`,
-/// `glass`, `dielectric`, `interface`) and surfaces without a material, and the irradiance
+/// `trans2`, `glass`, `dielectric`, `interface`, a `BRTDfunc` where its transmission is not
+/// zero) and surfaces without a material, and the irradiance
 /// is that of the surface behind them; light sources show their radiance.
 fn irradiance(tr: &Tracer, ray: &Ray, rng: &mut Sampler) -> Color {
     let mut ray = *ray;
@@ -101,6 +103,11 @@ fn irradiance(tr: &Tracer, ray: &Ray, rng: &mut Sampler) -> Color {
         let through = match h.material.map(|m| tr.scene.material(m)) {
             None => true,
             Some(Material::Emitter(_) | Material::Antimatter(_)) => return tr.trace(&ray, rng),
+            // A BRTDfunc lets the ray through where it transmits (measured with rtrace -i).
+            Some(Material::Brtd(b)) => {
+                let sp = ShadingPoint::new(&ray, &h, tr.scene.origin);
+                b.shadow_transmission(&sp).max_element() > 0.0
+            }
             Some(m) => irradiance_ignores(m),
         };
         if !through {
@@ -138,7 +145,12 @@ fn irradiance_ignores(m: &Material) -> bool {
     match m {
         Material::Normal(n) => n.kind == NormalKind::Trans,
         Material::Glass(_) | Material::Dielectric(_) => true,
-        Material::Mirror(_) | Material::Emitter(_) | Material::Antimatter(_) => false,
+        Material::Mirror(_)
+        | Material::Emitter(_)
+        | Material::Antimatter(_)
+        | Material::Ashik(_)
+        | Material::Brdf(_)
+        | Material::Brtd(_) => false,
     }
 }
 

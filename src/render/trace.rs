@@ -115,6 +115,9 @@ impl<'a> Tracer<'a> {
             None => true,
             Some(id) => match self.scene.material(id) {
                 Material::Normal(n) => n.trans > 0.0,
+                Material::Brdf(b) => b.trans > 0.0,
+                Material::Brtd(_) => true,
+                Material::Ashik(_) => false,
                 Material::Glass(_) | Material::Dielectric(_) | Material::Antimatter(_) => true,
                 Material::Emitter(e) => matches!(e.kind, EmitterKind::Illum { .. }),
                 Material::Mirror(_) => false,
@@ -359,6 +362,9 @@ impl<'a> Tracer<'a> {
         let hit = &sp.hit;
         match self.scene.material(id) {
             Material::Normal(n) => n.shade(self, ray, sp, rng),
+            Material::Ashik(a) => a.shade(self, ray, sp, rng),
+            Material::Brdf(b) => b.shade(self, ray, sp, rng),
+            Material::Brtd(b) => b.shade(self, ray, sp, rng),
             Material::Glass(g) => g.shade(self, ray, sp, rng),
             Material::Dielectric(d) => d.shade(self, ray, sp, rng),
             Material::Mirror(mi) => {
@@ -657,6 +663,7 @@ impl<'a> Tracer<'a> {
     pub(super) fn shadow_transmission(&self, sp: &ShadingPoint, m: MatId) -> Color {
         match self.scene.material(m) {
             Material::Normal(n) => n.shadow_transmission(sp),
+            Material::Brtd(b) => b.shadow_transmission(sp),
             Material::Glass(g) => g.shadow_transmission(sp),
             Material::Antimatter(_) => Color::ONE,
             Material::Mirror(mi) if mi.alternate_void => Color::ONE,

@@ -258,6 +258,10 @@ impl MaterialLookup for Modifiers {
             )),
         }
     }
+
+    fn files(&self) -> &SceneFiles {
+        &self.files
+    }
 }
 
 /// State shared while building a scene and the sets it instances: the modifiers (one
@@ -401,7 +405,7 @@ impl Builder<'_> {
                 let chain = mods
                     .material_chain(&p.modifier)
                     .map_err(|m| err(p, format!("{t} {}: {m}", p.name)))?;
-                let material = Material::parse(t, &p.sargs, &p.rargs, &*mods)
+                let material = Material::parse(p, &*mods)
                     .map_err(|m| err(p, format!("{t} {}: {m}", p.name)))?;
                 let id = materials.len();
                 materials.push(MaterialDef {
