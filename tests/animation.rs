@@ -235,3 +235,53 @@ fn keyframed_paths_and_previews() {
     assert!(!out.status.success());
     assert!(String::from_utf8_lossy(&out.stderr).contains("at least two key views"));
 }
+
+/// `-axm`: where the camera turns away, tiles whose surfaces leave the view render at a
+/// relaxed accuracy (fewer new values); `tpict` refuses the option.
+#[test]
+fn moving_direction_accuracy_relaxes_what_leaves_the_view() {
+    let t = tempfile::tempdir().unwrap();
+    let keys = t.path().join("keys.vf");
+    // A half turn: most of what a frame sees is out of view two frames later.
+    std::fs::write(
+        &keys,
+        "-vtv -vp 4 3 1.6 -vd -1 0 0 -vu 0 0 1 -vh 50 -vv 40\n-vd 0 1 0\n-vd 1 0 0\n",
+    )
+    .unwrap();
+    let values = |extra: &[&str]| -> u64 {
+        let job = t.path().join(format!("job{}", extra.len()));
+        run_ok(
+            tool("tplan")
+                .args(["--workers", "1", "--path"])
+                .arg(&keys)
+                .args(["--path-frames", "9", "-o"])
+                .arg(&job)
+                .arg("--")
+                .args(["-x", "48", "-y", "36", "-ab", "1", "-aa", ".1"])
+                .args(extra)
+                .arg("demo.rad"),
+        );
+        run_ok(tool("tpiece").arg(&job).args(["--threads", "1", "-q"]));
+        let out = run_ok(tool("tstat").arg(&job).arg("--json"));
+        let v: serde_json::Value = serde_json::from_slice(&out).unwrap();
+        v["frames"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .map(|f| f["new_values"].as_u64().unwrap())
+            .sum()
+    };
+    let (full, relaxed) = (values(&[]), values(&["-axm", "3", "2"]));
+    eprintln!("new values: constant {full}, -axm 3 2 {relaxed}");
+    assert!(relaxed * 10 < full * 9, "{relaxed} vs {full}");
+    let out = Command::new(tpict_bin())
+        .current_dir(demo())
+        .args([
+            "-vf", "demo.vf", "-x", "8", "-y", "8", "-ab", "1", "-axm", "2", "3",
+        ])
+        .arg("demo.rad")
+        .output()
+        .unwrap();
+    assert!(!out.status.success());
+    assert!(String::from_utf8_lossy(&out.stderr).contains("-axm"));
+}
