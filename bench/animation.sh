@@ -48,6 +48,18 @@ for m in "${modes[@]}"; do
     [[ $name == ax ]] && "$B/tassemble" "$job" --contact-sheet "$OUT/sheet-$name.png" --thumb-width 64 2>/dev/null
     echo "$name: $(cat "$TMP/$name.time") (user sys wall s)" >&2
 done
+# A per-frame time budget (-axt, tpict's view sequences): the same views on standard input.
+BUDGET=${BUDGET:-0.15}
+for k in $(seq 0 $((FRAMES - 1))); do
+    getinfo < "$TMP/${modes[0]%%:*}-$(printf %03d "$k").hdr" | grep '^VIEW=' | tail -1
+done > "$TMP/views.txt"
+# shellcheck disable=SC2086
+"$B/tpict" -n 1 -t 100000 -S 0 -o "$TMP/axt-%03d.hdr" $RES $AMB -axt "$BUDGET" .5 .1 demo.rad \
+    < "$TMP/views.txt" 2> "$TMP/axt.log"
+sed -n 's/.*frame \([0-9]*\): -aa \([0-9.]*\) took \([0-9.]*\) CPU s.*/\1 \2 \3/p' "$TMP/axt.log" \
+    > "$OUT/axt.txt"
+modes+=("axt:-axt $BUDGET .5 .1 (tpict -S)")
+MODES="$MODES;axt:-axt $BUDGET .5 .1 (tpict -S)"
 # References: the MID frames' and the last LAST frames' views at high accuracy.
 first=${modes[0]%%:*}
 ERRF="$MID $(seq -s ' ' $((FRAMES - LAST)) $((FRAMES - 1)))"

@@ -162,6 +162,9 @@ fn render_command(args: &[String], opts: &RpictOptions, log: &Log) -> Result<()>
     if let Some(why) = opts.params.refused() {
         bail!("{why}");
     }
+    if opts.params.axt.is_some() && opts.params.ax.is_some() {
+        bail!("-axt and -ax/-axg both choose -aa per frame: give one of them");
+    }
     if opts.params.axm.is_some() {
         bail!(
             "-axm needs the views of the frames ahead, which a view sequence on standard input \
@@ -175,6 +178,7 @@ fn render_command(args: &[String], opts: &RpictOptions, log: &Log) -> Result<()>
         session: &session,
         command_line: format!("tpict {}", args.join(" ")),
         log,
+        budget_aa: Mutex::new(opts.params.axt.map(|b| b.start)),
         stats: Mutex::new(RunStats {
             software: SOFTWARE.to_string(),
             threads: session.threads,
@@ -216,6 +220,8 @@ struct Run<'a> {
     command_line: String,
     log: &'a Log,
     stats: Mutex<RunStats>,
+    /// `-axt`: the accuracy of the next frame.
+    budget_aa: Mutex<Option<f64>>,
 }
 
 impl Run<'_> {
@@ -321,6 +327,11 @@ impl Run<'_> {
         // -S numbers frames from its start (default 1): the position in the animation.
         let first = opts.run.sequence_start.unwrap_or(frame);
         fs.aa = session.params.frame_accuracy(frame.saturating_sub(first));
+        let budget = session.params.axt;
+        if budget.is_some() {
+            fs.aa = *self.budget_aa.lock().unwrap_or_else(|e| e.into_inner());
+        }
+        let cpu0 = crate::runinfo::process_cpu_seconds();
         let progress = RenderProgress::default();
         let start = Instant::now();
         let region = Region {
@@ -331,6 +342,21 @@ impl Run<'_> {
         };
         let pixels =
             self.with_reports(&progress, start, || session.render(&fs, region, &progress))?;
+        if let (Some(b), Some(aa), Some(c0), Some(c1)) = (
+            budget,
+            fs.aa,
+            cpu0,
+            crate::runinfo::process_cpu_seconds(),
+        ) {
+            let next = b.next(aa, c1 - c0);
+            *self.budget_aa.lock().unwrap_or_else(|e| e.into_inner()) = Some(next);
+            if self.opts.run.report_interval > 0.0 {
+                self.log.say(&format!(
+                    "frame {frame}: -aa {aa:.4} took {:.2} CPU s; next -aa {next:.4}",
+                    c1 - c0
+                ));
+            }
+        }
         if let Ok(mut st) = self.stats.lock() {
             let rays = progress.rays.load(Ordering::Relaxed);
             st.total_rays += rays;
@@ -357,6 +383,10 @@ impl Run<'_> {
             extra: session.ambient_header(),
             ..Header::default()
         };
+        if let (Some(aa), true) = (fs.aa, session.cached_ambient().is_some()) {
+            // The frame's own -aa when it varies (-ax, -axg, -axt).
+            img.header.extra.push(("TESSERA_FRAME_AA".to_string(), format!(" {aa}")));
+        }
         Ok(img)
     }
 

@@ -285,3 +285,50 @@ fn moving_direction_accuracy_relaxes_what_leaves_the_view() {
     assert!(!out.status.success());
     assert!(String::from_utf8_lossy(&out.stderr).contains("-axm"));
 }
+
+/// `-axt`: tpict's view sequences choose each frame's `-aa` from the previous frame's cost
+/// (recorded as `TESSERA_FRAME_AA=` in each picture); jobs refuse it.
+#[test]
+fn time_budget_picks_each_frames_accuracy() {
+    let t = tempfile::tempdir().unwrap();
+    let line = std::fs::read_to_string(demo().join("demo.vf")).unwrap();
+    let frame_aa = |budget: &str, tag: &str| -> Vec<String> {
+        let pattern = t.path().join(format!("{tag}%d.hdr"));
+        let mut child = Command::new(tpict_bin())
+            .current_dir(demo())
+            .args(["-S", "1", "-o"])
+            .arg(&pattern)
+            .args(["-vf", "demo.vf", "-x", "32", "-y", "24", "-ab", "1"])
+            .args(["-axt", budget, ".4", ".1", "demo.rad"])
+            .stdin(std::process::Stdio::piped())
+            .spawn()
+            .unwrap();
+        use std::io::Write;
+        let input = format!("{}\n", line.trim()).repeat(3);
+        child.stdin.take().unwrap().write_all(input.as_bytes()).unwrap();
+        assert!(child.wait().unwrap().success());
+        (1..=3)
+            .map(|k| {
+                let bytes = std::fs::read(t.path().join(format!("{tag}{k}.hdr"))).unwrap();
+                let text = String::from_utf8_lossy(&bytes[..bytes.len().min(4000)]).to_string();
+                text.lines()
+                    .find_map(|l| l.strip_prefix("TESSERA_FRAME_AA="))
+                    .unwrap_or("none")
+                    .trim()
+                    .to_string()
+            })
+            .collect()
+    };
+    // A generous budget tightens to the end accuracy after the first frame; an impossible
+    // one keeps the loosest.
+    assert_eq!(frame_aa("1000", "easy"), ["0.4", "0.1", "0.1"]);
+    assert_eq!(frame_aa("0.000001", "hard"), ["0.4", "0.4", "0.4"]);
+    let out = tool("tplan")
+        .args(["-o"])
+        .arg(t.path().join("job"))
+        .args(["--", "-vf", "demo.vf", "-ab", "1", "-axt", "1", ".4", ".1", "demo.rad"])
+        .output()
+        .unwrap();
+    assert!(!out.status.success());
+    assert!(String::from_utf8_lossy(&out.stderr).contains("-axt"));
+}

@@ -424,7 +424,11 @@ prop_compose! {
         amb in any_settings(),
         ax in prop::option::of((0.01f64..1.0, 0.01f64..1.0, 0.01f64..0.99, any::<bool>())),
         axm in prop::option::of((1.0f64..10.0, 1u32..20)),
+        axt in prop::option::of((0.01f64..100.0, 0.01f64..1.0, 0.01f64..1.0)),
     ) -> RenderParams {
+        let axt = axt.map(|(t, a, b)| {
+            tessera::options::schedule::TimeBudget::new(t, a.max(b), a.min(b)).unwrap()
+        });
         let axm = axm.map(|(r, a)| {
             tessera::options::schedule::MotionAccuracy::new(r, a as f64).unwrap()
         });
@@ -434,7 +438,7 @@ prop_compose! {
         });
         let (ae, ai) = if include { (vec![], names) } else { (names, vec![]) };
         RenderParams { dt, dc, dj, ds, dr, dp, dv, ss, st, lr, lw, av, aw, ab, aa, ar, ad, as_,
-                       ae, ai, i, u, bv, me, ma, mg, ms, amb, ax, axm }
+                       ae, ai, i, u, bv, me, ma, mg, ms, amb, ax, axm, axt }
     }
 }
 

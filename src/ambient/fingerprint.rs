@@ -123,6 +123,9 @@ pub fn fingerprint(prims: &[Primitive], params: &RenderParams) -> [u8; 32] {
     if let Some(m) = &params.axm {
         h.str(&m.to_words().join(" "));
     }
+    if let Some(b) = &params.axt {
+        h.str(&b.to_words().join(" "));
+    }
     h.finish()
 }
 

@@ -2,7 +2,7 @@
 //! `-l*`, `-a*` but `-af`, `-i`, `-u`, `-bv`, `-m*`, and Tessera's ambient settings
 //! `--amb-*`). Kept in job manifests and hashed (in part) into the ambient fingerprint.
 
-use super::schedule::{AccuracySchedule, MotionAccuracy};
+use super::schedule::{AccuracySchedule, MotionAccuracy, TimeBudget};
 use super::words::{
     arg, bool_option, f1, f3, i1, nonneg3, nonneg_i32, parse_f64, range, split_words, OptError,
 };
@@ -75,6 +75,9 @@ pub struct RenderParams {
     /// `-axm relax ahead`: relaxed `-aa` where the view moves away (batch jobs).
     #[serde(default)]
     pub axm: Option<MotionAccuracy>,
+    /// `-axt seconds start end`: `-aa` chosen per frame to keep frame cost near a budget.
+    #[serde(default)]
+    pub axt: Option<TimeBudget>,
 }
 
 impl Default for RenderParams {
@@ -111,6 +114,7 @@ impl Default for RenderParams {
             amb: AmbientSettings::default(),
             ax: None,
             axm: None,
+            axt: None,
         }
     }
 }
@@ -246,6 +250,15 @@ impl RenderParams {
                 self.axm = Some(m);
                 3
             }
+            "-axt" => {
+                let v = f3(words)?;
+                let b = TimeBudget::new(v[0], v[1], v[2]).map_err(|e| OptError::BadValue {
+                    option: o.to_string(),
+                    reason: e,
+                })?;
+                self.axt = Some(b);
+                4
+            }
             "-ar" => {
                 self.ar = nonneg_i32(o, i1(words)?)?;
                 2
@@ -352,6 +365,10 @@ impl RenderParams {
         }
         if let Some(m) = &self.axm {
             let w = m.to_words();
+            push(&w[0], &w[1..]);
+        }
+        if let Some(b) = &self.axt {
+            let w = b.to_words();
             push(&w[0], &w[1..]);
         }
         push("-ar", &i(self.ar));

@@ -57,6 +57,8 @@ pub fn help_text() -> String {
            --same-seeds            every frame samples each pixel as the first (less flicker)\n\
            -ax START END STEP      -aa per frame: START, less STEP each frame, down to END\n\
            -axg START END RATIO    -aa per frame: START, times RATIO each frame, down to END\n\
+           -axt SECS START END     -aa per frame (-S) keeping each frame near SECS of CPU\n\
+           -axm RELAX AHEAD        jobs: -aa x RELAX where the view is gone AHEAD frames on\n\
            --help, -h              this text; --version, -version: the version\n\
          \n\
          The ambient calculation's additions to Radiance's (docs/ambient.md):\n",

@@ -72,6 +72,56 @@ impl AccuracySchedule {
     }
 }
 
+/// `-axt SECONDS START END`: a per-frame time budget (tpict's view sequences). The first
+/// frame renders at `-aa START`; after each frame the accuracy for the next is scaled by
+/// √(frame CPU seconds / SECONDS), within END..START, since the cost of new ambient values
+/// goes about as 1/aa²: frames that took too long relax the next, cheap frames tighten it
+/// toward END.
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct TimeBudget {
+    /// CPU seconds per frame aimed at.
+    pub seconds: f64,
+    /// `-aa` of the first frame, and the loosest allowed.
+    pub start: f64,
+    /// The tightest `-aa`.
+    pub end: f64,
+}
+
+impl TimeBudget {
+    /// Check `-axt SECONDS START END`.
+    pub fn new(seconds: f64, start: f64, end: f64) -> Result<Self, String> {
+        if !(seconds.is_finite() && seconds > 0.0) {
+            return Err(format!("budget {seconds} must be a positive number of seconds"));
+        }
+        if !(start.is_finite() && end.is_finite() && end > 0.0 && start >= end) {
+            return Err(format!("needs start >= end > 0 (got {start} {end})"));
+        }
+        Ok(TimeBudget {
+            seconds,
+            start,
+            end,
+        })
+    }
+
+    /// The accuracy after a frame rendered at `aa` cost `cost` CPU seconds.
+    pub fn next(&self, aa: f64, cost: f64) -> f64 {
+        if !(cost.is_finite() && cost > 0.0) {
+            return aa;
+        }
+        (aa * (cost / self.seconds).sqrt()).clamp(self.end, self.start)
+    }
+
+    /// The option as words.
+    pub fn to_words(&self) -> Vec<String> {
+        vec![
+            "-axt".to_string(),
+            format!("{}", self.seconds),
+            format!("{}", self.start),
+            format!("{}", self.end),
+        ]
+    }
+}
+
 /// `-axm RELAX AHEAD`: moving-direction accuracy (the seed paper's §4.2, proposed there and
 /// not built): a region of frame k whose surfaces are no longer seen from frame k+AHEAD's
 /// view renders with `-aa` times RELAX; regions that stay in view keep the frame's `-aa`.
@@ -127,6 +177,17 @@ mod tests {
         assert!((s.accuracy(30) - 0.35).abs() < 1e-12);
         assert_eq!(s.frames_to_final(), 60);
         assert_eq!(s.accuracy(1000), 0.125);
+    }
+
+    #[test]
+    fn budgets_relax_slow_frames_and_tighten_fast_ones() {
+        let b = TimeBudget::new(2.0, 0.4, 0.1).unwrap();
+        assert_eq!(b.next(0.2, 8.0), 0.4); // 4x over: 0.2*2 = 0.4
+        assert!((b.next(0.2, 0.5) - 0.1).abs() < 1e-12); // 4x under: 0.1
+        assert_eq!(b.next(0.2, 0.02), 0.1); // clamped at END
+        assert_eq!(b.next(0.2, f64::NAN), 0.2);
+        assert!(TimeBudget::new(0.0, 0.4, 0.1).is_err());
+        assert!(TimeBudget::new(1.0, 0.1, 0.4).is_err());
     }
 
     #[test]
