@@ -342,12 +342,9 @@ impl Run<'_> {
         };
         let pixels =
             self.with_reports(&progress, start, || session.render(&fs, region, &progress))?;
-        if let (Some(b), Some(aa), Some(c0), Some(c1)) = (
-            budget,
-            fs.aa,
-            cpu0,
-            crate::runinfo::process_cpu_seconds(),
-        ) {
+        if let (Some(b), Some(aa), Some(c0), Some(c1)) =
+            (budget, fs.aa, cpu0, crate::runinfo::process_cpu_seconds())
+        {
             let next = b.next(aa, c1 - c0);
             *self.budget_aa.lock().unwrap_or_else(|e| e.into_inner()) = Some(next);
             if self.opts.run.report_interval > 0.0 {
@@ -385,7 +382,9 @@ impl Run<'_> {
         };
         if let (Some(aa), true) = (fs.aa, session.cached_ambient().is_some()) {
             // The frame's own -aa when it varies (-ax, -axg, -axt).
-            img.header.extra.push(("TESSERA_FRAME_AA".to_string(), format!(" {aa}")));
+            img.header
+                .extra
+                .push(("TESSERA_FRAME_AA".to_string(), format!(" {aa}")));
         }
         Ok(img)
     }

@@ -305,7 +305,12 @@ fn time_budget_picks_each_frames_accuracy() {
             .unwrap();
         use std::io::Write;
         let input = format!("{}\n", line.trim()).repeat(3);
-        child.stdin.take().unwrap().write_all(input.as_bytes()).unwrap();
+        child
+            .stdin
+            .take()
+            .unwrap()
+            .write_all(input.as_bytes())
+            .unwrap();
         assert!(child.wait().unwrap().success());
         (1..=3)
             .map(|k| {
@@ -326,7 +331,9 @@ fn time_budget_picks_each_frames_accuracy() {
     let out = tool("tplan")
         .args(["-o"])
         .arg(t.path().join("job"))
-        .args(["--", "-vf", "demo.vf", "-ab", "1", "-axt", "1", ".4", ".1", "demo.rad"])
+        .args([
+            "--", "-vf", "demo.vf", "-ab", "1", "-axt", "1", ".4", ".1", "demo.rad",
+        ])
         .output()
         .unwrap();
     assert!(!out.status.success());

@@ -91,7 +91,9 @@ impl TimeBudget {
     /// Check `-axt SECONDS START END`.
     pub fn new(seconds: f64, start: f64, end: f64) -> Result<Self, String> {
         if !(seconds.is_finite() && seconds > 0.0) {
-            return Err(format!("budget {seconds} must be a positive number of seconds"));
+            return Err(format!(
+                "budget {seconds} must be a positive number of seconds"
+            ));
         }
         if !(start.is_finite() && end.is_finite() && end > 0.0 && start >= end) {
             return Err(format!("needs start >= end > 0 (got {start} {end})"));
@@ -136,10 +138,10 @@ pub struct MotionAccuracy {
 impl MotionAccuracy {
     /// Check `-axm RELAX AHEAD`.
     pub fn new(relax: f64, ahead: f64) -> Result<Self, String> {
-        if !(relax.is_finite() && relax >= 1.0 && relax <= 100.0) {
+        if !(1.0..=100.0).contains(&relax) {
             return Err(format!("factor {relax} must be between 1 and 100"));
         }
-        if !(ahead >= 1.0 && ahead <= 10_000.0 && ahead.fract() == 0.0) {
+        if !((1.0..=10_000.0).contains(&ahead) && ahead.fract() == 0.0) {
             return Err(format!(
                 "frames ahead {ahead} must be a whole number from 1"
             ));
