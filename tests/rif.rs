@@ -90,6 +90,7 @@ fn rpict_options_equal_rads() {
         "rpict= -lr 4",
         "INDIRECT= 2",
         "REPORT= 3\nINDIRECT= 1",
+        "OPTFILE= o.opt\nrender= -dj .5 -av 1 1 1\nAMBFILE= o.amb",
     ];
     let levels = ["L", "M", "H"];
     let mut n = 0;
@@ -110,7 +111,13 @@ fn rpict_options_equal_rads() {
                     );
                     let name = format!("s{n}.rif");
                     std::fs::write(t.path().join(&name), &rif).unwrap();
-                    let (want, got) = (rad_lines(&bin, t.path(), &name), ours(t.path(), &name));
+                    let want = rad_lines(&bin, t.path(), &name);
+                    let rad_opt = std::fs::read_to_string(t.path().join("o.opt")).ok();
+                    let _ = std::fs::remove_file(t.path().join("o.opt"));
+                    let got = ours(t.path(), &name);
+                    let our_opt = std::fs::read_to_string(t.path().join("o.opt")).ok();
+                    let _ = std::fs::remove_file(t.path().join("o.opt"));
+                    assert_eq!(our_opt, rad_opt, "OPTFILE of\n{rif}");
                     assert!(!want.is_empty(), "rad printed no rpict line for\n{rif}");
                     assert_eq!(got, want, "rif file:\n{rif}");
                     cases += want.len();

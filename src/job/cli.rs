@@ -5,7 +5,7 @@ use super::manifest::{create_job, Manifest, PlanRequest};
 use super::worker::{run_worker, WorkerOptions};
 use super::JobDir;
 use crate::session::store::FlushPolicy;
-use anyhow::{anyhow, bail, Result};
+use anyhow::{anyhow, bail, Context, Result};
 use clap::Parser;
 use std::path::PathBuf;
 
@@ -201,6 +201,13 @@ fn rif_plan(
     let views = plan
         .select(a.view.as_deref())
         .map_err(|e| anyhow!("{}: {e}", path.display()))?;
+    // As rad, write OPTFILE (even for --print): the options refer to it as @file.
+    if let Some((name, text)) = plan.optfile() {
+        crate::image::output::write_atomic(std::path::Path::new(&name), |f| {
+            std::io::Write::write_all(f, text.as_bytes())
+        })
+        .with_context(|| format!("cannot write OPTFILE {name}"))?;
+    }
     Ok((plan, views))
 }
 
@@ -218,7 +225,7 @@ fn rif_print(a: &TplanArgs) -> Result<i32> {
 fn rif_job_args(a: &TplanArgs) -> Result<(Vec<String>, Option<Vec<crate::view::View>>)> {
     let (plan, views) = rif_plan(a)?;
     let mut args = Vec::new();
-    let words = plan.rpict_words(&views[0]);
+    let words = plan.rpict_words_inline(&views[0]);
     let mut i = 0;
     while i < words.len() {
         if matches!(words[i].as_str(), "-af" | "-t" | "-e") {

@@ -32,8 +32,12 @@ pub struct RadPlan {
     pub y: usize,
     /// `-pa` when RESOLUTION gives a pixel aspect.
     pa: Option<String>,
-    /// Options from `-dp` to `-pt` and the `rpict` variable.
+    /// Options from `-dp` to `-lw` and the `render` variable (in OPTFILE when it is set).
     options: Vec<String>,
+    /// `-ps`, `-pt` and the `rpict` variable.
+    tail: Vec<String>,
+    /// OPTFILE: the file the options go into, passed as `@file`.
+    optfile: Option<String>,
     /// 1, 2 or 3: rad renders this much larger and reduces with pfilt.
     pub supersample: usize,
     /// The pfilt options rad reduces the picture with (before `-x /m -y /m`).
@@ -282,6 +286,7 @@ impl RadPlan {
             ["-lr 6 -lw .001", "-lr 8 -lw 1e-4", "-lr 12 -lw 5e-6"][q as usize],
         ));
         o.extend(rf.words("render"));
+        let mut tail: Vec<String> = Vec::new();
         let ps = match (q, pen) {
             (Level::Low, _) => [16, 8, 4][det],
             (Level::Medium, true) => [4, 3, 2][det],
@@ -289,8 +294,8 @@ impl RadPlan {
             (Level::High, true) => 1,
             (Level::High, false) => [8, 5, 3][det],
         };
-        o.extend(["-ps".into(), ps.to_string(), "-pt".into()]);
-        o.push([".16", ".08", ".04"][q as usize].into());
+        tail.extend(["-ps".into(), ps.to_string(), "-pt".into()]);
+        tail.push([".16", ".08", ".04"][q as usize].into());
         let mut extra = rf.words("rpict");
         if extra.first().is_some_and(|w| !w.starts_with('-')) {
             warnings.push(format!(
@@ -300,7 +305,7 @@ impl RadPlan {
             ));
             extra.remove(0);
         }
-        o.extend(extra);
+        tail.extend(extra);
         // REPORT.
         let mut report = Vec::new();
         let rw = rf.words("REPORT");
@@ -347,6 +352,8 @@ impl RadPlan {
             y: ry * supersample,
             pa,
             options: o,
+            tail,
+            optfile: rf.get("OPTFILE").map(str::to_string),
             supersample,
             pfilt,
             picture_root,
@@ -385,6 +392,15 @@ impl RadPlan {
 
     /// rpict's options for `view`, as `rad -n` prints them (without the octree).
     pub fn rpict_words(&self, view: &RadView) -> Vec<String> {
+        self.words(view, self.optfile.is_some())
+    }
+
+    /// [`RadPlan::rpict_words`] with every option inline, also when OPTFILE is set.
+    pub fn rpict_words_inline(&self, view: &RadView) -> Vec<String> {
+        self.words(view, false)
+    }
+
+    fn words(&self, view: &RadView, use_optfile: bool) -> Vec<String> {
         let mut w = self.report.clone();
         w.extend(view.words.iter().cloned());
         w.extend([
@@ -396,8 +412,28 @@ impl RadPlan {
         if let Some(pa) = &self.pa {
             w.extend(["-pa".into(), pa.clone()]);
         }
-        w.extend(self.options.iter().cloned());
+        match &self.optfile {
+            Some(f) if use_optfile => w.push(format!("@{f}")),
+            _ => w.extend(self.options.iter().cloned()),
+        }
+        w.extend(self.tail.iter().cloned());
         w
+    }
+
+    /// OPTFILE's name and contents (one option with its values per line, as rad writes
+    /// it), when the file names one.
+    pub fn optfile(&self) -> Option<(String, String)> {
+        let f = self.optfile.as_ref()?;
+        let mut text = String::new();
+        for (i, w) in self.options.iter().enumerate() {
+            let starts = w.len() > 1 && w.starts_with('-') && w.as_bytes()[1].is_ascii_alphabetic();
+            if i > 0 {
+                text.push(if starts { '\n' } else { ' ' });
+            }
+            text.push_str(w);
+        }
+        text.push('\n');
+        Some((f.clone(), text))
     }
 
     /// The pfilt command rad would reduce `view`'s picture with.
