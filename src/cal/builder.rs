@@ -2,7 +2,6 @@
 
 use super::code::{Code, Def, Loc, Node, NodeId, Slot, SlotId};
 use super::library::Lib;
-use super::parser::{PErr, Parser};
 use super::program::Program;
 use super::{CalError, CalOptions, Ctx, Dialect, ExprId, FuncRef};
 use std::collections::HashMap;
@@ -46,13 +45,13 @@ pub struct CalBuilder {
     pub(crate) depth: Vec<u32>,
     pub(crate) opts: CalOptions,
     names: HashMap<String, SlotId>,
-    ctxs: Vec<String>,
+    pub(super) ctxs: Vec<String>,
     loaded: HashMap<String, Ctx>,
     /// Function files read from disk: (name as given, path), in load order.
     paths: Vec<(String, PathBuf)>,
     file_ids: HashMap<String, u32>,
     raypath: Vec<PathBuf>,
-    exprs: Vec<NodeId>,
+    pub(super) exprs: Vec<NodeId>,
     outputs: Vec<(u32, ExprId)>,
     warnings: Vec<String>,
     rayinit: String,
@@ -211,40 +210,6 @@ impl CalBuilder {
         }
     }
 
-    /// Compile the statements of `text` (named `file` in messages) in context `ctx`.
-    pub fn load_text(&mut self, text: &[u8], file: &str, ctx: Ctx) -> Result<(), CalError> {
-        let id = self.file_id(file);
-        let cstr = self.ctxs[ctx.0 as usize].clone();
-        let r = Parser::new(self, text, cstr, id, true).and_then(|mut p| p.statements());
-        r.map_err(|e| CalError {
-            file: file.to_string(),
-            line: e.line,
-            col: e.col,
-            message: e.message,
-        })
-    }
-
-    /// Compile a primitive's expression argument in context `ctx`; `origin` is the
-    /// primitive's `file:line`, used in messages.
-    pub fn expr(&mut self, text: &str, ctx: Ctx, origin: &str) -> Result<ExprId, CalError> {
-        let id = self.file_id(origin);
-        let cstr = self.ctxs[ctx.0 as usize].clone();
-        let r = Parser::new(self, text.as_bytes(), cstr, id, false).and_then(|mut p| {
-            let e = p.expression()?;
-            match p.tok {
-                super::lexer::Tok::Eof => Ok(e),
-                _ => Err(p.err("unexpected character")),
-            }
-        });
-        match r {
-            Ok(e) => {
-                self.exprs.push(e);
-                Ok(ExprId(self.exprs.len() as u32 - 1))
-            }
-            Err(e) => Err(expr_error(origin, text, e)),
-        }
-    }
-
     /// A function-name argument, resolved in context `ctx` as a call would be. The name
     /// may be defined later (or never: calling it is then a fatal error).
     pub fn func(&mut self, name: &str, ctx: Ctx) -> Result<FuncRef, CalError> {
@@ -295,7 +260,7 @@ impl CalBuilder {
 
     // ---- for the parser ----
 
-    fn file_id(&mut self, file: &str) -> u32 {
+    pub(super) fn file_id(&mut self, file: &str) -> u32 {
         if let Some(i) = self.file_ids.get(file) {
             return *i;
         }
@@ -419,20 +384,5 @@ impl CalBuilder {
         let slot = &mut self.code.slots[s as usize];
         slot.def = def;
         slot.def_loc = loc;
-    }
-}
-
-/// A parse error in a primitive's expression: the origin's file and line, the column in
-/// the expression.
-fn expr_error(origin: &str, text: &str, e: PErr) -> CalError {
-    let (file, line) = match origin.rsplit_once(':') {
-        Some((f, l)) if l.parse::<u32>().is_ok() => (f.to_string(), l.parse().unwrap_or(0)),
-        _ => (origin.to_string(), 0),
-    };
-    CalError {
-        file,
-        line: line.max(1),
-        col: e.col,
-        message: format!("{} in expression \"{text}\"", e.message),
     }
 }

@@ -5,7 +5,7 @@
 use super::builder::CalBuilder;
 use super::code::{Callee, Loc, Node, NodeId};
 use super::lexer::{Lexer, Tok};
-use super::Dialect;
+use super::{CalError, Ctx, Dialect, ExprId};
 
 /// How deeply `(`, calls and `^` may nest in one expression (the parser's own recursion).
 const MAX_NEST: u32 = 200;
@@ -278,5 +278,58 @@ impl<'a, 'b> Parser<'a, 'b> {
             .iter()
             .position(|p| p == name)
             .map(|i| i.min(u16::MAX as usize) as u16)
+    }
+}
+
+/// The builder's entry points into the parser (here, so that the builder does not depend on
+/// the parser that drives it).
+impl CalBuilder {
+    /// Compile the statements of `text` (named `file` in messages) in context `ctx`.
+    pub fn load_text(&mut self, text: &[u8], file: &str, ctx: Ctx) -> Result<(), CalError> {
+        let id = self.file_id(file);
+        let cstr = self.ctxs[ctx.0 as usize].clone();
+        let r = Parser::new(self, text, cstr, id, true).and_then(|mut p| p.statements());
+        r.map_err(|e| CalError {
+            file: file.to_string(),
+            line: e.line,
+            col: e.col,
+            message: e.message,
+        })
+    }
+
+    /// Compile a primitive's expression argument in context `ctx`; `origin` is the
+    /// primitive's `file:line`, used in messages.
+    pub fn expr(&mut self, text: &str, ctx: Ctx, origin: &str) -> Result<ExprId, CalError> {
+        let id = self.file_id(origin);
+        let cstr = self.ctxs[ctx.0 as usize].clone();
+        let r = Parser::new(self, text.as_bytes(), cstr, id, false).and_then(|mut p| {
+            let e = p.expression()?;
+            match p.tok {
+                Tok::Eof => Ok(e),
+                _ => Err(p.err("unexpected character")),
+            }
+        });
+        match r {
+            Ok(e) => {
+                self.exprs.push(e);
+                Ok(ExprId(self.exprs.len() as u32 - 1))
+            }
+            Err(e) => Err(expr_error(origin, text, e)),
+        }
+    }
+}
+
+/// A parse error in a primitive's expression: the origin's file and line, the column in
+/// the expression.
+fn expr_error(origin: &str, text: &str, e: PErr) -> CalError {
+    let (file, line) = match origin.rsplit_once(':') {
+        Some((f, l)) if l.parse::<u32>().is_ok() => (f.to_string(), l.parse().unwrap_or(0)),
+        _ => (origin.to_string(), 0),
+    };
+    CalError {
+        file,
+        line: line.max(1),
+        col: e.col,
+        message: format!("{} in expression \"{text}\"", e.message),
     }
 }

@@ -14,7 +14,6 @@
 pub mod frame;
 
 use crate::color::Color;
-use crate::material::MatId;
 use crate::render::shading::ShadingPoint;
 use crate::scene::primitive::Primitive;
 use glam::DVec3;
@@ -41,8 +40,9 @@ pub type ModId = usize;
 pub enum ModRef {
     /// `void`: the end of a chain (no material: the surface is invisible).
     Void,
-    /// A material.
-    Material(MatId),
+    /// A material: its index in the scene's materials (a [`crate::material::MatId`]; the
+    /// plain index keeps this module independent of the materials that use it).
+    Material(usize),
     /// A pattern, texture or mixture.
     Modifier(ModId),
 }
