@@ -165,7 +165,7 @@ mod tests {
         let ray = Ray::primary(DVec3::new(0.5, 0.25, 1.0), -DVec3::Z, f64::INFINITY);
         let hit = Hit {
             obj: 0,
-            inst: crate::scene::instance::NO_INST,
+            inst: crate::render::ray::NO_INST,
             t: 1.0,
             point: DVec3::new(0.5, 0.25, 0.0),
             normal: DVec3::Z,
@@ -225,7 +225,7 @@ mod tests {
         let ray = Ray::primary(DVec3::Z, -DVec3::Z, f64::INFINITY);
         let hit = Hit {
             obj: 0,
-            inst: crate::scene::instance::NO_INST,
+            inst: crate::render::ray::NO_INST,
             t: 1.0,
             point: DVec3::ZERO,
             normal: DVec3::Z,

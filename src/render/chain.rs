@@ -94,7 +94,7 @@ impl Tracer<'_> {
     pub fn distant_pattern(&self, ray: &Ray, d: &DistantObject) -> Color {
         let hit = Hit {
             obj: 0,
-            inst: crate::scene::instance::NO_INST,
+            inst: crate::render::ray::NO_INST,
             t: FHUGE,
             point: ray.org + ray.dir * FHUGE,
             normal: -ray.dir,

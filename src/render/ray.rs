@@ -132,8 +132,8 @@ impl Ray {
 impl Hit {
     /// The surface hit.
     #[inline]
-    pub fn href(&self) -> crate::scene::instance::HitRef {
-        crate::scene::instance::HitRef {
+    pub fn href(&self) -> HitRef {
+        HitRef {
             inst: self.inst,
             obj: self.obj,
         }
@@ -143,7 +143,7 @@ impl Hit {
     /// sources.
     #[inline]
     pub fn is_top(&self) -> bool {
-        self.inst == crate::scene::instance::NO_INST
+        self.inst == NO_INST
     }
 }
 
@@ -154,7 +154,7 @@ pub struct Hit {
     /// `inst`.
     pub obj: usize,
     /// The placement of an instanced surface ([`crate::scene::Scene::placements`]), or
-    /// [`crate::scene::instance::NO_INST`] for the scene's own surfaces.
+    /// [`NO_INST`] for the scene's own surfaces.
     pub inst: u32,
     /// Distance from the ray origin.
     pub t: f64,
@@ -170,4 +170,29 @@ pub struct Hit {
     pub material: Option<MatId>,
     /// Antimatter state after this hit (for continuing rays).
     pub antimatter: [Option<MatId>; MAX_ANTIMATTER],
+}
+
+/// `Hit::inst` of a surface of the scene itself.
+pub const NO_INST: u32 = u32::MAX;
+
+/// A surface the tracer hit: an object of the scene (`inst == NO_INST`) or object `obj` of
+/// placement `inst`'s set.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct HitRef {
+    /// Placement index, or [`NO_INST`].
+    pub inst: u32,
+    /// Object (or triangle) index.
+    pub obj: usize,
+}
+
+impl HitRef {
+    /// An object of the scene itself.
+    pub fn top(obj: usize) -> HitRef {
+        HitRef { inst: NO_INST, obj }
+    }
+
+    /// A total order key (scene objects first, in index order).
+    pub fn key(&self) -> (u32, usize) {
+        (self.inst.wrapping_add(1), self.obj)
+    }
 }

@@ -129,7 +129,7 @@ mod tests {
     fn hit(normal: DVec3) -> Hit {
         Hit {
             obj: 0,
-            inst: crate::scene::instance::NO_INST,
+            inst: crate::render::ray::NO_INST,
             t: 1.0,
             point: DVec3::ZERO,
             normal,

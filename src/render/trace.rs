@@ -10,8 +10,8 @@ use crate::light::source::LightSet;
 use crate::material::emitter::EmitterKind;
 use crate::material::{MatId, Material};
 use crate::options::render::RenderParams;
+use crate::render::ray::HitRef;
 use crate::scene::build::Scene;
-use crate::scene::instance::HitRef;
 use glam::DVec3;
 
 /// Everything a ray needs to be traced.

@@ -2,7 +2,9 @@
 //! geometry in f64 relative to the scene origin, and the BVH over them.
 
 use super::error::SceneError;
+pub use super::object::Object;
 use super::primitive::{Location, Primitive};
+use super::sets::{flatten, map_box, Child, ObjectSet, Placement};
 use crate::geometry::bvh::Bvh;
 use crate::geometry::source::DistantSource;
 use crate::geometry::Surface;
@@ -10,7 +12,6 @@ use crate::material::{MatId, Material, MaterialLookup, MATERIAL_TYPES};
 use crate::modifier::{
     func::FuncShared, ModRef, ModifierDef, ModifierKind, ModifierLookup, ModifierTypes, SceneFiles,
 };
-use crate::scene::instance::{flatten, map_box, Child, ObjectSet, Placement};
 use crate::scene::reader::{ReadOptions, KNOWN_TYPES};
 use crate::scene::transform::Transform;
 use crate::FTINY;
@@ -23,24 +24,6 @@ use std::sync::Arc;
 pub const SURFACE_TYPES: &[&str] = &[
     "polygon", "sphere", "bubble", "cone", "cup", "cylinder", "tube", "ring", "source",
 ];
-
-/// A finite surface with its material.
-#[derive(Clone, Debug)]
-pub struct Object {
-    /// Geometry (relative to [`Scene::origin`]).
-    pub surface: Surface,
-    /// The material its modifier chain ends in, or None for a chain that ends in `void`
-    /// (such surfaces are invisible) or a mixture.
-    pub material: Option<MatId>,
-    /// Its modifier: the start of its chain.
-    pub chain: ModRef,
-    /// Identifier.
-    pub name: String,
-    /// Modifier name as written.
-    pub modifier: String,
-    /// Where it was defined.
-    pub loc: Location,
-}
 
 /// A distant `source` with its material.
 #[derive(Clone, Debug)]

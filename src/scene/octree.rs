@@ -8,6 +8,7 @@
 //! default) and, failing that, beside the octree. The number of primitives read must be the
 //! octree's object count (Radiance: "octree stale?").
 
+use std::io::Read;
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
 
@@ -275,6 +276,42 @@ pub fn octree_primitives(
         ));
     }
     Ok((prims, used))
+}
+
+/// Read scene files in order ("-" = stdin) into the flat list of primitives, expanding
+/// inline commands. Errors about a file that cannot be opened are located at `path:0`.
+/// An octree (a `.oct` name, or a Radiance header naming the octree format) gives its
+/// primitives: a frozen octree's own, an unfrozen one's scene files read again
+/// (this module).
+pub fn read_scene_files(
+    paths: &[String],
+    opts: &ReadOptions,
+) -> Result<Vec<Primitive>, SceneError> {
+    let mut out = Vec::new();
+    for p in paths {
+        if p != "-" && is_octree(Path::new(p), p) {
+            let (prims, _) = octree_primitives(Path::new(p), p, opts)?;
+            out.extend(prims);
+            continue;
+        }
+        out.extend(read_text_files(std::slice::from_ref(p), opts)?);
+    }
+    Ok(out)
+}
+
+/// Whether `path` (named `named`) is to be read as an octree.
+fn is_octree(path: &Path, named: &str) -> bool {
+    if named.ends_with(".oct") {
+        return true;
+    }
+    let mut head = Vec::new();
+    match std::fs::File::open(path) {
+        Ok(f) => {
+            let _ = f.take(1 << 16).read_to_end(&mut head);
+            looks_like_octree(&head)
+        }
+        Err(_) => false,
+    }
 }
 
 #[cfg(test)]

@@ -13,7 +13,8 @@
 //!   relative one in each [`ReadOptions::raypath`] directory in turn (Radiance's default
 //!   RAYPATH `.` is the current directory, *not* the including file's directory).
 //!   Top-level files are opened as given.
-//! - Top-level octrees are read ([`super::octree`]); octrees named by `xform` are refused.
+//! - Top-level octrees are read by [`super::read_scene_files`] ([`super::octree`]); octrees
+//!   named by `xform` are refused.
 
 use std::io::Read;
 use std::path::{Path, PathBuf};
@@ -121,43 +122,7 @@ impl ReadOptions {
     }
 }
 
-/// Read scene files in order ("-" = stdin) into the flat list of primitives, expanding
-/// inline commands. Errors about a file that cannot be opened are located at `path:0`.
-/// An octree (a `.oct` name, or a Radiance header naming the octree format) gives its
-/// primitives: a frozen octree's own, an unfrozen one's scene files read again
-/// ([`super::octree`]).
-pub fn read_scene_files(
-    paths: &[String],
-    opts: &ReadOptions,
-) -> Result<Vec<Primitive>, SceneError> {
-    let mut out = Vec::new();
-    for p in paths {
-        if p != "-" && is_octree(Path::new(p), p) {
-            let (prims, _) = super::octree::octree_primitives(Path::new(p), p, opts)?;
-            out.extend(prims);
-            continue;
-        }
-        out.extend(read_text_files(std::slice::from_ref(p), opts)?);
-    }
-    Ok(out)
-}
-
-/// Whether `path` (named `named`) is to be read as an octree.
-fn is_octree(path: &Path, named: &str) -> bool {
-    if named.ends_with(".oct") {
-        return true;
-    }
-    let mut head = Vec::new();
-    match std::fs::File::open(path) {
-        Ok(f) => {
-            let _ = f.take(1 << 16).read_to_end(&mut head);
-            super::octree::looks_like_octree(&head)
-        }
-        Err(_) => false,
-    }
-}
-
-/// [`read_scene_files`] for scene text only (octrees refused).
+/// [`super::read_scene_files`] for scene text only (octrees refused).
 pub fn read_text_files(paths: &[String], opts: &ReadOptions) -> Result<Vec<Primitive>, SceneError> {
     let mut out = Vec::new();
     for p in paths {
