@@ -339,3 +339,93 @@ fn time_budget_picks_each_frames_accuracy() {
     assert!(!out.status.success());
     assert!(String::from_utf8_lossy(&out.stderr).contains("-axt"));
 }
+
+/// Workers take tiles frame by frame: every tile of a frame before any of the next.
+#[test]
+fn tiles_are_claimed_in_frame_order() {
+    let t = tempfile::tempdir().unwrap();
+    let line = std::fs::read_to_string(demo().join("demo.vf")).unwrap();
+    let vf = t.path().join("frames.vf");
+    std::fs::write(&vf, format!("{}\n", line.trim()).repeat(3)).unwrap();
+    let job = t.path().join("job");
+    run_ok(
+        tool("tplan")
+            .args(["--workers", "2", "--frames"])
+            .arg(&vf)
+            .arg("-o")
+            .arg(&job)
+            .arg("--")
+            .args([
+                "-vf", "demo.vf", "-x", "24", "-y", "18", "-ab", "0", "demo.rad",
+            ]),
+    );
+    let out = tool("tpiece")
+        .arg(&job)
+        .args(["--threads", "1"])
+        .output()
+        .unwrap();
+    assert!(out.status.success());
+    let err = String::from_utf8_lossy(&out.stderr);
+    let frames: Vec<u32> = err
+        .split_whitespace()
+        .filter_map(|w| w.strip_prefix('f'))
+        .filter_map(|w| w.split_once("-t"))
+        .filter_map(|(f, _)| f.parse().ok())
+        .collect();
+    assert!(frames.len() > 6, "no tile reports: {err}");
+    assert!(frames.windows(2).all(|w| w[0] <= w[1]), "order: {frames:?}");
+    assert_eq!(frames.last(), Some(&2));
+}
+
+/// `Session::share_still_seen` on a known camera move: the same view sees everything again,
+/// a view turned away sees nothing of it, a view half turned sees part of it.
+#[test]
+fn reprojection_on_a_known_camera_move() {
+    use tessera::options::RenderParams;
+    use tessera::scene::ReadOptions;
+    use tessera::session::{Region, SceneSource, Session};
+    use tessera::view::View;
+    let t = tempfile::tempdir().unwrap();
+    let scene = t.path().join("box.rad");
+    // A closed box 10 on a side around the origin, the camera at its centre.
+    std::fs::write(
+        &scene,
+        "void plastic w 0 0 5 .5 .5 .5 0 0\n!genbox w b 10 10 10 -i | xform -t -5 -5 -5\n",
+    )
+    .unwrap();
+    let params = RenderParams::default();
+    let ro = ReadOptions {
+        allow_commands: false,
+        raypath: vec![t.path().to_path_buf()],
+    };
+    let src = SceneSource::read(&[scene.display().to_string()], &ro, &params).unwrap();
+    let session = Session::start(params, src, Some(1)).unwrap();
+    let view = |d: [f64; 3]| {
+        let mut v = View::default();
+        v.vp = glam::DVec3::ZERO;
+        v.vd = glam::DVec3::from_array(d);
+        v.vh = 40.0;
+        v.vv = 40.0;
+        v.frame().unwrap()
+    };
+    let now = view([1.0, 0.0, 0.0]);
+    let all = Region {
+        x0: 0,
+        y0: 0,
+        x1: 64,
+        y1: 64,
+    };
+    let share = |later: &tessera::view::ViewFrame, r: Region| {
+        session.share_still_seen(&now, (64, 64), r, later)
+    };
+    assert_eq!(share(&now, all), 1.0);
+    assert_eq!(share(&view([-1.0, 0.0, 0.0]), all), 0.0);
+    assert_eq!(share(&view([0.0, 1.0, 0.0]), all), 0.0);
+    // Turned 20° to the left (+y): the left part of the picture stays in view, the right
+    // part leaves it.
+    let half = view([1.0, 20f64.to_radians().tan(), 0.0]);
+    let left = Region { x1: 32, ..all };
+    let right = Region { x0: 32, ..all };
+    assert_eq!(share(&half, left), 1.0);
+    assert_eq!(share(&half, right), 0.0);
+}
