@@ -401,12 +401,15 @@ fn reprojection_on_a_known_camera_move() {
     let src = SceneSource::read(&[scene.display().to_string()], &ro, &params).unwrap();
     let session = Session::start(params, src, Some(1)).unwrap();
     let view = |d: [f64; 3]| {
-        let mut v = View::default();
-        v.vp = glam::DVec3::ZERO;
-        v.vd = glam::DVec3::from_array(d);
-        v.vh = 40.0;
-        v.vv = 40.0;
-        v.frame().unwrap()
+        View {
+            vp: glam::DVec3::ZERO,
+            vd: glam::DVec3::from_array(d),
+            vh: 40.0,
+            vv: 40.0,
+            ..View::default()
+        }
+        .frame()
+        .unwrap()
     };
     let now = view([1.0, 0.0, 0.0]);
     let all = Region {
