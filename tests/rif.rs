@@ -244,8 +244,8 @@ fn bad_rif_files_name_file_and_line() {
             "bad.rif:2: RESOLUTION 'big'",
         ),
         (
-            "scene= room.rad\nillum= window.rad\n",
-            "bad.rif:2: illum is not supported",
+            "scene= room.rad\nPGMAP= g.pm 1000\n",
+            "bad.rif:2: PGMAP is not supported",
         ),
         ("QUALITY= L\n", "no scene files"),
         ("scene= missing.rad\n", "missing.rad"),
@@ -262,4 +262,38 @@ fn bad_rif_files_name_file_and_line() {
             "for\n{text}\nwanted '{want}', got: {err}"
         );
     }
+}
+
+/// `illum` files (rad would run mkillum on them) are rendered as ordinary surfaces, with a
+/// warning; the options printed are rad's.
+#[test]
+fn illum_files_render_as_surfaces() {
+    let Some(bin) = radiance_bin() else { return };
+    let t = tempfile::tempdir().unwrap();
+    let d = t.path();
+    std::fs::write(d.join("room.rad"), ROOM).unwrap();
+    std::fs::write(
+        d.join("win.rad"),
+        "void glow wg 0 0 4 1 1 1 0\nwg polygon win 0 0 12 0 1 1 0 2 1 0 2 2 0 1 2\n",
+    )
+    .unwrap();
+    std::fs::write(
+        d.join("i.rif"),
+        "scene= room.rad\nillum= win.rad\nview= X\n",
+    )
+    .unwrap();
+    assert_eq!(ours(d, "i.rif"), rad_lines(&bin, d, "i.rif"));
+    let job = d.join("job");
+    let out = tplan(d)
+        .args(["--rif", "i.rif", "--set", "RES=16", "-o"])
+        .arg(&job)
+        .output()
+        .unwrap();
+    assert!(out.status.success());
+    assert!(String::from_utf8_lossy(&out.stderr).contains("mkillum is not built in"));
+    let scene = std::fs::read_to_string(job.join("scene.rad")).unwrap();
+    assert!(
+        scene.contains("win"),
+        "the illum file is not in the job's scene"
+    );
 }

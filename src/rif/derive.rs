@@ -167,7 +167,15 @@ impl RadPlan {
     /// octree exists).
     pub fn new(rf: &RadFile, cube: ([f64; 3], f64)) -> Result<RadPlan, RifError> {
         let mut warnings = Vec::new();
-        for v in ["illum", "PGMAP", "PCMAP"] {
+        if rf.get("illum").is_some() {
+            warnings.push(format!(
+                "{}: mkillum is not built in: the illum files are rendered as ordinary \
+                 surfaces (their light reaches the scene through the ambient calculation, \
+                 not as mkillum's secondary light sources)",
+                rf.path.display()
+            ));
+        }
+        for v in ["PGMAP", "PCMAP"] {
             if rf.get(v).is_some() {
                 return Err(rf.error(
                     v,

@@ -299,8 +299,10 @@ pub fn load(
             path.display()
         );
     }
+    // rad's octree cube is made of these; illum files join the octree later (`oconv -i`).
     let cube = scene_cube(&files, ro)?;
     let mut plan = derive::RadPlan::new(&rf, cube)?;
+    files.extend(rf.words("illum"));
     plan.scene_files = std::mem::take(&mut files);
     Ok(plan)
 }
