@@ -7,7 +7,8 @@
 # Usage: bash bench/animation.sh [OUTDIR (default docs/benchmarks/animation)]
 # Environment: FRAMES=60, RES="-x 160 -y 120", AMB="-ab 1 -ad 512 -as 128 -ar 64",
 #              MODES (name:options;...), REF="-aa .03 -ad 2048 -as 1024",
-#              MID="10 20 30 40 50" (frames along the path whose error is measured), LAST=5
+#              MID (frames along the path whose error is measured; default every frame
+#              before the last LAST), LAST=5
 set -euo pipefail
 ROOT=$(cd "$(dirname "$0")/.." && pwd)
 OUT=${1:-$ROOT/docs/benchmarks/animation}
@@ -17,7 +18,7 @@ AMB=${AMB:-"-ab 1 -ad 512 -as 128 -ar 64"}
 MODES=${MODES:-"constant:-aa .1;ax:-ax .5 .1 .0075;axg:-axg .5 .1 .93;axm:-aa .1 -axm 2 5"}
 REF=${REF:-"-aa .03 -ad 2048 -as 1024"}
 LAST=${LAST:-5}
-MID=${MID:-"10 20 30 40 50"}
+MID=${MID:-$(seq -s ' ' 0 $((FRAMES - LAST - 1)))}
 NAME=animation
 NO_BUILD=1
 # shellcheck source=bench/common.sh

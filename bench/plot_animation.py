@@ -19,7 +19,7 @@ import matplotlib.pyplot as plt  # noqa: E402
 out, modes = sys.argv[1], [m.split(":", 1) for m in sys.argv[2].split(";")]
 mid = {int(k) for k in sys.argv[3].split()} if len(sys.argv) > 3 else set()
 rows = []
-fig, (ax1, ax2) = plt.subplots(2, 1, figsize=(8, 7), sharex=True)
+fig, (ax1, ax2, ax3) = plt.subplots(3, 1, figsize=(8, 9.5), sharex=True)
 for name, opts in modes:
     if name == "axt":
         # tpict -S: per-frame CPU from its report lines (frame, -aa, CPU s); no value counts.
@@ -33,6 +33,7 @@ for name, opts in modes:
     errs = [(int(a), float(b)) for a, b in
             (l.split() for l in open(os.path.join(out, f"{name}-error.txt")))]
     err_mid = [e for k, e in errs if k in mid] or [float("nan")]
+    ax3.plot([k for k, _ in sorted(errs)], [100 * e for _, e in sorted(errs)], label=name)
     err_last = [e for k, e in errs if k not in mid]
     med = statistics.median(cpu)
     rows.append((name, opts, sum(cpu), max(cpu), med, max(cpu) / med, sum(vals), max(vals),
@@ -42,7 +43,8 @@ for name, opts in modes:
         ax2.plot(vals, label=name)
 ax1.set_ylabel("CPU seconds per frame")
 ax2.set_ylabel("new ambient values per frame")
-ax2.set_xlabel("frame")
+ax3.set_ylabel("error vs a high-accuracy render, %")
+ax3.set_xlabel("frame")
 ax1.legend()
 ax1.set_title("Walkthrough of the demo scene: frame cost with constant and time-varying -aa")
 fig.tight_layout()
