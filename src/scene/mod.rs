@@ -17,5 +17,6 @@ pub mod binio;
 pub mod build;
 pub mod instance;
 pub mod octree;
+pub mod obj;
 pub mod rtm;
 pub use build::Scene;
