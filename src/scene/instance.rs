@@ -20,7 +20,7 @@
 //! geometric one); with (u,v) at all three, `Lu Lv` are interpolated.
 
 use glam::{DAffine3, DMat3, DMat4, DVec3};
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 
 use super::build::{Builder, Object, Scene};
 use super::error::SceneError;
@@ -119,6 +119,9 @@ pub struct ObjectSet {
     pub children: Vec<Child>,
     /// Surfaces once every nested instance is expanded.
     pub expanded: u64,
+    /// An OBJ file's modifier names, bound where it is first placed
+    /// ([`super::obj::bind_names`]).
+    pub unbound: Option<super::obj::ObjNames>,
 }
 
 impl ObjectSet {
@@ -224,7 +227,23 @@ pub fn union(acc: &mut Option<(DVec3, DVec3)>, b: (DVec3, DVec3)) {
     });
 }
 
-/// The transform of an instance or mesh primitive's string arguments after the file name.
+/// Whether a mesh file name names a Wavefront OBJ file (`.obj`, any case).
+pub fn is_obj_name(name: &str) -> bool {
+    name.len() > 4 && name[name.len() - 4..].eq_ignore_ascii_case(".obj")
+}
+
+/// The default modifier of a mesh primitive naming an OBJ file (`file.obj -m NAME ...`):
+/// for its triangles with no modifier name or an undefined one.
+pub fn obj_default(p: &Primitive) -> Option<&str> {
+    (p.ptype == "mesh"
+        && p.sargs.len() >= 3
+        && is_obj_name(&p.sargs[0])
+        && p.sargs[1] == "-m")
+        .then(|| p.sargs[2].as_str())
+}
+
+/// The transform of an instance or mesh primitive's string arguments after the file name
+/// (and after an OBJ mesh's `-m NAME`).
 pub fn instance_transform(p: &Primitive) -> Result<Transform, String> {
     if p.sargs.is_empty() || !p.iargs.is_empty() || !p.rargs.is_empty() {
         return Err(format!(
@@ -232,7 +251,8 @@ pub fn instance_transform(p: &Primitive) -> Result<Transform, String> {
             p.ptype, p.name
         ));
     }
-    let words = &p.sargs[1..];
+    let skip = if obj_default(p).is_some() { 3 } else { 1 };
+    let words = &p.sargs[skip.min(p.sargs.len())..];
     let xf = if words.is_empty() {
         Transform::identity()
     } else {
@@ -256,8 +276,22 @@ impl Builder<'_> {
             |m: String| SceneError::syntax(p.loc.clone(), format!("{} {}: {m}", p.ptype, p.name));
         let xf = instance_transform(p).map_err(err)?;
         let name = &p.sargs[0];
-        let path = self.mods.files.find(name).map_err(err)?;
-        let key = std::fs::canonicalize(&path).unwrap_or(path.clone());
+        let path = match self.mods.files.find(name) {
+            // A `.obj` given on the command line is opened as given.
+            Err(_) if &*p.loc.file == super::reader::COMMAND_LINE && Path::new(name).is_file() => {
+                let path = PathBuf::from(name);
+                self.mods.files.note_input(name, path.clone());
+                path
+            }
+            r => r.map_err(err)?,
+        };
+        let mut key = std::fs::canonicalize(&path).unwrap_or(path.clone());
+        let obj = p.ptype == "mesh" && is_obj_name(name);
+        if obj {
+            // An OBJ's names are bound where it is first placed, with its default.
+            key.as_mut_os_string()
+                .push(format!("\0-m {}", obj_default(p).unwrap_or("")));
+        }
         if let Some(&id) = self.set_ids.get(&key) {
             return Ok((id, xf));
         }
@@ -278,7 +312,9 @@ impl Builder<'_> {
             )));
         }
         self.loading.push(key.clone());
-        let set = if p.ptype == "mesh" {
+        let set = if obj {
+            self.obj_set(name, &path, obj_default(p))
+        } else if p.ptype == "mesh" {
             self.mesh_set(name, &path)
         } else {
             self.octree_set(name, &path)
@@ -333,6 +369,7 @@ impl Builder<'_> {
             full: level.full,
             children: level.children,
             expanded,
+            unbound: None,
         })
     }
 
@@ -372,35 +409,57 @@ impl Builder<'_> {
                 }
             }
         }
-        let mut full = None;
-        for p in &file.pos {
-            union(&mut full, (*p, *p));
-        }
-        let (origin, size) = match full {
-            Some((lo, hi)) => ((lo + hi) * 0.5, (hi - lo).max_element()),
-            None => (DVec3::ZERO, 1.0),
-        };
-        let mut mesh = TriMesh {
-            pos: file.pos.iter().map(|p| *p - origin).collect(),
-            normal: file.normal,
-            uv: file.uv,
-            flags: file.flags,
-            tris: file.tris,
-            eps: super::build::length_tolerance(size),
-        };
-        mesh.pos.shrink_to_fit();
-        let bvh = Bvh::build_from(mesh.tris.len(), |i| mesh.bounds(i), mesh.eps);
-        let expanded = mesh.tris.len() as u64;
-        Ok(ObjectSet {
-            file: name.to_string(),
-            geom: SetGeom::Mesh { mesh, mods },
-            bvh,
-            origin,
-            bounds: full.map(|(lo, hi)| (lo - origin, hi - origin)),
-            full,
-            children: Vec::new(),
-            expanded,
-        })
+        Ok(mesh_object_set(
+            name,
+            file.pos,
+            file.normal,
+            file.uv,
+            file.flags,
+            file.tris,
+            mods,
+        ))
+    }
+}
+
+/// The object set of a mesh's triangles (file coordinates), relative to their centre.
+pub(super) fn mesh_object_set(
+    name: &str,
+    pos: Vec<DVec3>,
+    normal: Vec<glam::Vec3>,
+    uv: Vec<[f64; 2]>,
+    flags: Vec<u8>,
+    tris: Vec<super::rtm::MeshTri>,
+    mods: Vec<Option<MeshModifier>>,
+) -> ObjectSet {
+    let mut full = None;
+    for p in &pos {
+        union(&mut full, (*p, *p));
+    }
+    let (origin, size) = match full {
+        Some((lo, hi)) => ((lo + hi) * 0.5, (hi - lo).max_element()),
+        None => (DVec3::ZERO, 1.0),
+    };
+    let mut mesh = TriMesh {
+        pos: pos.iter().map(|p| *p - origin).collect(),
+        normal,
+        uv,
+        flags,
+        tris,
+        eps: super::build::length_tolerance(size),
+    };
+    mesh.pos.shrink_to_fit();
+    let bvh = Bvh::build_from(mesh.tris.len(), |i| mesh.bounds(i), mesh.eps);
+    let expanded = mesh.tris.len() as u64;
+    ObjectSet {
+        file: name.to_string(),
+        geom: SetGeom::Mesh { mesh, mods },
+        bvh,
+        origin,
+        bounds: full.map(|(lo, hi)| (lo - origin, hi - origin)),
+        full,
+        children: Vec::new(),
+        expanded,
+        unbound: None,
     }
 }
 

@@ -99,6 +99,35 @@ pub struct ReadOptions {
     pub allow_commands: bool,
     /// Directories searched for files named by `xform` (Radiance's RAYPATH).
     pub raypath: Vec<PathBuf>,
+    /// `--obj-material NAME`: the modifier of the triangles of `.obj` files given as scene
+    /// files that have no modifier name or an undefined one.
+    pub obj_material: Option<String>,
+}
+
+/// The location of primitives made from the command line (a `.obj` scene file).
+pub const COMMAND_LINE: &str = "<command line>";
+
+/// The mesh primitive standing for a `.obj` file given as a scene file:
+/// `void mesh STEM 1 file.obj 0 0`, or `3 file.obj -m NAME` with a default modifier.
+pub fn obj_scene_primitive(file: &str, default: Option<&str>) -> Primitive {
+    let stem = Path::new(file)
+        .file_stem()
+        .map(|s| s.to_string_lossy().into_owned())
+        .filter(|s| !s.is_empty() && !s.contains(char::is_whitespace))
+        .unwrap_or_else(|| "obj".into());
+    let mut sargs = vec![file.to_string()];
+    if let Some(d) = default {
+        sargs.extend(["-m".to_string(), d.to_string()]);
+    }
+    Primitive {
+        modifier: "void".into(),
+        ptype: "mesh".into(),
+        name: stem,
+        sargs,
+        iargs: Vec::new(),
+        rargs: Vec::new(),
+        loc: Location::new(COMMAND_LINE, 0),
+    }
 }
 
 impl ReadOptions {
@@ -117,6 +146,7 @@ impl ReadOptions {
         ReadOptions {
             allow_commands: std::env::var("TESSERA_ALLOW_COMMANDS").is_ok_and(|v| v == "1"),
             raypath,
+            obj_material: None,
         }
     }
 }
@@ -125,13 +155,25 @@ impl ReadOptions {
 /// inline commands. Errors about a file that cannot be opened are located at `path:0`.
 /// An octree (a `.oct` name, or a Radiance header naming the octree format) gives its
 /// primitives: a frozen octree's own, an unfrozen one's scene files read again
-/// ([`super::octree`]).
+/// ([`super::octree`]). A `.obj` file becomes a mesh primitive placing it
+/// ([`obj_scene_primitive`], read by [`super::obj`] when the scene is built).
 pub fn read_scene_files(
     paths: &[String],
     opts: &ReadOptions,
 ) -> Result<Vec<Primitive>, SceneError> {
     let mut out = Vec::new();
     for p in paths {
+        if super::instance::is_obj_name(p) {
+            if let Err(e) = std::fs::metadata(p) {
+                return Err(SceneError::Io {
+                    loc: Location::new(p.as_str(), 0),
+                    path: p.clone(),
+                    reason: e.to_string(),
+                });
+            }
+            out.push(obj_scene_primitive(p, opts.obj_material.as_deref()));
+            continue;
+        }
         if p != "-" && is_octree(Path::new(p), p) {
             let (prims, _) = super::octree::octree_primitives(Path::new(p), p, opts)?;
             out.extend(prims);
