@@ -175,8 +175,8 @@ fn triangles_are_obj2mesh_s() {
     let Some(bin) = radiance_bin() else { return };
     let t = workdir(&bin);
     let d = t.path();
-    let rtm = tessera::scene::rtm::parse_mesh(&std::fs::read(d.join("model.rtm")).unwrap(), "m")
-        .unwrap();
+    let rtm =
+        tessera::scene::rtm::parse_mesh(&std::fs::read(d.join("model.rtm")).unwrap(), "m").unwrap();
     let text = std::fs::read_to_string(d.join("model.obj")).unwrap();
     let obj = tessera::scene::obj::parse_obj(&text, "model.obj").unwrap();
     let key = |pos: &[DVec3], flags: &[u8], v: [u32; 3], name: &str| {
@@ -226,7 +226,13 @@ fn a_job_carries_its_obj_file() {
     std::fs::write(d.join("plain.obj"), text.replace("g floor\n", "")).unwrap();
     let job = d.join("job");
     let view = ["-vf", "view.vf", "-x", "64", "-y", "50", "-ab", "0"];
-    let scene = ["--obj-material", "blue", "light.rad", "mat.rad", "plain.obj"];
+    let scene = [
+        "--obj-material",
+        "blue",
+        "light.rad",
+        "mat.rad",
+        "plain.obj",
+    ];
     run_ok(
         Command::new(env!("CARGO_BIN_EXE_tplan"))
             .current_dir(d)
@@ -235,7 +241,10 @@ fn a_job_carries_its_obj_file() {
             .args(view)
             .args(scene),
     );
-    assert!(job.join("files/plain.obj").is_file(), "plain.obj not in the job");
+    assert!(
+        job.join("files/plain.obj").is_file(),
+        "plain.obj not in the job"
+    );
     let elsewhere = tempfile::tempdir().unwrap();
     run_ok(
         Command::new(env!("CARGO_BIN_EXE_tpiece"))
@@ -248,9 +257,17 @@ fn a_job_carries_its_obj_file() {
     run_ok(tpict(d).args(view).args(["-o", "direct.hdr"]).args(scene));
     let a = read_picture(&d.join("job.hdr")).unwrap();
     let b = read_picture(&d.join("direct.hdr")).unwrap();
-    assert!(a.pixels == b.pixels, "the job's picture differs from tpict's");
+    assert!(
+        a.pixels == b.pixels,
+        "the job's picture differs from tpict's"
+    );
     // Without the default the floor's triangles are void: invisible, another picture.
-    run_ok(tpict(d).args(view).args(["-o", "void.hdr"]).args(&scene[2..]));
+    run_ok(
+        tpict(d)
+            .args(view)
+            .args(["-o", "void.hdr"])
+            .args(&scene[2..]),
+    );
     let c = read_picture(&d.join("void.hdr")).unwrap();
     assert!(c.pixels != b.pixels);
 }
@@ -290,18 +307,33 @@ fn bad_obj_files_are_one_line_errors() {
     bad("number.obj", "v 0 0 0\nv 1 0 zero\n");
     bad("normal.obj", "v 0 0 0\nvn 0 0 0\n");
     bad("ref.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1/x 2 3\n");
-    bad("nomat.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nusemtl chrome\nf 1 2 3\n");
+    bad(
+        "nomat.obj",
+        "v 0 0 0\nv 1 0 0\nv 0 1 0\nusemtl chrome\nf 1 2 3\n",
+    );
     bad("binary.obj", "v 0 0 \u{0}\u{ff}\n");
     let l = "light.rad";
-    fails_with(d, &[l, "index.obj"], "index.obj:4: vertex index 4 in '4' is out of range");
+    fails_with(
+        d,
+        &[l, "index.obj"],
+        "index.obj:4: vertex index 4 in '4' is out of range",
+    );
     fails_with(d, &[l, "number.obj"], "number.obj:2: bad vertex z 'zero'");
     fails_with(d, &[l, "normal.obj"], "normal.obj:2: zero normal");
     fails_with(d, &[l, "ref.obj"], "ref.obj:4: bad texture index 'x'");
-    fails_with(d, &[l, "nomat.obj"], "nomat.obj:4: undefined modifier 'chrome'");
+    fails_with(
+        d,
+        &[l, "nomat.obj"],
+        "nomat.obj:4: undefined modifier 'chrome'",
+    );
     fails_with(d, &[l, "binary.obj"], "binary.obj:1: bad vertex z");
     fails_with(d, &[l, "missing.obj"], "missing.obj");
     // The materials after the OBJ come too late (obj2mesh's -a files come first).
-    fails_with(d, &[l, "model.obj", "mat.rad"], "model.obj:3: undefined modifier 'floor'");
+    fails_with(
+        d,
+        &[l, "model.obj", "mat.rad"],
+        "model.obj:3: undefined modifier 'floor'",
+    );
     std::fs::write(d.join("ref.rad"), "void mesh m 1 gone.obj 0 0\n").unwrap();
     fails_with(d, &[l, "ref.rad"], "cannot find file 'gone.obj'");
     // A default material that is not defined.

@@ -235,10 +235,7 @@ pub fn is_obj_name(name: &str) -> bool {
 /// The default modifier of a mesh primitive naming an OBJ file (`file.obj -m NAME ...`):
 /// for its triangles with no modifier name or an undefined one.
 pub fn obj_default(p: &Primitive) -> Option<&str> {
-    (p.ptype == "mesh"
-        && p.sargs.len() >= 3
-        && is_obj_name(&p.sargs[0])
-        && p.sargs[1] == "-m")
+    (p.ptype == "mesh" && p.sargs.len() >= 3 && is_obj_name(&p.sargs[0]) && p.sargs[1] == "-m")
         .then(|| p.sargs[2].as_str())
 }
 

@@ -16,7 +16,7 @@ pub use transform::{parse_transform, Transform};
 pub mod binio;
 pub mod build;
 pub mod instance;
-pub mod octree;
 pub mod obj;
+pub mod octree;
 pub mod rtm;
 pub use build::Scene;

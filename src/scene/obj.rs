@@ -201,10 +201,11 @@ impl Reader<'_> {
         let [p1, p2, p3] = t.map(|c| self.pos[c.0]);
         let fnorm = (p2 - p1).cross(p3 - p2);
         let len = fnorm.length();
-        if !(len > 0.0) {
-            self.out
-                .warnings
-                .push(format!("{}:{line}: zero-area triangle skipped", self.file));
+        if !len.is_finite() || len <= 0.0 {
+            self.out.warnings.push(format!(
+                "{}:{line}: degenerate (zero-area) triangle skipped",
+                self.file
+            ));
             return;
         }
         let mut fnorm = fnorm / len;
