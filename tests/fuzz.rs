@@ -188,6 +188,7 @@ fn instance_scene(dir: &Path, text: &str) {
     let opts = ReadOptions {
         allow_commands: false,
         raypath: vec![dir.to_path_buf()],
+        ..ReadOptions::default()
     };
     let Ok(prims) = parse_scene_text(text, "fuzz.rad", &opts) else {
         return;
