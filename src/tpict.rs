@@ -109,6 +109,7 @@ fn run_inner(args: &[String], mut log: Log) -> std::result::Result<(), (Log, any
 pub fn start_session(opts: &RpictOptions, log: &Log) -> Result<Session> {
     let mut ro = ReadOptions::from_env();
     ro.allow_commands |= opts.run.allow_commands;
+    ro.obj_material.clone_from(&opts.run.obj_material);
     let files = if opts.scene_files.is_empty() {
         if opts.run.sequence_start.is_some() {
             bail!("no scene files given (with -S, views come from standard input, so the scene cannot)");

@@ -188,6 +188,7 @@ fn instance_scene(dir: &Path, text: &str) {
     let opts = ReadOptions {
         allow_commands: false,
         raypath: vec![dir.to_path_buf()],
+        ..ReadOptions::default()
     };
     let Ok(prims) = parse_scene_text(text, "fuzz.rad", &opts) else {
         return;
@@ -288,6 +289,19 @@ fn targets(dir: Arc<tempfile::TempDir>) -> Vec<Target> {
             let _ = tessera::scene::rtm::parse_mesh(b, "case.rtm");
             scratch(d.path(), "case.rtm", b);
             instance_scene(d.path(), "void mesh m 1 case.rtm -rz 30 0 0\n");
+        }),
+    });
+    let d = dir.clone();
+    v.push(Target {
+        name: "obj",
+        seeds: file_seeds(&["tests/scenes/obj/model.obj"]),
+        run: Box::new(move |b| {
+            let _ = tessera::scene::obj::parse_obj(&text(b), "case.obj");
+            scratch(d.path(), "case.obj", b);
+            instance_scene(
+                d.path(),
+                "void plastic red 0 0 5 1 0 0 0 0\nvoid mesh m 3 case.obj -m red 0 0\n",
+            );
         }),
     });
     let records: Vec<AmbRecord> = (0..6).map(record).collect();

@@ -43,6 +43,7 @@ fn opts(bin: &Path, dir: &Path) -> ReadOptions {
     ReadOptions {
         allow_commands: false,
         raypath: vec![dir.to_path_buf(), lib_dir(bin)],
+        ..ReadOptions::default()
     }
 }
 

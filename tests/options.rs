@@ -386,6 +386,7 @@ prop_compose! {
         error_file in proptest::option::of(name()),
         allow_commands in any::<bool>(),
         stats_file in proptest::option::of(name()),
+        obj_material in proptest::option::of(name()),
         amb_log in proptest::option::of(name()),
         amb_flush in 1usize..1000,
         amb_force in any::<bool>(),
@@ -403,7 +404,8 @@ prop_compose! {
             params: p,
             run: RunParams {
                 report_interval: t as f64, warnings, threads, output, sequence_start: seq,
-                error_file, allow_commands, stats_file, amb_file, amb_log, amb_flush, amb_force,
+                error_file, allow_commands, stats_file, obj_material, amb_file, amb_log, amb_flush,
+                amb_force,
             },
             scene_files: vec!["scene.rad".into()],
         }

@@ -66,6 +66,7 @@ fn opts(dir: &Path) -> ReadOptions {
     ReadOptions {
         allow_commands: false,
         raypath: vec![dir.to_path_buf()],
+        ..ReadOptions::default()
     }
 }
 
@@ -437,6 +438,7 @@ fn daffodil_with_commands_matches_flat_file() {
     let o = ReadOptions {
         allow_commands: true,
         raypath: vec![d.path().to_path_buf()],
+        ..ReadOptions::default()
     };
     let ours = parse_scene_text("!xform -rz -40 -t 50 40 20 daffodil", "x", &o).unwrap();
     let flat = read_scene_files(

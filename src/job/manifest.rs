@@ -337,6 +337,7 @@ pub fn create_job(dir: &Path, req: &PlanRequest) -> Result<Manifest> {
     // Scene: read, check that it builds, flatten.
     let mut ro = ReadOptions::from_env();
     ro.allow_commands |= opts.run.allow_commands;
+    ro.obj_material.clone_from(&opts.run.obj_material);
     let prims = read_scene_files(&opts.scene_files, &ro)?;
     let scene = Scene::build_read(&prims, &ro)?;
     for w in &scene.warnings {

@@ -208,6 +208,7 @@ fn start_session(job: &JobDir, m: &Manifest, owner: &str, wo: &WorkerOptions) ->
     let ro = ReadOptions {
         allow_commands: false,
         raypath,
+        ..ReadOptions::default()
     };
     let source = SceneSource::read(&[scene_path.display().to_string()], &ro, &m.params)?;
     // The fingerprint covers the files the scene reads (JOB/files/), known once it is built.

@@ -38,8 +38,9 @@ pub fn help_text() -> String {
     let mut s = String::from(
         "usage: tpict [rpict options] [Tessera options] scene.rad [more.rad ...]\n\
          \n\
-         Renders Radiance scene files or octrees ('-' or none: stdin) with rpict's\n\
-         options: views (-vt? -vp -vd -vu -vh -vv -vo -va -vs -vl -vf), picture (-x -y\n\
+         Renders Radiance scene files, octrees and Wavefront .obj files ('-' or none:\n\
+         stdin) with rpict's options: views (-vt? -vp -vd -vu -vh -vv -vo -va -vs -vl\n\
+         -vf), picture (-x -y\n\
          -pa -pj -ps -pt), direct light (-dt -dc -dj -ds -dr -dp -dv), specular (-ss -st),\n\
          limits (-lr -lw), ambient (-av -aw -ab -aa -ar -ad -as -ae -ai -aE -aI -af), -i -u\n\
          -bv -w -t -e -o -S, @file and $VAR. 'tpict -defaults' prints every\n\
@@ -49,6 +50,7 @@ pub fn help_text() -> String {
            -n N                    render threads (default: every core, or SLURM_CPUS_PER_TASK)\n\
            -o FILE                 output: .hdr (Radiance), .exr or .png; -S n: a pattern\n\
            --allow-commands        run a scene's !commands other than xform and genbox\n\
+           --obj-material NAME     modifier of .obj triangles with no or an undefined name\n\
            --stats FILE            write render statistics (JSON)\n\
            --amb-log FILE          share ambient values through Tessera's append-only log\n\
            --amb-flush N           values per log write (default 128)\n\
@@ -204,6 +206,7 @@ mod tests {
         }
         for name in [
             "--allow-commands",
+            "--obj-material",
             "--stats",
             "--amb-log",
             "--amb-flush",

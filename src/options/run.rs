@@ -1,7 +1,8 @@
 //! The run parameters: how one tpict process runs and where its output goes, none of which
 //! changes a pixel: progress reports (`-t`), warnings (`-w`), threads (`-n`), the output file
 //! (`-o`), view sequences (`-S`), the error file (`-e`), inline commands
-//! (`--allow-commands`), statistics (`--stats`) and the ambient stores (`-af`, `--amb-log`,
+//! (`--allow-commands`), the default modifier of `.obj` scene files (`--obj-material`, which
+//! changes only what is read: a job keeps it in its flattened scene), statistics (`--stats`) and the ambient stores (`-af`, `--amb-log`,
 //! `--amb-flush`, `--amb-force`). Not kept in job manifests.
 
 use super::words::{arg, bool_option, f1, i1, range, unsupported, OptError};
@@ -25,6 +26,9 @@ pub struct RunParams {
     pub allow_commands: bool,
     /// `--stats FILE`: write render statistics.
     pub stats_file: Option<String>,
+    /// `--obj-material NAME`: the modifier of `.obj` scene files' triangles that have no
+    /// modifier name or an undefined one.
+    pub obj_material: Option<String>,
     /// `-af` Radiance ambient file (read at the start, this run's values appended at the end).
     pub amb_file: Option<String>,
     /// `--amb-log FILE`: Tessera's append-only ambient log (shared between processes).
@@ -47,6 +51,7 @@ impl Default for RunParams {
             error_file: None,
             allow_commands: false,
             stats_file: None,
+            obj_material: None,
             amb_file: None,
             amb_log: None,
             amb_flush: 128,
@@ -112,6 +117,10 @@ impl RunParams {
                 self.allow_commands = true;
                 1
             }
+            "--obj-material" => {
+                self.obj_material = Some(arg(words, 1, "a modifier name")?.clone());
+                2
+            }
             "--stats" => {
                 self.stats_file = Some(arg(words, 1, "a file name")?.clone());
                 2
@@ -166,6 +175,9 @@ impl RunParams {
         }
         if self.allow_commands {
             w.push("--allow-commands".into());
+        }
+        if let Some(m) = &self.obj_material {
+            w.extend(["--obj-material".into(), m.clone()]);
         }
         if let Some(f) = &self.stats_file {
             w.extend(["--stats".into(), f.clone()]);

@@ -335,6 +335,7 @@ impl Builder<'_> {
             } else if t == "instance" || t == "mesh" {
                 let chain = mods.modref(&p.modifier).map_err(|m| err(p, m))?;
                 if let Some((set, xf)) = pending.next() {
+                    super::obj::bind_names(mods, &mut self.sets[set])?;
                     children.push(Child {
                         set,
                         xf,
@@ -527,6 +528,7 @@ impl Scene {
         let opts = ReadOptions {
             allow_commands: false,
             raypath: raypath.to_vec(),
+            ..ReadOptions::default()
         };
         Scene::build_opts(prims, types, &opts)
     }

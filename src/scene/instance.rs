@@ -20,7 +20,7 @@
 //! geometric one); with (u,v) at all three, `Lu Lv` are interpolated.
 
 use glam::DVec3;
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 
 use super::build::{Builder, Scene};
 use super::error::SceneError;
@@ -40,8 +40,22 @@ impl Builder<'_> {
             |m: String| SceneError::syntax(p.loc.clone(), format!("{} {}: {m}", p.ptype, p.name));
         let xf = instance_transform(p).map_err(err)?;
         let name = &p.sargs[0];
-        let path = self.mods.files.find(name).map_err(err)?;
-        let key = std::fs::canonicalize(&path).unwrap_or(path.clone());
+        let path = match self.mods.files.find(name) {
+            // A `.obj` given on the command line is opened as given.
+            Err(_) if &*p.loc.file == super::reader::COMMAND_LINE && Path::new(name).is_file() => {
+                let path = PathBuf::from(name);
+                self.mods.files.note_input(name, path.clone());
+                path
+            }
+            r => r.map_err(err)?,
+        };
+        let mut key = std::fs::canonicalize(&path).unwrap_or(path.clone());
+        let obj = p.ptype == "mesh" && is_obj_name(name);
+        if obj {
+            // An OBJ's names are bound where it is first placed, with its default.
+            key.as_mut_os_string()
+                .push(format!("\0-m {}", obj_default(p).unwrap_or("")));
+        }
         if let Some(&id) = self.set_ids.get(&key) {
             return Ok((id, xf));
         }
@@ -62,7 +76,9 @@ impl Builder<'_> {
             )));
         }
         self.loading.push(key.clone());
-        let set = if p.ptype == "mesh" {
+        let set = if obj {
+            self.obj_set(name, &path, obj_default(p))
+        } else if p.ptype == "mesh" {
             self.mesh_set(name, &path)
         } else {
             self.octree_set(name, &path)
@@ -117,6 +133,7 @@ impl Builder<'_> {
             full: level.full,
             children: level.children,
             expanded,
+            unbound: None,
         })
     }
 
@@ -156,35 +173,57 @@ impl Builder<'_> {
                 }
             }
         }
-        let mut full = None;
-        for p in &file.pos {
-            union(&mut full, (*p, *p));
-        }
-        let (origin, size) = match full {
-            Some((lo, hi)) => ((lo + hi) * 0.5, (hi - lo).max_element()),
-            None => (DVec3::ZERO, 1.0),
-        };
-        let mut mesh = TriMesh {
-            pos: file.pos.iter().map(|p| *p - origin).collect(),
-            normal: file.normal,
-            uv: file.uv,
-            flags: file.flags,
-            tris: file.tris,
-            eps: super::build::length_tolerance(size),
-        };
-        mesh.pos.shrink_to_fit();
-        let bvh = Bvh::build_from(mesh.tris.len(), |i| mesh.bounds(i), mesh.eps);
-        let expanded = mesh.tris.len() as u64;
-        Ok(ObjectSet {
-            file: name.to_string(),
-            geom: SetGeom::Mesh { mesh, mods },
-            bvh,
-            origin,
-            bounds: full.map(|(lo, hi)| (lo - origin, hi - origin)),
-            full,
-            children: Vec::new(),
-            expanded,
-        })
+        Ok(mesh_object_set(
+            name,
+            file.pos,
+            file.normal,
+            file.uv,
+            file.flags,
+            file.tris,
+            mods,
+        ))
+    }
+}
+
+/// The object set of a mesh's triangles (file coordinates), relative to their centre.
+pub(super) fn mesh_object_set(
+    name: &str,
+    pos: Vec<DVec3>,
+    normal: Vec<glam::Vec3>,
+    uv: Vec<[f64; 2]>,
+    flags: Vec<u8>,
+    tris: Vec<super::rtm::MeshTri>,
+    mods: Vec<Option<MeshModifier>>,
+) -> ObjectSet {
+    let mut full = None;
+    for p in &pos {
+        union(&mut full, (*p, *p));
+    }
+    let (origin, size) = match full {
+        Some((lo, hi)) => ((lo + hi) * 0.5, (hi - lo).max_element()),
+        None => (DVec3::ZERO, 1.0),
+    };
+    let mut mesh = TriMesh {
+        pos: pos.iter().map(|p| *p - origin).collect(),
+        normal,
+        uv,
+        flags,
+        tris,
+        eps: super::build::length_tolerance(size),
+    };
+    mesh.pos.shrink_to_fit();
+    let bvh = Bvh::build_from(mesh.tris.len(), |i| mesh.bounds(i), mesh.eps);
+    let expanded = mesh.tris.len() as u64;
+    ObjectSet {
+        file: name.to_string(),
+        geom: SetGeom::Mesh { mesh, mods },
+        bvh,
+        origin,
+        bounds: full.map(|(lo, hi)| (lo - origin, hi - origin)),
+        full,
+        children: Vec::new(),
+        expanded,
+        unbound: None,
     }
 }
 

@@ -17,6 +17,7 @@ pub use transform::{parse_transform, Transform};
 pub mod binio;
 pub mod build;
 pub mod instance;
+pub mod obj;
 pub mod object;
 pub mod octree;
 pub mod rtm;

@@ -282,13 +282,28 @@ pub fn octree_primitives(
 /// inline commands. Errors about a file that cannot be opened are located at `path:0`.
 /// An octree (a `.oct` name, or a Radiance header naming the octree format) gives its
 /// primitives: a frozen octree's own, an unfrozen one's scene files read again
-/// (this module).
+/// (this module). A `.obj` file becomes a mesh primitive placing it
+/// ([`super::reader::obj_scene_primitive`], read by [`super::obj`] when the scene is built).
 pub fn read_scene_files(
     paths: &[String],
     opts: &ReadOptions,
 ) -> Result<Vec<Primitive>, SceneError> {
     let mut out = Vec::new();
     for p in paths {
+        if super::sets::is_obj_name(p) {
+            if let Err(e) = std::fs::metadata(p) {
+                return Err(SceneError::Io {
+                    loc: Location::new(p.as_str(), 0),
+                    path: p.clone(),
+                    reason: e.to_string(),
+                });
+            }
+            out.push(super::reader::obj_scene_primitive(
+                p,
+                opts.obj_material.as_deref(),
+            ));
+            continue;
+        }
         if p != "-" && is_octree(Path::new(p), p) {
             let (prims, _) = octree_primitives(Path::new(p), p, opts)?;
             out.extend(prims);

@@ -100,6 +100,35 @@ pub struct ReadOptions {
     pub allow_commands: bool,
     /// Directories searched for files named by `xform` (Radiance's RAYPATH).
     pub raypath: Vec<PathBuf>,
+    /// `--obj-material NAME`: the modifier of the triangles of `.obj` files given as scene
+    /// files that have no modifier name or an undefined one.
+    pub obj_material: Option<String>,
+}
+
+/// The location of primitives made from the command line (a `.obj` scene file).
+pub const COMMAND_LINE: &str = "<command line>";
+
+/// The mesh primitive standing for a `.obj` file given as a scene file:
+/// `void mesh STEM 1 file.obj 0 0`, or `3 file.obj -m NAME` with a default modifier.
+pub fn obj_scene_primitive(file: &str, default: Option<&str>) -> Primitive {
+    let stem = Path::new(file)
+        .file_stem()
+        .map(|s| s.to_string_lossy().into_owned())
+        .filter(|s| !s.is_empty() && !s.contains(char::is_whitespace))
+        .unwrap_or_else(|| "obj".into());
+    let mut sargs = vec![file.to_string()];
+    if let Some(d) = default {
+        sargs.extend(["-m".to_string(), d.to_string()]);
+    }
+    Primitive {
+        modifier: "void".into(),
+        ptype: "mesh".into(),
+        name: stem,
+        sargs,
+        iargs: Vec::new(),
+        rargs: Vec::new(),
+        loc: Location::new(COMMAND_LINE, 0),
+    }
 }
 
 impl ReadOptions {
@@ -118,6 +147,7 @@ impl ReadOptions {
         ReadOptions {
             allow_commands: std::env::var("TESSERA_ALLOW_COMMANDS").is_ok_and(|v| v == "1"),
             raypath,
+            obj_material: None,
         }
     }
 }

@@ -75,6 +75,9 @@ pub struct ObjectSet {
     pub children: Vec<Child>,
     /// Surfaces once every nested instance is expanded.
     pub expanded: u64,
+    /// An OBJ file's modifier names, bound where it is first placed
+    /// ([`super::obj::bind_names`]).
+    pub unbound: Option<super::obj::ObjNames>,
 }
 
 impl ObjectSet {
@@ -180,7 +183,20 @@ pub fn union(acc: &mut Option<(DVec3, DVec3)>, b: (DVec3, DVec3)) {
     });
 }
 
-/// The transform of an instance or mesh primitive's string arguments after the file name.
+/// Whether a mesh file name names a Wavefront OBJ file (`.obj`, any case).
+pub fn is_obj_name(name: &str) -> bool {
+    name.len() > 4 && name[name.len() - 4..].eq_ignore_ascii_case(".obj")
+}
+
+/// The default modifier of a mesh primitive naming an OBJ file (`file.obj -m NAME ...`):
+/// for its triangles with no modifier name or an undefined one.
+pub fn obj_default(p: &Primitive) -> Option<&str> {
+    (p.ptype == "mesh" && p.sargs.len() >= 3 && is_obj_name(&p.sargs[0]) && p.sargs[1] == "-m")
+        .then(|| p.sargs[2].as_str())
+}
+
+/// The transform of an instance or mesh primitive's string arguments after the file name
+/// (and after an OBJ mesh's `-m NAME`).
 pub fn instance_transform(p: &Primitive) -> Result<Transform, String> {
     if p.sargs.is_empty() || !p.iargs.is_empty() || !p.rargs.is_empty() {
         return Err(format!(
@@ -188,7 +204,8 @@ pub fn instance_transform(p: &Primitive) -> Result<Transform, String> {
             p.ptype, p.name
         ));
     }
-    let words = &p.sargs[1..];
+    let skip = if obj_default(p).is_some() { 3 } else { 1 };
+    let words = &p.sargs[skip.min(p.sargs.len())..];
     let xf = if words.is_empty() {
         Transform::identity()
     } else {

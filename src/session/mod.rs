@@ -104,6 +104,7 @@ impl Session {
         let ro = ReadOptions {
             allow_commands: source.allow_commands,
             raypath: source.raypath.clone(),
+            ..ReadOptions::default()
         };
         let scene = Scene::build_read(&source.prims, &ro)?;
         let fingerprint =
