@@ -287,19 +287,24 @@ fn moving_direction_accuracy_relaxes_what_leaves_the_view() {
 }
 
 /// `-axt`: tpict's view sequences choose each frame's `-aa` from the previous frame's cost
-/// (recorded as `TESSERA_FRAME_AA=` in each picture); jobs refuse it.
+/// (recorded as `TESSERA_FRAME_AA=` in each picture), and the accuracy takes effect: an
+/// impossible budget keeps the loosest accuracy and makes far fewer values.
 #[test]
 fn time_budget_picks_each_frames_accuracy() {
     let t = tempfile::tempdir().unwrap();
     let line = std::fs::read_to_string(demo().join("demo.vf")).unwrap();
-    let frame_aa = |budget: &str, tag: &str| -> Vec<String> {
+    let run = |budget: &str, tag: &str| -> (Vec<String>, u64) {
         let pattern = t.path().join(format!("{tag}%d.hdr"));
+        let stats = t.path().join(format!("{tag}.json"));
         let mut child = Command::new(tpict_bin())
             .current_dir(demo())
             .args(["-S", "1", "-o"])
             .arg(&pattern)
+            .arg("--stats")
+            .arg(&stats)
             .args(["-vf", "demo.vf", "-x", "32", "-y", "24", "-ab", "1"])
-            .args(["-axt", budget, ".4", ".1", "demo.rad"])
+            // -aa below START: the cache must file values for START all the same.
+            .args(["-aa", ".1", "-axt", budget, ".4", ".1", "demo.rad"])
             .stdin(std::process::Stdio::piped())
             .spawn()
             .unwrap();
@@ -312,27 +317,102 @@ fn time_budget_picks_each_frames_accuracy() {
             .write_all(input.as_bytes())
             .unwrap();
         assert!(child.wait().unwrap().success());
-        (1..=3)
-            .map(|k| {
-                let bytes = std::fs::read(t.path().join(format!("{tag}{k}.hdr"))).unwrap();
-                let text = String::from_utf8_lossy(&bytes[..bytes.len().min(4000)]).to_string();
-                text.lines()
-                    .find_map(|l| l.strip_prefix("TESSERA_FRAME_AA="))
-                    .unwrap_or("none")
-                    .trim()
-                    .to_string()
-            })
-            .collect()
+        let aa = (1..=3)
+            .map(|k| frame_aa_header(&t.path().join(format!("{tag}{k}.hdr"))))
+            .collect();
+        let v: serde_json::Value = serde_json::from_slice(&std::fs::read(&stats).unwrap()).unwrap();
+        let cached = v["ambient"]["cached_values"].as_u64().unwrap_or_else(|| {
+            panic!("no ambient.cached_values in {v}");
+        });
+        (aa, cached)
     };
     // A generous budget tightens to the end accuracy after the first frame; an impossible
     // one keeps the loosest.
-    assert_eq!(frame_aa("1000", "easy"), ["0.4", "0.1", "0.1"]);
-    assert_eq!(frame_aa("0.000001", "hard"), ["0.4", "0.4", "0.4"]);
+    let (easy, easy_values) = run("1000", "easy");
+    let (hard, hard_values) = run("0.000001", "hard");
+    assert_eq!(easy, ["0.4", "0.1", "0.1"]);
+    assert_eq!(hard, ["0.4", "0.4", "0.4"]);
+    assert!(
+        (hard_values as f64) < 0.7 * easy_values as f64,
+        "values at -aa .4: {hard_values}, tightened to .1: {easy_values}"
+    );
+}
+
+/// The `TESSERA_FRAME_AA=` value of a picture's header ("none" without one).
+fn frame_aa_header(path: &Path) -> String {
+    let bytes = std::fs::read(path).unwrap();
+    let text = String::from_utf8_lossy(&bytes[..bytes.len().min(4000)]).to_string();
+    text.lines()
+        .find_map(|l| l.strip_prefix("TESSERA_FRAME_AA="))
+        .unwrap_or("none")
+        .trim()
+        .to_string()
+}
+
+/// `-axt` in a job: each frame's `-aa` is decided once from the latest finished frame's CPU
+/// time (recorded in `JOB/budget/`), reported by tstat, written in the assembled headers,
+/// and taken by every tile; `-axt` with `-ax` is refused.
+#[test]
+fn time_budget_in_jobs() {
+    let t = tempfile::tempdir().unwrap();
+    let line = std::fs::read_to_string(demo().join("demo.vf")).unwrap();
+    let vf = t.path().join("frames.vf");
+    std::fs::write(&vf, format!("{}\n", line.trim()).repeat(3)).unwrap();
+    let job_run = |budget: &str, tag: &str| -> (Vec<f64>, Vec<u64>, PathBuf) {
+        let job = t.path().join(tag);
+        run_ok(
+            tool("tplan")
+                .args(["--workers", "1", "--frames"])
+                .arg(&vf)
+                .arg("-o")
+                .arg(&job)
+                .arg("--")
+                .args(["-vf", "demo.vf", "-x", "32", "-y", "24", "-ab", "1"])
+                .args(["-aa", ".1", "-axt", budget, ".4", ".1", "demo.rad"]),
+        );
+        run_ok(tool("tpiece").arg(&job).args(["--threads", "1", "-q"]));
+        let out = run_ok(tool("tstat").arg(&job).arg("--json"));
+        let v: serde_json::Value = serde_json::from_slice(&out).unwrap();
+        let frames = v["frames"].as_array().unwrap();
+        let aa = frames.iter().map(|f| f["aa"].as_f64().unwrap()).collect();
+        let values = frames
+            .iter()
+            .map(|f| f["new_values"].as_u64().unwrap())
+            .collect();
+        (aa, values, job)
+    };
+    let (easy, easy_values, job) = job_run("1000", "easy");
+    assert_eq!(easy, [0.4, 0.1, 0.1]);
+    let (hard, hard_values, _) = job_run("0.000001", "hard");
+    assert_eq!(hard, [0.4, 0.4, 0.4]);
+    // Frame 1 tightens from .4 to .1 with a generous budget: it makes many more values.
+    assert!(
+        hard_values[1] * 2 < easy_values[1],
+        "values: hard {hard_values:?} easy {easy_values:?}"
+    );
+    let record: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(job.join("budget/f00001.json")).unwrap()).unwrap();
+    assert_eq!(record["from_frame"].as_u64(), Some(0));
+    assert!(record["from_cpu_seconds"].as_f64().unwrap() > 0.0);
+    let pic = t.path().join("f1.hdr");
+    run_ok(
+        tool("tassemble")
+            .arg(&job)
+            .args(["--frame", "1", "-o"])
+            .arg(&pic),
+    );
+    assert_eq!(frame_aa_header(&pic), "0.1");
+    // A damaged record stops the worker with the file's name rather than being replaced.
+    std::fs::write(job.join("budget/f00002.json"), b"{\"frame\": 2, \"aa\": 7}").unwrap();
+    let out = tool("tstat").arg(&job).output().unwrap();
+    assert!(!out.status.success());
+    assert!(String::from_utf8_lossy(&out.stderr).contains("f00002.json"));
     let out = tool("tplan")
         .args(["-o"])
-        .arg(t.path().join("job"))
+        .arg(t.path().join("both"))
         .args([
-            "--", "-vf", "demo.vf", "-ab", "1", "-axt", "1", ".4", ".1", "demo.rad",
+            "--", "-vf", "demo.vf", "-ab", "1", "-axt", "1", ".4", ".1", "-ax", ".4", ".1", ".1",
+            "demo.rad",
         ])
         .output()
         .unwrap();

@@ -258,6 +258,7 @@ pub fn run_worker(job: &JobDir, wo: &WorkerOptions) -> Result<WorkerSummary> {
             owner: owner.clone(),
             ..WorkerSummary::default()
         },
+        budget_aa: Default::default(),
     };
     let result = worker.work().and_then(|s| session.finish().map(|()| s));
     beater.stop();
@@ -308,6 +309,8 @@ struct Worker<'a> {
     idle_since: Option<Instant>,
     watcher: StaleWatcher,
     summary: WorkerSummary,
+    /// `-axt`: the frames' accuracies read or decided so far ([`super::budget`]).
+    budget_aa: std::cell::RefCell<HashMap<u32, f64>>,
 }
 
 impl Worker<'_> {
@@ -531,6 +534,16 @@ impl Worker<'_> {
         }
     }
 
+    /// `-axt`: frame `frame`'s accuracy, read or decided once per frame.
+    fn budget_accuracy(&self, frame: u32) -> Result<f64> {
+        if let Some(&aa) = self.budget_aa.borrow().get(&frame) {
+            return Ok(aa);
+        }
+        let aa = super::budget::frame_accuracy(self.job, self.m, frame)?;
+        self.budget_aa.borrow_mut().insert(frame, aa);
+        Ok(aa)
+    }
+
     /// Render the tile `rect` of frame `fp`: its pixels and the result's metadata.
     fn render_tile(
         &self,
@@ -548,6 +561,9 @@ impl Worker<'_> {
             .frame_setup(&self.m.params, &vf, (fp.xres, fp.yres), fp.index);
         // Frames are numbered from 0 in the job: the index is the position in the animation.
         fs.aa = self.m.params.frame_accuracy(fp.index);
+        if self.m.params.axt.is_some() {
+            fs.aa = Some(self.budget_accuracy(fp.index)?);
+        }
         if let Some(mo) = self.m.params.axm {
             // Every tile sets its accuracy: the previous tile's may have been relaxed.
             let base = fs.aa.unwrap_or(self.m.params.aa);
