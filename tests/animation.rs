@@ -27,29 +27,46 @@ fn tool(name: &str) -> Command {
     c
 }
 
-/// New ambient values per frame of a job of `frames` identical views with `accuracy`.
-fn values_per_frame(dir: &Path, frames: usize, accuracy: &[&str]) -> Vec<u64> {
+/// A views file in `dir` holding the demo's view `n` times (a job of `n` still frames).
+fn still_views(dir: &Path, n: usize) -> PathBuf {
     let vf = dir.join("frames.vf");
     let line = std::fs::read_to_string(demo().join("demo.vf")).unwrap();
-    std::fs::write(&vf, format!("{}\n", line.trim()).repeat(frames)).unwrap();
-    let job = dir.join(format!("job{}", accuracy.join("_")));
+    std::fs::write(&vf, format!("{}\n", line.trim()).repeat(n)).unwrap();
+    vf
+}
+
+/// Plan a job for one worker at `job` (`plan`: tplan's frame arguments; `opts`: the render
+/// options and scene after `--`), render it with one single-thread worker and return
+/// `tstat --json`'s per-frame records.
+fn run_job(job: &Path, plan: &[&std::ffi::OsStr], opts: &[&str]) -> Vec<serde_json::Value> {
     run_ok(
         tool("tplan")
-            .args(["--workers", "1", "--frames"])
-            .arg(&vf)
+            .args(["--workers", "1"])
+            .args(plan)
             .arg("-o")
-            .arg(&job)
+            .arg(job)
             .arg("--")
-            .args(["-vf", "demo.vf", "-x", "64", "-y", "48", "-ab", "1"])
-            .args(accuracy)
-            .arg("demo.rad"),
+            .args(opts),
     );
-    run_ok(tool("tpiece").arg(&job).args(["--threads", "1", "-q"]));
-    let out = run_ok(tool("tstat").arg(&job).arg("--json"));
+    run_ok(tool("tpiece").arg(job).args(["--threads", "1", "-q"]));
+    let out = run_ok(tool("tstat").arg(job).arg("--json"));
     let v: serde_json::Value = serde_json::from_slice(&out).unwrap();
-    v["frames"]
-        .as_array()
-        .unwrap()
+    v["frames"].as_array().unwrap().clone()
+}
+
+/// `--frames FILE` as tplan arguments.
+fn frames_arg(vf: &Path) -> [&std::ffi::OsStr; 2] {
+    ["--frames".as_ref(), vf.as_os_str()]
+}
+
+/// New ambient values per frame of a job of `frames` identical views with `accuracy`.
+fn values_per_frame(dir: &Path, frames: usize, accuracy: &[&str]) -> Vec<u64> {
+    let vf = still_views(dir, frames);
+    let job = dir.join(format!("job{}", accuracy.join("_")));
+    let mut opts = vec!["-vf", "demo.vf", "-x", "64", "-y", "48", "-ab", "1"];
+    opts.extend_from_slice(accuracy);
+    opts.push("demo.rad");
+    run_job(&job, &frames_arg(&vf), &opts)
         .iter()
         .map(|f| f["new_values"].as_u64().unwrap())
         .collect()
@@ -130,23 +147,13 @@ fn ax_options_are_checked_and_recorded() {
 #[test]
 fn same_seeds_keep_static_frames_still() {
     let t = tempfile::tempdir().unwrap();
-    let line = std::fs::read_to_string(demo().join("demo.vf")).unwrap();
-    let vf = t.path().join("frames.vf");
-    std::fs::write(&vf, format!("{}\n", line.trim()).repeat(3)).unwrap();
+    let vf = still_views(t.path(), 3);
     let frames = |extra: &[&str]| {
         let job = t.path().join(format!("job{}", extra.len()));
-        run_ok(
-            tool("tplan")
-                .args(["--workers", "1", "--frames"])
-                .arg(&vf)
-                .arg("-o")
-                .arg(&job)
-                .arg("--")
-                .args(["-vf", "demo.vf", "-x", "32", "-y", "24", "-ab", "0"])
-                .args(extra)
-                .arg("demo.rad"),
-        );
-        run_ok(tool("tpiece").arg(&job).args(["--threads", "1", "-q"]));
+        let mut opts = vec!["-vf", "demo.vf", "-x", "32", "-y", "24", "-ab", "0"];
+        opts.extend_from_slice(extra);
+        opts.push("demo.rad");
+        run_job(&job, &frames_arg(&vf), &opts);
         (0..3)
             .map(|k| {
                 let out = t.path().join(format!("f{}-{k}.hdr", extra.len()));
@@ -250,23 +257,16 @@ fn moving_direction_accuracy_relaxes_what_leaves_the_view() {
     .unwrap();
     let values = |extra: &[&str]| -> u64 {
         let job = t.path().join(format!("job{}", extra.len()));
-        run_ok(
-            tool("tplan")
-                .args(["--workers", "1", "--path"])
-                .arg(&keys)
-                .args(["--path-frames", "9", "-o"])
-                .arg(&job)
-                .arg("--")
-                .args(["-x", "48", "-y", "36", "-ab", "1", "-aa", ".1"])
-                .args(extra)
-                .arg("demo.rad"),
-        );
-        run_ok(tool("tpiece").arg(&job).args(["--threads", "1", "-q"]));
-        let out = run_ok(tool("tstat").arg(&job).arg("--json"));
-        let v: serde_json::Value = serde_json::from_slice(&out).unwrap();
-        v["frames"]
-            .as_array()
-            .unwrap()
+        let mut opts = vec!["-x", "48", "-y", "36", "-ab", "1", "-aa", ".1"];
+        opts.extend_from_slice(extra);
+        opts.push("demo.rad");
+        let plan = [
+            "--path".as_ref(),
+            keys.as_os_str(),
+            "--path-frames".as_ref(),
+            "9".as_ref(),
+        ];
+        run_job(&job, &plan, &opts)
             .iter()
             .map(|f| f["new_values"].as_u64().unwrap())
             .sum()
@@ -355,25 +355,14 @@ fn frame_aa_header(path: &Path) -> String {
 #[test]
 fn time_budget_in_jobs() {
     let t = tempfile::tempdir().unwrap();
-    let line = std::fs::read_to_string(demo().join("demo.vf")).unwrap();
-    let vf = t.path().join("frames.vf");
-    std::fs::write(&vf, format!("{}\n", line.trim()).repeat(3)).unwrap();
+    let vf = still_views(t.path(), 3);
     let job_run = |budget: &str, tag: &str| -> (Vec<f64>, Vec<u64>, PathBuf) {
         let job = t.path().join(tag);
-        run_ok(
-            tool("tplan")
-                .args(["--workers", "1", "--frames"])
-                .arg(&vf)
-                .arg("-o")
-                .arg(&job)
-                .arg("--")
-                .args(["-vf", "demo.vf", "-x", "32", "-y", "24", "-ab", "1"])
-                .args(["-aa", ".1", "-axt", budget, ".4", ".1", "demo.rad"]),
-        );
-        run_ok(tool("tpiece").arg(&job).args(["--threads", "1", "-q"]));
-        let out = run_ok(tool("tstat").arg(&job).arg("--json"));
-        let v: serde_json::Value = serde_json::from_slice(&out).unwrap();
-        let frames = v["frames"].as_array().unwrap();
+        let opts = [
+            "-vf", "demo.vf", "-x", "32", "-y", "24", "-ab", "1", "-aa", ".1", "-axt", budget,
+            ".4", ".1", "demo.rad",
+        ];
+        let frames = run_job(&job, &frames_arg(&vf), &opts);
         let aa = frames.iter().map(|f| f["aa"].as_f64().unwrap()).collect();
         let values = frames
             .iter()
@@ -424,9 +413,7 @@ fn time_budget_in_jobs() {
 #[test]
 fn tiles_are_claimed_in_frame_order() {
     let t = tempfile::tempdir().unwrap();
-    let line = std::fs::read_to_string(demo().join("demo.vf")).unwrap();
-    let vf = t.path().join("frames.vf");
-    std::fs::write(&vf, format!("{}\n", line.trim()).repeat(3)).unwrap();
+    let vf = still_views(t.path(), 3);
     let job = t.path().join("job");
     run_ok(
         tool("tplan")
