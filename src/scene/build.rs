@@ -287,6 +287,7 @@ impl Builder<'_> {
         let mut lo = DVec3::splat(f64::INFINITY);
         let mut hi = DVec3::splat(f64::NEG_INFINITY);
         let mut pending: Vec<(usize, Transform)> = Vec::new();
+        let mut nsurf = 0;
         for p in prims {
             if p.ptype == "instance" || p.ptype == "mesh" {
                 let (set, xf) = self.child_set(p)?;
@@ -307,6 +308,7 @@ impl Builder<'_> {
                 let (a, b) = s.bounds();
                 lo = lo.min(a);
                 hi = hi.max(b);
+                nsurf += 1;
             }
         }
         let full = (lo.x.is_finite() && hi.x.is_finite()).then_some((lo, hi));
@@ -319,7 +321,7 @@ impl Builder<'_> {
         };
         let eps = length_tolerance(size);
 
-        let mut objects = Vec::new();
+        let mut objects = Vec::with_capacity(nsurf);
         let mut distant = Vec::new();
         let mut children = Vec::new();
         let mut defined = Vec::with_capacity(prims.len());
