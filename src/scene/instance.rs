@@ -366,7 +366,7 @@ impl Scene {
             return HitInfo {
                 chain: o.chain,
                 material: o.material,
-                modifier: &o.modifier,
+                modifier: self.objects.modifier(r.obj),
                 frame: None,
             };
         }
