@@ -152,7 +152,11 @@ fn build_cw(prims: &[BoxPrim]) -> CwBvh {
         p.search_depth_threshold,
     );
     ReinsertionOptimizer::default().run(&mut bvh2, p.reinsertion_batch_ratio, None);
-    bvh2_to_cwbvh(&bvh2, p.max_prims_per_leaf.clamp(1, 3), true, false)
+    let mut cw = bvh2_to_cwbvh(&bvh2, p.max_prims_per_leaf.clamp(1, 3), true, false);
+    // The conversion reserves a node per box; a tree needs far fewer.
+    cw.nodes.shrink_to_fit();
+    cw.primitive_indices.shrink_to_fit();
+    cw
 }
 
 /// [`build_cw`] on a thread with a large stack (the conversion recurses once per tree
