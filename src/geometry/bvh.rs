@@ -195,38 +195,33 @@ fn morton(b: &Aabb, lo: DVec3, hi: DVec3) -> u64 {
 /// chunks each built alone, and a tree over the chunks' boxes. Returns the top tree, its
 /// primitives' ids (the chunks' indices) and the chunks.
 fn build_chunked(
-    prims: Vec<BoxPrim>,
     ids: Vec<u32>,
+    boxed: impl Fn(u32) -> BoxPrim,
     lo: DVec3,
     hi: DVec3,
 ) -> (Option<CwBvh>, Vec<u32>, Vec<Chunk>) {
-    let mut order: Vec<(u64, u32)> = prims
+    let mut order: Vec<(u64, u32)> = ids
         .iter()
-        .enumerate()
-        .map(|(k, b)| (morton(&b.0, lo, hi), k as u32))
+        .map(|&i| (morton(&boxed(i).0, lo, hi), i))
         .collect();
+    drop(ids);
     order.sort_unstable();
-    let sorted: Vec<BoxPrim> = order
-        .iter()
-        .map(|&(_, k)| BoxPrim(prims[k as usize].0))
-        .collect();
-    let sorted_ids: Vec<u32> = order.iter().map(|&(_, k)| ids[k as usize]).collect();
-    drop((prims, ids, order));
     let mut chunks = Vec::new();
     let mut tops = Vec::new();
-    for (group, gids) in sorted.chunks(CHUNK).zip(sorted_ids.chunks(CHUNK)) {
-        let cw = build_cw_big_stack(group);
+    for group in order.chunks(CHUNK) {
+        let prims: Vec<BoxPrim> = group.iter().map(|&(_, i)| boxed(i)).collect();
+        let cw = build_cw_big_stack(&prims);
         if cw.nodes.is_empty() {
             continue;
         }
-        let bounds = group.iter().fold(Aabb::empty(), |acc, b| acc.union(&b.0));
+        let bounds = prims.iter().fold(Aabb::empty(), |acc, b| acc.union(&b.0));
         tops.push(BoxPrim(bounds));
         chunks.push(Chunk {
             cw,
-            ids: gids.to_vec(),
+            ids: group.iter().map(|&(_, i)| i).collect(),
         });
     }
-    drop((sorted, sorted_ids));
+    drop(order);
     let top = Some(build_cw_big_stack(&tops)).filter(|cw| !cw.nodes.is_empty());
     (top, (0..chunks.len() as u32).collect(), chunks)
 }
@@ -393,8 +388,9 @@ impl Bvh {
         Bvh::build_from(bounds.len(), |i| bounds[i], eps)
     }
 
-    /// [`Bvh::build`] over `n` boxes given by `bound(i)` (called twice per box), without a
-    /// list of them: large meshes build with less memory.
+    /// [`Bvh::build`] over `n` boxes given by `bound(i)` (called two or three times per
+    /// box, giving the same box each time), without a list of them: large meshes build with
+    /// less memory.
     pub fn build_from(n: usize, bound: impl Fn(usize) -> (DVec3, DVec3), eps: f64) -> Bvh {
         let clamped = |i: usize| -> Option<(DVec3, DVec3)> {
             let (a, b) = bound(i);
@@ -406,36 +402,39 @@ impl Bvh {
         };
         let mut s: f64 = 0.0;
         let mut ids = Vec::new();
+        let mut blo = DVec3::splat(f64::INFINITY);
+        let mut bhi = DVec3::splat(f64::NEG_INFINITY);
         for i in 0..n {
             if let Some((lo, hi)) = clamped(i) {
                 s = s.max(lo.abs().max_element()).max(hi.abs().max_element());
+                blo = blo.min(lo);
+                bhi = bhi.max(hi);
                 ids.push(i as u32);
             }
         }
         let pad = PAD_REL * (s + MARGIN) + PAD_EPS * eps;
-        let mut tlo = DVec3::splat(f64::INFINITY);
-        let mut thi = DVec3::splat(f64::NEG_INFINITY);
-        let prims: Vec<BoxPrim> = ids
-            .iter()
-            .filter_map(|&i| clamped(i as usize))
-            .map(|(lo, hi)| {
-                let lo = lo - DVec3::splat(pad);
-                let hi = hi + DVec3::splat(pad);
-                tlo = tlo.min(lo);
-                thi = thi.max(hi);
-                BoxPrim(Aabb::new(
-                    Vec3A::new(f32_down(lo.x), f32_down(lo.y), f32_down(lo.z)),
-                    Vec3A::new(f32_up(hi.x), f32_up(hi.y), f32_up(hi.z)),
-                ))
-            })
-            .collect();
-        let (cw, ids, chunks) = if prims.is_empty() {
+        // The union of the padded boxes (rounding is monotonic: padding the union's bounds
+        // gives the same numbers as padding every box).
+        let tlo = blo - DVec3::splat(pad);
+        let thi = bhi + DVec3::splat(pad);
+        let boxed = |i: u32| -> BoxPrim {
+            // `bound` gives the same box each time: every listed box is finite.
+            let (lo, hi) = clamped(i as usize).unwrap_or((DVec3::ZERO, DVec3::ZERO));
+            let lo = lo - DVec3::splat(pad);
+            let hi = hi + DVec3::splat(pad);
+            BoxPrim(Aabb::new(
+                Vec3A::new(f32_down(lo.x), f32_down(lo.y), f32_down(lo.z)),
+                Vec3A::new(f32_up(hi.x), f32_up(hi.y), f32_up(hi.z)),
+            ))
+        };
+        let (cw, ids, chunks) = if ids.is_empty() {
             (None, ids, Vec::new())
-        } else if prims.len() <= CHUNK {
+        } else if ids.len() <= CHUNK {
+            let prims: Vec<BoxPrim> = ids.iter().map(|&i| boxed(i)).collect();
             let cw = Some(build_cw_big_stack(&prims)).filter(|cw| !cw.nodes.is_empty());
             (cw, ids, Vec::new())
         } else {
-            build_chunked(prims, ids, tlo, thi)
+            build_chunked(ids, boxed, tlo, thi)
         };
         Bvh {
             cw,

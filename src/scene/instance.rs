@@ -206,7 +206,8 @@ pub(super) fn mesh_object_set(
         None => (DVec3::ZERO, 1.0),
     };
     let mut mesh = TriMesh {
-        pos: pos.iter().map(|p| *p - origin).collect(),
+        // In place: the file's positions are not kept twice.
+        pos: pos.into_iter().map(|p| p - origin).collect(),
         normal,
         uv,
         flags,
