@@ -679,6 +679,49 @@ mod tests {
     }
 
     #[test]
+    fn chunked_tree_finds_the_same_closest_hits() {
+        // More boxes than a chunk: the chunks and the tree over them find what a brute-force
+        // search finds.
+        let mut seed = 12345u64;
+        let mut rnd = move || {
+            seed = seed
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
+            (seed >> 11) as f64 / (1u64 << 53) as f64
+        };
+        let n = CHUNK * 2 + 1000;
+        let boxes: Vec<(DVec3, DVec3)> = (0..n)
+            .map(|_| {
+                let c = DVec3::new(rnd(), rnd(), rnd()) * 100.0;
+                let h = DVec3::new(rnd(), rnd(), rnd()) * 0.5 + DVec3::splat(0.01);
+                (c - h, c + h)
+            })
+            .collect();
+        let bvh = Bvh::build(&boxes, FTINY);
+        assert_eq!(bvh.chunks.len(), 3);
+        let slab = |b: &(DVec3, DVec3), o: DVec3, d: DVec3| -> Option<f64> {
+            let (t0, t1) = ((b.0 - o) / d, (b.1 - o) / d);
+            let (near, far) = (t0.min(t1).max_element(), t0.max(t1).min_element());
+            (near <= far && near > FTINY).then_some(near)
+        };
+        for _ in 0..300 {
+            let o = DVec3::new(
+                rnd() * 140.0 - 20.0,
+                rnd() * 140.0 - 20.0,
+                rnd() * 140.0 - 20.0,
+            );
+            let d = (DVec3::new(rnd(), rnd(), rnd()) - DVec3::splat(0.5)).normalize();
+            let got = bvh.closest(o, d, 1e30, |i| slab(&boxes[i], o, d), |_, _| false);
+            let want = select_closest(
+                (0..n).filter_map(|i| slab(&boxes[i], o, d).map(|t| (i, t))),
+                1e30,
+                |_, _| false,
+            );
+            assert_eq!(got, want);
+        }
+    }
+
+    #[test]
     fn window_rules() {
         // Closest wins when nothing is preferred.
         assert_eq!(
