@@ -14,6 +14,7 @@ use crate::view::ViewFrame;
 use glam::DVec3;
 use rayon::prelude::*;
 use std::sync::atomic::{AtomicU64, AtomicUsize, Ordering};
+use std::sync::Mutex;
 
 /// What a picture render needs besides the tracer.
 pub struct FrameSetup<'a> {
@@ -212,32 +213,66 @@ pub fn render_region(
     }
     let cx0 = x0 / ps;
     let cx1 = x1.div_ceil(ps);
-    let bands: Vec<Vec<(usize, usize, [f32; 3])>> = (cy0..cy1)
-        .into_par_iter()
-        .map(|cy| {
-            let mut rays = 0;
-            let mut pix = Vec::new();
-            if tr.scene.fatal_error().is_some() {
-                return pix;
-            }
-            for cx in cx0..cx1 {
-                render_cell(tr, fs, cx, cy, ps, &mut rays, &mut |x, y, c| {
+    // Samples on the cell borders are shared: a cell takes its left column from the cell
+    // before it in its band, and its top and bottom rows from the band lines it shares with
+    // the bands above and below. Even bands run first (in parallel, their lines disjoint),
+    // then odd bands reuse the lines the even ones filled. A sample depends only on its
+    // pixel, so sharing changes no pixel, only how often a border sample is traced.
+    let lx0 = cx0 * ps;
+    let line_len = (cx1 * ps).min(fs.xres - 1) + 1 - lx0;
+    let lines: Vec<Mutex<Vec<Option<Sample>>>> = (cy0..=cy1)
+        .map(|_| Mutex::new(vec![None; line_len]))
+        .collect();
+    let band = |cy: usize| -> Vec<(usize, usize, [f32; 3])> {
+        let mut rays = 0;
+        let mut pix = Vec::new();
+        if tr.scene.fatal_error().is_some() {
+            return pix;
+        }
+        let b = cy - cy0;
+        let mut top = lines[b].lock().unwrap_or_else(|e| e.into_inner());
+        let mut bottom = lines[b + 1].lock().unwrap_or_else(|e| e.into_inner());
+        let mut left = Vec::new();
+        for cx in cx0..cx1 {
+            let mut edges = CellEdges {
+                top: &mut top[cx * ps - lx0..],
+                bottom: &mut bottom[cx * ps - lx0..],
+                left: &mut left,
+            };
+            render_cell(
+                tr,
+                fs,
+                (cx, cy, ps),
+                &mut edges,
+                &mut rays,
+                &mut |x, y, c| {
                     if x >= x0 && x < x1 && y >= y0 && y < y1 {
                         pix.push((x, y, to_f32(c)));
                     }
-                });
-            }
-            progress.rays.fetch_add(rays, Ordering::Relaxed);
-            progress.rows_done.fetch_add(1, Ordering::Relaxed);
-            pix
-        })
-        .collect();
-    for band in bands {
-        for (x, y, c) in band {
-            out[(y - y0) * w + (x - x0)] = c;
+                },
+            );
         }
+        progress.rays.fetch_add(rays, Ordering::Relaxed);
+        progress.rows_done.fetch_add(1, Ordering::Relaxed);
+        pix
+    };
+    let even: Vec<_> = (cy0..cy1).step_by(2).collect();
+    let odd: Vec<_> = (cy0 + 1..cy1).step_by(2).collect();
+    let even_px: Vec<_> = even.into_par_iter().map(band).collect();
+    let odd_px: Vec<_> = odd.into_par_iter().map(band).collect();
+    for (x, y, c) in even_px.into_iter().chain(odd_px).flatten() {
+        out[(y - y0) * w + (x - x0)] = c;
     }
     out
+}
+
+/// Samples a cell shares with its neighbours: its top and bottom rows (starting at the cell's
+/// left column, in the band lines shared with the bands above and below) and its left column
+/// (the right column of the cell before it, which the cell replaces with its own).
+struct CellEdges<'a> {
+    top: &'a mut [Option<Sample>],
+    bottom: &'a mut [Option<Sample>],
+    left: &'a mut Vec<Option<Sample>>,
 }
 
 /// The rows `[y0, y1)` of the overture's global grid of step `fs.overture` (none at 0).
@@ -290,9 +325,8 @@ fn to_f32(c: Color) -> [f32; 3] {
 fn render_cell(
     tr: &Tracer,
     fs: &FrameSetup,
-    cx: usize,
-    cy: usize,
-    ps: usize,
+    (cx, cy, ps): (usize, usize, usize),
+    edges: &mut CellEdges,
     rays: &mut u64,
     emit: &mut dyn FnMut(usize, usize, Color),
 ) {
@@ -308,14 +342,29 @@ fn render_cell(
     let yb = (ya + ps).min(fs.yres - 1);
     let gw = xb - xa + 1;
     let gh = yb - ya + 1;
+    // `grid`: the samples this cell asked for (they alone decide its pixels, so a pixel never
+    // depends on which neighbours were rendered with it); `known`: those and the ones its
+    // neighbours traced on the shared borders, taken instead of tracing again.
     let mut grid: Vec<Option<Sample>> = vec![None; gw * gh];
-    let get = |x: usize, y: usize, grid: &mut Vec<Option<Sample>>, rays: &mut u64| -> Sample {
+    let mut known = grid.clone();
+    known[..gw].copy_from_slice(&edges.top[..gw]);
+    known[(gh - 1) * gw..].copy_from_slice(&edges.bottom[..gw]);
+    if edges.left.len() == gh {
+        for (y, s) in edges.left.iter().enumerate() {
+            known[y * gw] = *s;
+        }
+    }
+    let mut get = |x: usize, y: usize, grid: &mut Vec<Option<Sample>>, rays: &mut u64| -> Sample {
         let k = (y - ya) * gw + (x - xa);
         if let Some(s) = grid[k] {
             return s;
         }
-        let s = sample_pixel(tr, fs, x, y, rays);
+        let s = match known[k] {
+            Some(s) => s,
+            None => sample_pixel(tr, fs, x, y, rays),
+        };
         grid[k] = Some(s);
+        known[k] = Some(s);
         s
     };
     let mut values: Vec<Option<Color>> = vec![None; gw * gh];
@@ -390,6 +439,11 @@ fn render_cell(
             }
         }
     }
+    drop(get);
+    edges.top[..gw].copy_from_slice(&known[..gw]);
+    edges.bottom[..gw].copy_from_slice(&known[(gh - 1) * gw..]);
+    edges.left.clear();
+    edges.left.extend((0..gh).map(|y| known[y * gw + gw - 1]));
     // Sampled pixels keep their own sample; the others take the first interpolation that
     // reached them (the stack order is fixed, so this is deterministic).
     for y in ya..ye {
