@@ -136,7 +136,7 @@ fn irradiance(tr: &Tracer, ray: &Ray, rng: &mut Sampler) -> Color {
             Color::ZERO
         }
     };
-    let d = tr.direct(ray, &hit, n, &coef, rng);
+    let d = tr.direct(ray, &hit, (n, tr.constant_ambient(Color::ONE)), &coef, rng);
     let l = d + tr.ambient(ray, &hit, Color::ONE, n, bright(d), rng);
     l * std::f64::consts::PI
 }
