@@ -186,7 +186,7 @@ pub fn render_region(
     if w == 0 || h == 0 {
         return out;
     }
-    let ps = fs.ps.max(1);
+    let ps = cell_size(fs.ps);
     // Cells of the global grid: pixels [cx*ps, (cx+1)*ps) × [cy*ps, (cy+1)*ps).
     let cy0 = y0 / ps;
     let cy1 = y1.div_ceil(ps);
@@ -273,6 +273,44 @@ struct CellEdges<'a> {
     top: &'a mut [Option<Sample>],
     bottom: &'a mut [Option<Sample>],
     left: &'a mut Vec<Option<Sample>>,
+}
+
+/// The side in pixels of the cells of the adaptive sampling grid for `-ps` (1: every pixel
+/// is traced). A cell's corners and centre form a quincunx whose nearest samples lie
+/// `side/√2` apart; the side is the even number nearest `ps·√2`, so that spacing is about
+/// `ps`, the spacing of rpict's quincunx at the same `-ps` (the same density of first samples,
+/// one per `ps²` pixels), and every region the cell splits into has a centre pixel
+/// ([`split`]).
+pub fn cell_size(ps: usize) -> usize {
+    if ps <= 1 {
+        return 1;
+    }
+    let half = (ps as f64 / std::f64::consts::SQRT_2).round() as usize;
+    2 * half.max(1)
+}
+
+/// The parts a region `[a, b]` of the sampling grid splits into (sharing their end points).
+/// An even span `n` splits into `k` equal parts of even span, `k` the smallest prime factor
+/// of `n/2` (a span of 2 into single pixels), so every part again has a centre pixel; an odd
+/// span (at the picture's border) splits in two about its middle; a span of 0 or 1 stays.
+fn split(a: usize, b: usize) -> impl Iterator<Item = (usize, usize)> {
+    let n = b - a;
+    let k = if n <= 1 {
+        1
+    } else if n % 2 == 1 || n == 2 {
+        2
+    } else {
+        let m = n / 2;
+        (2..=m).find(|d| m.is_multiple_of(*d)).unwrap_or(m)
+    };
+    let cut = move |i: usize| {
+        if n % 2 == 1 && k == 2 && i == 1 {
+            (a + b) / 2
+        } else {
+            a + n * i / k
+        }
+    };
+    (0..k).map(move |i| (cut(i), cut(i + 1)))
 }
 
 /// The rows `[y0, y1)` of the overture's global grid of step `fs.overture` (none at 0).
@@ -370,10 +408,14 @@ fn render_cell(
     let mut values: Vec<Option<Color>> = vec![None; gw * gh];
     // Recursive subdivision with an explicit stack. A region is interpolated bilinearly from
     // its corners when its centre sample agrees with that interpolation (within -pt); else it
-    // is split in four around the centre. Smooth gradients are therefore interpolated and only
-    // edges, shadows and highlights are refined.
-    let mut stack = vec![(xa, xb, ya, yb)];
-    while let Some((x0, x1, y0, y1)) = stack.pop() {
+    // is split ([`split`]). Smooth gradients are therefore interpolated and only edges,
+    // shadows and highlights are refined. A region split because an edge crosses it (its
+    // corners disagree among themselves) passes `probe = false` to its parts: a part whose
+    // own corners agree lies beside the edge and is interpolated without a centre sample. A
+    // region whose corners agree but whose centre does not holds something smaller than
+    // itself (a thin light, a highlight): all its parts are probed.
+    let mut stack = vec![(xa, xb, ya, yb, true)];
+    while let Some((x0, x1, y0, y1, probe)) = stack.pop() {
         let c00 = get(x0, y0, &mut grid, rays);
         let c10 = get(x1, y0, &mut grid, rays);
         let c01 = get(x0, y1, &mut grid, rays);
@@ -397,11 +439,13 @@ fn render_cell(
                 + c01.color * ((1.0 - fx) * fy)
                 + c11.color * (fx * fy)
         };
-        let refine = !small && {
+        let corners = [c00, c10, c01, c11];
+        let agree = (0..4).all(|i| (i + 1..4).all(|j| !bigdiff(&corners[i], &corners[j], fs.pt)));
+        let refine = !small && (probe || !agree) && {
             let centre = get(xm, ym, &mut grid, rays);
             let predicted = Sample {
                 color: bilinear(xm, ym),
-                dist: if [c00, c10, c01, c11].iter().all(|c| c.dist.is_finite()) {
+                dist: if corners.iter().all(|c| c.dist.is_finite()) {
                     centre.dist
                 } else {
                     f64::INFINITY
@@ -423,23 +467,12 @@ fn render_cell(
             }
             continue;
         }
-        let xs: &[(usize, usize)] = if x1 - x0 >= 2 {
-            &[(x0, xm), (xm, x1)]
-        } else {
-            &[(x0, x1)]
-        };
-        let ys: &[(usize, usize)] = if y1 - y0 >= 2 {
-            &[(y0, ym), (ym, y1)]
-        } else {
-            &[(y0, y1)]
-        };
-        for &(a, b) in xs {
-            for &(c, d) in ys {
-                stack.push((a, b, c, d));
+        for (a, b) in split(x0, x1) {
+            for (c, d) in split(y0, y1) {
+                stack.push((a, b, c, d, agree));
             }
         }
     }
-    drop(get);
     edges.top[..gw].copy_from_slice(&known[..gw]);
     edges.bottom[..gw].copy_from_slice(&known[(gh - 1) * gw..]);
     edges.left.clear();
@@ -455,5 +488,46 @@ fn render_cell(
             };
             emit(x, y, c);
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn cells_keep_rpicts_sample_spacing() {
+        let sides: Vec<usize> = (1..=16).map(cell_size).collect();
+        assert_eq!(
+            sides,
+            [1, 2, 4, 6, 8, 8, 10, 12, 12, 14, 16, 16, 18, 20, 22, 22]
+        );
+        for ps in 2..=16 {
+            // Quincunx spacing side/√2 within a pixel of -ps.
+            let spacing = cell_size(ps) as f64 / std::f64::consts::SQRT_2;
+            assert!((spacing - ps as f64).abs() <= 1.0, "ps {ps}: {spacing}");
+        }
+    }
+
+    #[test]
+    fn splits_tile_the_region_and_keep_centre_pixels() {
+        for a in [0usize, 5, 12] {
+            for n in 0..=40 {
+                let parts: Vec<_> = split(a, a + n).collect();
+                assert_eq!(parts.first().unwrap().0, a);
+                assert_eq!(parts.last().unwrap().1, a + n);
+                assert!(parts.windows(2).all(|w| w[0].1 == w[1].0), "{n}: {parts:?}");
+                if n >= 2 {
+                    assert!(parts.len() >= 2, "{n}: {parts:?}");
+                }
+                if n % 2 == 0 && n > 2 {
+                    // Even parts: each has a centre pixel.
+                    assert!(parts.iter().all(|p| (p.1 - p.0) % 2 == 0), "{n}: {parts:?}");
+                }
+            }
+        }
+        assert_eq!(split(0, 6).collect::<Vec<_>>(), [(0, 2), (2, 4), (4, 6)]);
+        assert_eq!(split(0, 3).collect::<Vec<_>>(), [(0, 1), (1, 3)]);
+        assert_eq!(split(0, 2).collect::<Vec<_>>(), [(0, 1), (1, 2)]);
     }
 }
