@@ -21,7 +21,7 @@
 # Environment:
 #   RES=512  RED=128        picture size and reduced size
 #   SCENES="spheres ..."    subset of: spheres curved glassy mirrors aniso examp daffodil
-#   PS_LIST="1 2 4 8"       -ps settings
+#   PS_LIST="1 2 4 8 16"    -ps settings
 #   DS_LIST="default .1 .05" -ds settings ("default": the renderer's own)
 #   REF_DS=.02 REF_SS=16    the references' -ds and -ss
 #   REPEAT=2                runs per timing (the minimum is kept)
@@ -36,7 +36,7 @@ ROOT=$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)
 RES=${RES:-512}
 RED=${RED:-128}
 SCENES=${SCENES:-"spheres curved glassy mirrors aniso examp daffodil"}
-PS_LIST=${PS_LIST:-"1 2 4 8"}
+PS_LIST=${PS_LIST:-"1 2 4 8 16"}
 DS_LIST=${DS_LIST:-"default .1 .05"}
 REF_DS=${REF_DS:-.02}
 REF_SS=${REF_SS:-16}
