@@ -277,16 +277,28 @@ struct CellEdges<'a> {
 
 /// The side in pixels of the cells of the adaptive sampling grid for `-ps` (1: every pixel
 /// is traced). A cell's corners and centre form a quincunx whose nearest samples lie
-/// `side/√2` apart; the side is the even number nearest `ps·√2`, so that spacing is about
-/// `ps`, the spacing of rpict's quincunx at the same `-ps` (the same density of first samples,
-/// one per `ps²` pixels), and every region the cell splits into has a centre pixel
-/// ([`split`]).
+/// `side/√2` apart; the side is the number of the form 2^a·3^b (a ≥ 1) nearest `ps·√2`, so
+/// that spacing is within 20% of `ps` (`-ps 2`: 1.41), the spacing of rpict's quincunx at the same `-ps`
+/// (about the same density of first samples, one per `ps²` pixels), and every region a cell
+/// splits into is split in two or three and has a centre pixel ([`split`]).
 pub fn cell_size(ps: usize) -> usize {
     if ps <= 1 {
         return 1;
     }
-    let half = (ps as f64 / std::f64::consts::SQRT_2).round() as usize;
-    2 * half.max(1)
+    let want = ps as f64 * std::f64::consts::SQRT_2;
+    let mut best = 2;
+    let mut a = 2;
+    while a as f64 <= 2.0 * want {
+        let mut n = a;
+        while n as f64 <= 2.0 * want {
+            if (n as f64 - want).abs() < (best as f64 - want).abs() {
+                best = n;
+            }
+            n *= 3;
+        }
+        a *= 2;
+    }
+    best
 }
 
 /// The parts a region `[a, b]` of the sampling grid splits into (sharing their end points).
@@ -500,12 +512,20 @@ mod tests {
         let sides: Vec<usize> = (1..=16).map(cell_size).collect();
         assert_eq!(
             sides,
-            [1, 2, 4, 6, 8, 8, 10, 12, 12, 14, 16, 16, 18, 20, 22, 22]
+            [1, 2, 4, 6, 8, 8, 8, 12, 12, 16, 16, 16, 18, 18, 24, 24]
         );
         for ps in 2..=16 {
-            // Quincunx spacing side/√2 within a pixel of -ps.
+            // Quincunx spacing side/√2 within 20% of -ps (-ps 2: 1.41, the nearest).
             let spacing = cell_size(ps) as f64 / std::f64::consts::SQRT_2;
-            assert!((spacing - ps as f64).abs() <= 1.0, "ps {ps}: {spacing}");
+            let off = (spacing / ps as f64 - 1.0).abs();
+            assert!(off <= if ps == 2 { 0.3 } else { 0.2 }, "ps {ps}: {spacing}");
+            // Regions split in two or three parts down to single pixels.
+            let mut n = cell_size(ps);
+            while n > 1 {
+                let parts = split(0, n).count();
+                assert!(parts == 2 || parts == 3, "ps {ps}: {n} into {parts}");
+                n /= parts;
+            }
         }
     }
 
