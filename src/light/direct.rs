@@ -31,9 +31,11 @@ thread_local! {
 
 /// Direct light reflected toward the viewer: `coef(l, ω)` is the material's coefficient for
 /// light arriving from unit direction `l` over solid angle `ω`.
+///
+/// `known`: the point's other light known before the shadow tests ([`Tracer::direct`]).
 pub fn direct(
     tr: &Tracer,
-    weight: f64,
+    (weight, known): (f64, Color),
     hit: &Hit,
     coef: &dyn Fn(DVec3, f64) -> Color,
     rng: &mut Sampler,
@@ -46,14 +48,14 @@ pub fn direct(
     // The buffers are taken out of the thread-local (and put back below), so a nested call
     // would only allocate afresh, never alias them.
     let mut scratch = SCRATCH.with(|s| std::mem::take(&mut *s.borrow_mut()));
-    let result = direct_with(tr, weight, hit, coef, rng, vis, &mut scratch);
+    let result = direct_with(tr, (weight, known), hit, coef, rng, vis, &mut scratch);
     SCRATCH.with(|s| *s.borrow_mut() = scratch);
     result
 }
 
 fn direct_with(
     tr: &Tracer,
-    weight: f64,
+    (weight, known): (f64, Color),
     hit: &Hit,
     coef: &dyn Fn(DVec3, f64) -> Color,
     rng: &mut Sampler,
@@ -116,7 +118,7 @@ fn direct_with(
     for (tested, i) in (0..n).enumerate() {
         if thresh > 0.0 && tested >= MIN_SHADOW_TESTS {
             let ahead: f64 = cands[i..(i + nshadcheck).min(n)].iter().map(|c| c.0).sum();
-            if ahead < thresh * bright(result) {
+            if ahead < thresh * bright(known + result) {
                 untested_from = i;
                 break;
             }

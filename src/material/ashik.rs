@@ -118,11 +118,12 @@ impl Ashik {
             }
             c
         };
-        result += tr.direct(ray, hit, n, &coef, rng);
         let mut acolor = dcolor;
         if rblt {
             acolor += scolor;
         }
+        let known = result + tr.constant_ambient(acolor);
+        result += tr.direct(ray, hit, (n, known), &coef, rng);
         let other = bright(result);
         result += tr.ambient(ray, hit, acolor, n, other, rng);
         result

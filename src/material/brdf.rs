@@ -242,7 +242,8 @@ impl BrdfMat {
             }
             c
         };
-        let mut result = tr.direct(ray, hit, n, &coef, rng);
+        let known = tr.constant_ambient(mcolor);
+        let mut result = tr.direct(ray, hit, (n, known), &coef, rng);
         let other = bright(result);
         if trans < 1.0 - FTINY {
             result += tr.ambient(ray, hit, mcolor * (1.0 - trans), n, other, rng);

@@ -177,7 +177,10 @@ impl BrtdFunc {
                 }
                 c
             };
-            result += tr.direct(ray, hit, n, &coef, rng);
+            let amb = if hasrefl { rdiff } else { Color::ZERO }
+                + if hastrans { tdiff } else { Color::ZERO };
+            let known = result + tr.constant_ambient(amb);
+            result += tr.direct(ray, hit, (n, known), &coef, rng);
         }
         let other = bright(result);
         if hasrefl {

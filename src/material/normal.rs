@@ -235,19 +235,21 @@ impl NormalMat {
             }
             c
         };
-        result += tr.direct(ray, hit, n, &coef, rng);
         // Ambient (indirect diffuse), and what is too weak to sample.
         let mut acolor = dcolor;
         if rblt {
             acolor += scolor;
         }
-        let other = bright(result);
-        result += tr.ambient(ray, hit, acolor, n, other, rng);
         let mut tacolor = tdcolor;
         if tblt {
             tacolor += tscolor;
         }
-        if hastrans && bright(tacolor) > 0.0 {
+        let hastamb = hastrans && bright(tacolor) > 0.0;
+        let known = result + tr.constant_ambient(if hastamb { acolor + tacolor } else { acolor });
+        result += tr.direct(ray, hit, (n, known), &coef, rng);
+        let other = bright(result);
+        result += tr.ambient(ray, hit, acolor, n, other, rng);
+        if hastamb {
             result += tr.ambient(ray, hit, tacolor, -n, other, rng);
         }
         result

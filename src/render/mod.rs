@@ -7,5 +7,5 @@ pub mod sampler;
 pub mod shading;
 pub mod trace;
 
-pub use picture::{render_region, FrameSetup, RenderProgress};
+pub use picture::{cell_size, render_region, FrameSetup, RenderProgress};
 pub use trace::Tracer;

@@ -14,6 +14,7 @@ use crate::view::ViewFrame;
 use glam::DVec3;
 use rayon::prelude::*;
 use std::sync::atomic::{AtomicU64, AtomicUsize, Ordering};
+use std::sync::Mutex;
 
 /// What a picture render needs besides the tracer.
 pub struct FrameSetup<'a> {
@@ -135,7 +136,7 @@ fn irradiance(tr: &Tracer, ray: &Ray, rng: &mut Sampler) -> Color {
             Color::ZERO
         }
     };
-    let d = tr.direct(ray, &hit, n, &coef, rng);
+    let d = tr.direct(ray, &hit, (n, tr.constant_ambient(Color::ONE)), &coef, rng);
     let l = d + tr.ambient(ray, &hit, Color::ONE, n, bright(d), rng);
     l * std::f64::consts::PI
 }
@@ -185,7 +186,7 @@ pub fn render_region(
     if w == 0 || h == 0 {
         return out;
     }
-    let ps = fs.ps.max(1);
+    let ps = cell_size(fs.ps);
     // Cells of the global grid: pixels [cx*ps, (cx+1)*ps) × [cy*ps, (cy+1)*ps).
     let cy0 = y0 / ps;
     let cy1 = y1.div_ceil(ps);
@@ -212,32 +213,116 @@ pub fn render_region(
     }
     let cx0 = x0 / ps;
     let cx1 = x1.div_ceil(ps);
-    let bands: Vec<Vec<(usize, usize, [f32; 3])>> = (cy0..cy1)
-        .into_par_iter()
-        .map(|cy| {
-            let mut rays = 0;
-            let mut pix = Vec::new();
-            if tr.scene.fatal_error().is_some() {
-                return pix;
-            }
-            for cx in cx0..cx1 {
-                render_cell(tr, fs, cx, cy, ps, &mut rays, &mut |x, y, c| {
+    // Samples on the cell borders are shared: a cell takes its left column from the cell
+    // before it in its band, and its top and bottom rows from the band lines it shares with
+    // the bands above and below. Even bands run first (in parallel, their lines disjoint),
+    // then odd bands reuse the lines the even ones filled. A sample depends only on its
+    // pixel, so sharing changes no pixel, only how often a border sample is traced.
+    let lx0 = cx0 * ps;
+    let line_len = (cx1 * ps).min(fs.xres - 1) + 1 - lx0;
+    let lines: Vec<Mutex<Vec<Option<Sample>>>> = (cy0..=cy1)
+        .map(|_| Mutex::new(vec![None; line_len]))
+        .collect();
+    let band = |cy: usize| -> Vec<(usize, usize, [f32; 3])> {
+        let mut rays = 0;
+        let mut pix = Vec::new();
+        if tr.scene.fatal_error().is_some() {
+            return pix;
+        }
+        let b = cy - cy0;
+        let mut top = lines[b].lock().unwrap_or_else(|e| e.into_inner());
+        let mut bottom = lines[b + 1].lock().unwrap_or_else(|e| e.into_inner());
+        let mut left = Vec::new();
+        for cx in cx0..cx1 {
+            let mut edges = CellEdges {
+                top: &mut top[cx * ps - lx0..],
+                bottom: &mut bottom[cx * ps - lx0..],
+                left: &mut left,
+            };
+            render_cell(
+                tr,
+                fs,
+                (cx, cy, ps),
+                &mut edges,
+                &mut rays,
+                &mut |x, y, c| {
                     if x >= x0 && x < x1 && y >= y0 && y < y1 {
                         pix.push((x, y, to_f32(c)));
                     }
-                });
-            }
-            progress.rays.fetch_add(rays, Ordering::Relaxed);
-            progress.rows_done.fetch_add(1, Ordering::Relaxed);
-            pix
-        })
-        .collect();
-    for band in bands {
-        for (x, y, c) in band {
-            out[(y - y0) * w + (x - x0)] = c;
+                },
+            );
         }
+        progress.rays.fetch_add(rays, Ordering::Relaxed);
+        progress.rows_done.fetch_add(1, Ordering::Relaxed);
+        pix
+    };
+    let even: Vec<_> = (cy0..cy1).step_by(2).collect();
+    let odd: Vec<_> = (cy0 + 1..cy1).step_by(2).collect();
+    let even_px: Vec<_> = even.into_par_iter().map(band).collect();
+    let odd_px: Vec<_> = odd.into_par_iter().map(band).collect();
+    for (x, y, c) in even_px.into_iter().chain(odd_px).flatten() {
+        out[(y - y0) * w + (x - x0)] = c;
     }
     out
+}
+
+/// Samples a cell shares with its neighbours: its top and bottom rows (starting at the cell's
+/// left column, in the band lines shared with the bands above and below) and its left column
+/// (the right column of the cell before it, which the cell replaces with its own).
+struct CellEdges<'a> {
+    top: &'a mut [Option<Sample>],
+    bottom: &'a mut [Option<Sample>],
+    left: &'a mut Vec<Option<Sample>>,
+}
+
+/// The side in pixels of the cells of the adaptive sampling grid for `-ps` (1: every pixel
+/// is traced). A cell's corners and centre form a quincunx whose nearest samples lie
+/// `side/√2` apart; the side is the number of the form 2^a·3^b (a ≥ 1) nearest `ps·√2`, so
+/// that spacing is within 20% of `ps` (`-ps 2`: 1.41), the spacing of rpict's quincunx at the same `-ps`
+/// (about the same density of first samples, one per `ps²` pixels), and every region a cell
+/// splits into is split in two or three and has a centre pixel ([`split`]).
+pub fn cell_size(ps: usize) -> usize {
+    if ps <= 1 {
+        return 1;
+    }
+    let want = ps as f64 * std::f64::consts::SQRT_2;
+    let mut best = 2;
+    let mut a = 2;
+    while a as f64 <= 2.0 * want {
+        let mut n = a;
+        while n as f64 <= 2.0 * want {
+            if (n as f64 - want).abs() < (best as f64 - want).abs() {
+                best = n;
+            }
+            n *= 3;
+        }
+        a *= 2;
+    }
+    best
+}
+
+/// The parts a region `[a, b]` of the sampling grid splits into (sharing their end points).
+/// An even span `n` splits into `k` equal parts of even span, `k` the smallest prime factor
+/// of `n/2` (a span of 2 into single pixels), so every part again has a centre pixel; an odd
+/// span (at the picture's border) splits in two about its middle; a span of 0 or 1 stays.
+fn split(a: usize, b: usize) -> impl Iterator<Item = (usize, usize)> {
+    let n = b - a;
+    let k = if n <= 1 {
+        1
+    } else if n % 2 == 1 || n == 2 {
+        2
+    } else {
+        let m = n / 2;
+        (2..=m).find(|d| m.is_multiple_of(*d)).unwrap_or(m)
+    };
+    let cut = move |i: usize| {
+        if n % 2 == 1 && k == 2 && i == 1 {
+            (a + b) / 2
+        } else {
+            a + n * i / k
+        }
+    };
+    (0..k).map(move |i| (cut(i), cut(i + 1)))
 }
 
 /// The rows `[y0, y1)` of the overture's global grid of step `fs.overture` (none at 0).
@@ -290,9 +375,8 @@ fn to_f32(c: Color) -> [f32; 3] {
 fn render_cell(
     tr: &Tracer,
     fs: &FrameSetup,
-    cx: usize,
-    cy: usize,
-    ps: usize,
+    (cx, cy, ps): (usize, usize, usize),
+    edges: &mut CellEdges,
     rays: &mut u64,
     emit: &mut dyn FnMut(usize, usize, Color),
 ) {
@@ -308,23 +392,42 @@ fn render_cell(
     let yb = (ya + ps).min(fs.yres - 1);
     let gw = xb - xa + 1;
     let gh = yb - ya + 1;
+    // `grid`: the samples this cell asked for (they alone decide its pixels, so a pixel never
+    // depends on which neighbours were rendered with it); `known`: those and the ones its
+    // neighbours traced on the shared borders, taken instead of tracing again.
     let mut grid: Vec<Option<Sample>> = vec![None; gw * gh];
-    let get = |x: usize, y: usize, grid: &mut Vec<Option<Sample>>, rays: &mut u64| -> Sample {
+    let mut known = grid.clone();
+    known[..gw].copy_from_slice(&edges.top[..gw]);
+    known[(gh - 1) * gw..].copy_from_slice(&edges.bottom[..gw]);
+    if edges.left.len() == gh {
+        for (y, s) in edges.left.iter().enumerate() {
+            known[y * gw] = *s;
+        }
+    }
+    let mut get = |x: usize, y: usize, grid: &mut Vec<Option<Sample>>, rays: &mut u64| -> Sample {
         let k = (y - ya) * gw + (x - xa);
         if let Some(s) = grid[k] {
             return s;
         }
-        let s = sample_pixel(tr, fs, x, y, rays);
+        let s = match known[k] {
+            Some(s) => s,
+            None => sample_pixel(tr, fs, x, y, rays),
+        };
         grid[k] = Some(s);
+        known[k] = Some(s);
         s
     };
     let mut values: Vec<Option<Color>> = vec![None; gw * gh];
     // Recursive subdivision with an explicit stack. A region is interpolated bilinearly from
     // its corners when its centre sample agrees with that interpolation (within -pt); else it
-    // is split in four around the centre. Smooth gradients are therefore interpolated and only
-    // edges, shadows and highlights are refined.
-    let mut stack = vec![(xa, xb, ya, yb)];
-    while let Some((x0, x1, y0, y1)) = stack.pop() {
+    // is split ([`split`]). Smooth gradients are therefore interpolated and only edges,
+    // shadows and highlights are refined. A region split because an edge crosses it (its
+    // corners disagree among themselves) passes `probe = false` to its parts: a part whose
+    // own corners agree lies beside the edge and is interpolated without a centre sample. A
+    // region whose corners agree but whose centre does not holds something smaller than
+    // itself (a thin light, a highlight): all its parts are probed.
+    let mut stack = vec![(xa, xb, ya, yb, true)];
+    while let Some((x0, x1, y0, y1, probe)) = stack.pop() {
         let c00 = get(x0, y0, &mut grid, rays);
         let c10 = get(x1, y0, &mut grid, rays);
         let c01 = get(x0, y1, &mut grid, rays);
@@ -348,11 +451,13 @@ fn render_cell(
                 + c01.color * ((1.0 - fx) * fy)
                 + c11.color * (fx * fy)
         };
-        let refine = !small && {
+        let corners = [c00, c10, c01, c11];
+        let agree = (0..4).all(|i| (i + 1..4).all(|j| !bigdiff(&corners[i], &corners[j], fs.pt)));
+        let refine = !small && (probe || !agree) && {
             let centre = get(xm, ym, &mut grid, rays);
             let predicted = Sample {
                 color: bilinear(xm, ym),
-                dist: if [c00, c10, c01, c11].iter().all(|c| c.dist.is_finite()) {
+                dist: if corners.iter().all(|c| c.dist.is_finite()) {
                     centre.dist
                 } else {
                     f64::INFINITY
@@ -374,22 +479,16 @@ fn render_cell(
             }
             continue;
         }
-        let xs: &[(usize, usize)] = if x1 - x0 >= 2 {
-            &[(x0, xm), (xm, x1)]
-        } else {
-            &[(x0, x1)]
-        };
-        let ys: &[(usize, usize)] = if y1 - y0 >= 2 {
-            &[(y0, ym), (ym, y1)]
-        } else {
-            &[(y0, y1)]
-        };
-        for &(a, b) in xs {
-            for &(c, d) in ys {
-                stack.push((a, b, c, d));
+        for (a, b) in split(x0, x1) {
+            for (c, d) in split(y0, y1) {
+                stack.push((a, b, c, d, agree));
             }
         }
     }
+    edges.top[..gw].copy_from_slice(&known[..gw]);
+    edges.bottom[..gw].copy_from_slice(&known[(gh - 1) * gw..]);
+    edges.left.clear();
+    edges.left.extend((0..gh).map(|y| known[y * gw + gw - 1]));
     // Sampled pixels keep their own sample; the others take the first interpolation that
     // reached them (the stack order is fixed, so this is deterministic).
     for y in ya..ye {
@@ -401,5 +500,54 @@ fn render_cell(
             };
             emit(x, y, c);
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn cells_keep_rpicts_sample_spacing() {
+        let sides: Vec<usize> = (1..=16).map(cell_size).collect();
+        assert_eq!(
+            sides,
+            [1, 2, 4, 6, 8, 8, 8, 12, 12, 16, 16, 16, 18, 18, 24, 24]
+        );
+        for ps in 2..=16 {
+            // Quincunx spacing side/√2 within 20% of -ps (-ps 2: 1.41, the nearest).
+            let spacing = cell_size(ps) as f64 / std::f64::consts::SQRT_2;
+            let off = (spacing / ps as f64 - 1.0).abs();
+            assert!(off <= if ps == 2 { 0.3 } else { 0.2 }, "ps {ps}: {spacing}");
+            // Regions split in two or three parts down to single pixels.
+            let mut n = cell_size(ps);
+            while n > 1 {
+                let parts = split(0, n).count();
+                assert!(parts == 2 || parts == 3, "ps {ps}: {n} into {parts}");
+                n /= parts;
+            }
+        }
+    }
+
+    #[test]
+    fn splits_tile_the_region_and_keep_centre_pixels() {
+        for a in [0usize, 5, 12] {
+            for n in 0..=40 {
+                let parts: Vec<_> = split(a, a + n).collect();
+                assert_eq!(parts.first().unwrap().0, a);
+                assert_eq!(parts.last().unwrap().1, a + n);
+                assert!(parts.windows(2).all(|w| w[0].1 == w[1].0), "{n}: {parts:?}");
+                if n >= 2 {
+                    assert!(parts.len() >= 2, "{n}: {parts:?}");
+                }
+                if n % 2 == 0 && n > 2 {
+                    // Even parts: each has a centre pixel.
+                    assert!(parts.iter().all(|p| (p.1 - p.0) % 2 == 0), "{n}: {parts:?}");
+                }
+            }
+        }
+        assert_eq!(split(0, 6).collect::<Vec<_>>(), [(0, 2), (2, 4), (4, 6)]);
+        assert_eq!(split(0, 3).collect::<Vec<_>>(), [(0, 1), (1, 3)]);
+        assert_eq!(split(0, 2).collect::<Vec<_>>(), [(0, 1), (1, 2)]);
     }
 }

@@ -481,12 +481,15 @@ impl<'a> Tracer<'a> {
         })
     }
 
-    /// Direct light at a hit for a material coefficient function.
+    /// Direct light at a hit for a material coefficient function. `known` is the light the
+    /// surface sends besides its direct light that is known before the shadow tests (its
+    /// specular rays, the constant `-av` ambient): the adaptive shadow test (`-dt`) stops
+    /// relative to it plus the direct light found so far, as rpict's does.
     pub fn direct(
         &self,
         ray: &Ray,
         hit: &Hit,
-        _normal: DVec3,
+        (_normal, known): (DVec3, Color),
         coef: &dyn Fn(DVec3, f64) -> Color,
         rng: &mut Sampler,
     ) -> Color {
@@ -499,8 +502,22 @@ impl<'a> Tracer<'a> {
         };
         match plan {
             DirectPlan::Skip => Color::ZERO,
-            DirectPlan::Estimate { weight } => direct(self, weight, hit, coef, rng, None),
-            DirectPlan::Full(vis) => direct(self, ray.weight, hit, coef, rng, vis.as_ref()),
+            DirectPlan::Estimate { weight } => direct(self, (weight, known), hit, coef, rng, None),
+            DirectPlan::Full(vis) => {
+                direct(self, (ray.weight, known), hit, coef, rng, vis.as_ref())
+            }
+        }
+    }
+
+    /// The ambient light reflected with coefficient `refl` when it is the constant `-av`
+    /// (no indirect-light calculation), known before any ray is traced; else zero.
+    pub fn constant_ambient(&self, refl: Color) -> Color {
+        match self.ambient {
+            Some(_) => Color::ZERO,
+            None => {
+                let av = self.params.av;
+                refl * DVec3::new(av[0], av[1], av[2])
+            }
         }
     }
 
