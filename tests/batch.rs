@@ -156,7 +156,10 @@ fn ab0_jobs_are_pixel_identical_to_tpict_at_any_worker_count() {
                 let (x0, y0) = (t["x0"].as_u64().unwrap(), t["y0"].as_u64().unwrap());
                 let (x1, y1) = (x0 + t["w"].as_u64().unwrap(), y0 + t["h"].as_u64().unwrap());
                 for (v, end) in [(x0, w), (x1, w), (y0, h), (y1, h)] {
-                    assert!(v % g == 0 || v == end, "-ps {ps}: tile {t} is off the grid");
+                    assert!(
+                        v.is_multiple_of(g) || v == end,
+                        "-ps {ps}: tile {t} is off the grid"
+                    );
                 }
             }
             if let Some(t) = tiles {

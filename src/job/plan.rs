@@ -185,7 +185,7 @@ pub fn plan_tiles(width: usize, height: usize, tiles: usize, grid: usize) -> Vec
 /// Whether every tile edge inside the `width × height` picture lies on a multiple of `grid`.
 pub fn on_grid(width: usize, height: usize, tiles: &[TileRect], grid: usize) -> bool {
     let grid = grid.max(1);
-    let ok = |v: usize, end: usize| v % grid == 0 || v == end;
+    let ok = |v: usize, end: usize| v.is_multiple_of(grid) || v == end;
     tiles.iter().all(|t| {
         ok(t.x0, width) && ok(t.x0 + t.w, width) && ok(t.y0, height) && ok(t.y0 + t.h, height)
     })
