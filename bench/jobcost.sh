@@ -4,10 +4,11 @@
 #   - one `tpict -n 1` render;
 #   - the default plan for 16 workers (`tplan --workers 16`) rendered by 1 worker (`--threads 1`);
 #   - the same plan rendered by 16 workers at once (1 thread each, time-sharing the cores);
-# and the per-tile overhead: the CPU of one worker on a plan of 32x32 tiles minus that on a
+# and tassemble's CPU (writing the picture, which tpict's CPU includes), the workers' summed
+# T_idle with N workers (time-sharing the cores inflates it), and the per-tile overhead: the CPU of one worker on a plan of 32x32 tiles minus that on a
 # plan of one tile, per extra tile, at -ab 0 (every pixel costs the same in both plans: the
 # tiles lie on the -ps grid, so the rays are equal).
-# Every figure is the median of REPEAT runs, with the spread (min-max) in brackets.
+# Ratios are the job's median CPU over tpict's (workers only). Every figure is the median of REPEAT runs, with the spread (min-max) in brackets.
 # Scene: tests/scenes/daffodil (58 surfaces: genrev/genworm flowers in a room, two panels).
 # Usage: bash bench/jobcost.sh   (environment: RES="1024 512", AB="0 1", REPEAT=3, WORKERS=16,
 #        NO_BUILD=1 to skip the build; binaries from $CARGO_TARGET_DIR or target/)
@@ -46,11 +47,11 @@ run_workers() {
     for p in "${pids[@]}"; do wait "$p"; done
 }
 
-printf '%-6s %-3s %-22s %-10s %-22s %-22s %-7s %-7s %-9s %-9s %s\n' res ab "tpict CPU s" "rays" \
-    "1 worker CPU s" "${WORKERS} workers CPU s" "ratio1" "ratioN" "rays/tpict" tiles "idle s (N workers)"
+printf '%-6s %-3s %-22s %-10s %-22s %-22s %-7s %-7s %-10s %-6s %-22s %s\n' res ab "tpict CPU s" "rays" \
+    "1 worker CPU s" "${WORKERS} workers CPU s" "ratio1" "ratioN" "rays/tpict" tiles "tassemble CPU s" "ΣT_idle s (N workers)"
 for res in $RES; do
     for ab in $AB; do
-        one=() w1=() wn=() idle=()
+        one=() w1=() wn=() idle=() asm=()
         for r in $(seq 1 "$REPEAT"); do
             /usr/bin/time -f "%U %S" -o "$TMP/t.time" "$B/tpict" -n 1 "${VIEW[@]}" -x "$res" -y "$res" \
                 -ab "$ab" --stats "$TMP/st.json" "${SCENE[@]}" >/dev/null 2>&1
@@ -66,13 +67,16 @@ for res in $RES; do
             run_workers "$TMP/job" "$WORKERS"
             wn+=("$(cpu "$TMP"/w*.time)")
             idle+=("$(job_idle "$TMP/job")")
+            /usr/bin/time -f "%U %S" -o "$TMP/a.time" "$B/tassemble" "$TMP/job" -o "$TMP/out.hdr" 2>/dev/null
+            asm+=("$(cpu "$TMP/a.time")")
         done
         m1=$(median "${one[@]}")
-        printf '%-6s %-3s %-22s %-10s %-22s %-22s %-7s %-7s %-9s %-9s %s\n' "${res}²" "$ab" "$(stats "${one[@]}")" "$rays" \
+        printf '%-6s %-3s %-22s %-10s %-22s %-22s %-7s %-7s %-10s %-6s %-22s %s\n' "${res}²" "$ab" "$(stats "${one[@]}")" "$rays" \
             "$(stats "${w1[@]}")" "$(stats "${wn[@]}")" \
             "$(awk -v a="$(median "${w1[@]}")" -v b="$m1" 'BEGIN {printf "%.3f", a / b}')" \
             "$(awk -v a="$(median "${wn[@]}")" -v b="$m1" 'BEGIN {printf "%.3f", a / b}')" \
-            "$(awk -v a="$jrays" -v b="$rays" 'BEGIN {printf "%.4f", a / b}')" "$tiles" "$(stats "${idle[@]}")"
+            "$(awk -v a="$jrays" -v b="$rays" 'BEGIN {printf "%.4f", a / b}')" "$tiles" "$(stats "${asm[@]}")" \
+            "$(stats "${idle[@]}")"
     done
 done
 

@@ -61,7 +61,7 @@ pub const TILES_PER_WORKER: usize = 80;
 /// CPU seconds a worker spends on a tile besides rendering it: claiming it, writing,
 /// fsyncing and renaming its result, marking it done (`bench/jobcost.sh`: 32×32 tiles
 /// against one tile at `-ab 0`, docs/benchmarks.md "Job cost").
-pub const TILE_OVERHEAD: f64 = 0.6e-3;
+pub const TILE_OVERHEAD: f64 = 0.8e-3;
 
 /// The share of a tile's cost its overhead may take in the default plan.
 pub const OVERHEAD_SHARE: f64 = 0.02;
