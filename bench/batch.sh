@@ -90,7 +90,7 @@ if [ "${COSTS:-1}" = 1 ]; then
     costs_job 1w-cold 1
     costs_job 1w-warm 1 "$TMP/store-16w.log"
     for c in 16w 1w-cold 1w-warm; do
-        (cd "$ROOT" && cargo bench --quiet --bench tilesim -- "$OUT/costs-$c.json" --json "$OUT/tilesim-$c.json") | tee "$OUT/tilesim-$c.txt"
+        (cd "$ROOT" && cargo bench --quiet --bench tilesim -- "$OUT/costs-$c.json" --tiles-per-worker 80 --json "$OUT/tilesim-$c.json") | tee "$OUT/tilesim-$c.txt"
         python3 "$ROOT/bench/plot_tilesim.py" "$OUT/tilesim-$c.json" "$OUT/tilesim-$c.png" || true
     done
 fi

@@ -5,8 +5,9 @@
 #   - the default plan for 16 workers (`tplan --workers 16`) rendered by 1 worker (`--threads 1`);
 #   - the same plan rendered by 16 workers at once (1 thread each, time-sharing the cores);
 # and tassemble's CPU (writing the picture, which tpict's CPU includes), the workers' summed
-# T_idle with N workers (time-sharing the cores inflates it), and the per-tile overhead: the CPU of one worker on a plan of 32x32 tiles minus that on a
-# plan of one tile, per extra tile, at -ab 0 (every pixel costs the same in both plans: the
+# T_idle with N workers (time-sharing the cores inflates it), and the per-tile overhead: the
+# CPU of one worker on a plan of 32x32 tiles minus that on a plan of one tile, per extra
+# tile, at -ab 0 (every pixel costs the same in both plans: the
 # tiles lie on the -ps grid, so the rays are equal).
 # Ratios are the job's median CPU over tpict's (workers only). Every figure is the median of REPEAT runs, with the spread (min-max) in brackets.
 # Scene: tests/scenes/daffodil (58 surfaces: genrev/genworm flowers in a room, two panels).
@@ -26,8 +27,26 @@ VIEW=(-vp 50 60 40 -vd 0 -0.707107 -0.707107 -vu 0 1 0 -vh 20 -vv 20 -av .2 .2 .
 TMP=$(mktemp -d)
 trap 'rm -rf "$TMP"' EXIT
 
-# cpu FILE...: summed user+sys seconds of /usr/bin/time -f "%U %S" outputs
-cpu() { cat "$@" | awk '{s += $1 + $2} END {printf "%.3f", s}'; }
+# cputime N CMD...: run N copies of CMD at once ("{i}" in an argument becomes 1..N; stdout
+# to /dev/null, stderr to $TMP/err) and print their summed user+sys CPU seconds, from
+# wait4's rusage (microseconds; /usr/bin/time rounds each process to 10 ms)
+cputime() {
+    python3 - "$TMP/err" "$@" <<'PY'
+import os, subprocess, sys
+err, n, cmd = sys.argv[1], int(sys.argv[2]), sys.argv[3:]
+with open(os.devnull, "wb") as null, open(err, "ab") as e:
+    procs = [subprocess.Popen([a.replace("{i}", str(i + 1)) for a in cmd], stdout=null, stderr=e)
+             for i in range(n)]
+    total = 0.0
+    for p in procs:
+        _, status, ru = os.wait4(p.pid, 0)
+        p.returncode = os.waitstatus_to_exitcode(status)
+        if p.returncode != 0:
+            sys.exit(f"{cmd[0]} failed ({p.returncode}); see {err}")
+        total += ru.ru_utime + ru.ru_stime
+print(f"{total:.4f}")
+PY
+}
 # stats FIGURES...: "median [min-max]"
 stats() { printf '%s\n' "$@" | sort -g | awk -v f="${FMT:-%.3f}" '{v[NR] = $1} END {printf f " [" f "-" f "]", v[int((NR + 1) / 2)], v[1], v[NR]}'; }
 median() { printf '%s\n' "$@" | sort -g | awk '{v[NR] = $1} END {print v[int((NR + 1) / 2)]}'; }
@@ -36,16 +55,8 @@ job_rays() { "$B/tstat" "$1" --json | python3 -c 'import json,sys; print(json.lo
 job_idle() { "$B/tstat" "$1" --json | python3 -c 'import json,sys; print(round(json.load(sys.stdin)["aggregate"]["t_idle"], 3))'; }
 plan() { "$B/tplan" "$@" 2>&1 >/dev/null | sed -n 's/.* \([0-9]*\) tiles,.*/\1/p'; }
 
-# run_workers JOB N: N workers at once, each's CPU in $TMP/w*.time
-run_workers() {
-    local job=$1 n=$2 pids=()
-    rm -f "$TMP"/w*.time
-    for i in $(seq 1 "$n"); do
-        /usr/bin/time -f "%U %S" -o "$TMP/w$i.time" "$B/tpiece" "$job" --worker-id "w$i" --threads 1 -q 2>/dev/null &
-        pids+=("$!")
-    done
-    for p in "${pids[@]}"; do wait "$p"; done
-}
+# run_workers JOB N: N workers at once (one thread each); prints their summed CPU seconds
+run_workers() { cputime "$2" "$B/tpiece" "$1" --worker-id "w{i}" --threads 1 -q; }
 
 printf '%-6s %-3s %-22s %-10s %-22s %-22s %-7s %-7s %-10s %-6s %-22s %s\n' res ab "tpict CPU s" "rays" \
     "1 worker CPU s" "${WORKERS} workers CPU s" "ratio1" "ratioN" "rays/tpict" tiles "tassemble CPU s" "ΣT_idle s (N workers)"
@@ -53,22 +64,18 @@ for res in $RES; do
     for ab in $AB; do
         one=() w1=() wn=() idle=() asm=()
         for r in $(seq 1 "$REPEAT"); do
-            /usr/bin/time -f "%U %S" -o "$TMP/t.time" "$B/tpict" -n 1 "${VIEW[@]}" -x "$res" -y "$res" \
-                -ab "$ab" --stats "$TMP/st.json" "${SCENE[@]}" >/dev/null 2>&1
-            one+=("$(cpu "$TMP/t.time")")
+            one+=("$(cputime 1 "$B/tpict" -n 1 "${VIEW[@]}" -x "$res" -y "$res" -ab "$ab" \
+                --stats "$TMP/st.json" "${SCENE[@]}")")
             rays=$(python3 -c 'import json,sys; print(json.load(open(sys.argv[1]))["total_rays"])' "$TMP/st.json")
             rm -rf "$TMP/job"
             tiles=$(plan --workers "$WORKERS" -o "$TMP/job" -- "${VIEW[@]}" -x "$res" -y "$res" -ab "$ab" "${SCENE[@]}")
-            run_workers "$TMP/job" 1
-            w1+=("$(cpu "$TMP"/w*.time)")
+            w1+=("$(run_workers "$TMP/job" 1)")
             jrays=$(job_rays "$TMP/job")
             rm -rf "$TMP/job"
             plan --workers "$WORKERS" -o "$TMP/job" -- "${VIEW[@]}" -x "$res" -y "$res" -ab "$ab" "${SCENE[@]}" >/dev/null
-            run_workers "$TMP/job" "$WORKERS"
-            wn+=("$(cpu "$TMP"/w*.time)")
+            wn+=("$(run_workers "$TMP/job" "$WORKERS")")
             idle+=("$(job_idle "$TMP/job")")
-            /usr/bin/time -f "%U %S" -o "$TMP/a.time" "$B/tassemble" "$TMP/job" -o "$TMP/out.hdr" 2>/dev/null
-            asm+=("$(cpu "$TMP/a.time")")
+            asm+=("$(cputime 1 "$B/tassemble" "$TMP/job" -o "$TMP/out.hdr")")
         done
         m1=$(median "${one[@]}")
         printf '%-6s %-3s %-22s %-10s %-22s %-22s %-7s %-7s %-10s %-6s %-22s %s\n' "${res}²" "$ab" "$(stats "${one[@]}")" "$rays" \
@@ -85,12 +92,10 @@ many=() single=()
 for r in $(seq 1 "$REPEAT"); do
     rm -rf "$TMP/job"
     n=$(plan --tile-size 32x32 -o "$TMP/job" -- "${VIEW[@]}" -x 1024 -y 1024 -ab 0 "${SCENE[@]}")
-    run_workers "$TMP/job" 1
-    many+=("$(cpu "$TMP"/w*.time)")
+    many+=("$(run_workers "$TMP/job" 1)")
     rm -rf "$TMP/job"
     plan --tiles 1 -o "$TMP/job" -- "${VIEW[@]}" -x 1024 -y 1024 -ab 0 "${SCENE[@]}" >/dev/null
-    run_workers "$TMP/job" 1
-    single+=("$(cpu "$TMP"/w*.time)")
+    single+=("$(run_workers "$TMP/job" 1)")
 done
 per=()
 for i in "${!many[@]}"; do
