@@ -411,7 +411,7 @@ mod tests {
             if x > 0 {
                 check_cover(w, 3, &p).unwrap();
                 p[1].w += 1;
-                p[3].w -= 1;
+                p[2].w -= 1; // row 2 gives the pixel back: equal areas
                 assert!(
                     check_cover(w, 3, &p).unwrap_err().contains("overlap"),
                     "{w} {x}"
