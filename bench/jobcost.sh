@@ -7,9 +7,10 @@
 # and tassemble's CPU (writing the picture, which tpict's CPU includes), the workers' summed
 # T_idle with N workers (time-sharing the cores inflates it), and the per-tile overhead: the
 # CPU of one worker on a plan of 32x32 tiles minus that on a plan of one tile, per extra
-# tile, at -ab 0 (every pixel costs the same in both plans: the
-# tiles lie on the -ps grid, so the rays are equal).
-# Ratios are the job's median CPU over tpict's (workers only). Every figure is the median of REPEAT runs, with the spread (min-max) in brackets.
+# tile, at -ab 0 (every pixel costs the same in both plans: the tiles lie on the -ps grid,
+# so the rays are equal).
+# Ratios are the job's median CPU (workers only) over tpict's. Every figure is the median of
+# REPEAT runs, with the spread (min-max) in brackets.
 # Scene: tests/scenes/daffodil (58 surfaces: genrev/genworm flowers in a room, two panels).
 # Usage: bash bench/jobcost.sh   (environment: RES="1024 512", AB="0 1", REPEAT=3, WORKERS=16,
 #        NO_BUILD=1 to skip the build; binaries from $CARGO_TARGET_DIR or target/)
