@@ -2,10 +2,10 @@
 # A walkthrough of the demo scene (docs/animation.md, "Figures"): FRAMES frames along a
 # keyframed path (tplan --path), rendered as one job by one worker with a constant -aa and
 # with time-varying accuracy (-ax, the seed paper's constant step; -axg, the geometric step it
-# proposed). Per-frame CPU and new ambient values come from tstat --json; the error of the
+# proposed; -axm, moving-direction accuracy; -axt, a per-frame CPU budget of BUDGET seconds). Per-frame CPU and new ambient values come from tstat --json; the error of the
 # last frames is measured against a high-accuracy render of the same views.
 # Usage: bash bench/animation.sh [OUTDIR (default docs/benchmarks/animation)]
-# Environment: FRAMES=60, RES="-x 160 -y 120", AMB="-ab 1 -ad 512 -as 128 -ar 64",
+# Environment: FRAMES=60, BUDGET=0.12, RES="-x 160 -y 120", AMB="-ab 1 -ad 512 -as 128 -ar 64",
 #              MODES (name:options;...), REF="-aa .03 -ad 2048 -as 1024",
 #              MID (frames along the path whose error is measured; default every frame
 #              before the last LAST), LAST=5
@@ -15,7 +15,8 @@ OUT=${1:-$ROOT/docs/benchmarks/animation}
 FRAMES=${FRAMES:-60}
 RES=${RES:-"-x 160 -y 120"}
 AMB=${AMB:-"-ab 1 -ad 512 -as 128 -ar 64"}
-MODES=${MODES:-"constant:-aa .1;ax:-ax .5 .1 .0075;axg:-axg .5 .1 .93;axm:-aa .1 -axm 2 5"}
+BUDGET=${BUDGET:-0.12}
+MODES=${MODES:-"constant:-aa .1;ax:-ax .5 .1 .0075;axg:-axg .5 .1 .93;axm:-aa .1 -axm 2 5;axt:-aa .1 -axt $BUDGET .5 .1"}
 REF=${REF:-"-aa .03 -ad 2048 -as 1024"}
 LAST=${LAST:-5}
 MID=${MID:-$(seq -s ' ' 0 $((FRAMES - LAST - 1)))}
@@ -49,18 +50,6 @@ for m in "${modes[@]}"; do
     [[ $name == ax ]] && "$B/tassemble" "$job" --contact-sheet "$OUT/sheet-$name.png" --thumb-width 64 2>/dev/null
     echo "$name: $(cat "$TMP/$name.time") (user sys wall s)" >&2
 done
-# A per-frame time budget (-axt, tpict's view sequences): the same views on standard input.
-BUDGET=${BUDGET:-0.15}
-for k in $(seq 0 $((FRAMES - 1))); do
-    getinfo < "$TMP/${modes[0]%%:*}-$(printf %03d "$k").hdr" | grep '^VIEW=' | tail -1
-done > "$TMP/views.txt"
-# shellcheck disable=SC2086
-"$B/tpict" -n 1 -t 100000 -S 0 -o "$TMP/axt-%03d.hdr" $RES $AMB -axt "$BUDGET" .5 .1 demo.rad \
-    < "$TMP/views.txt" 2> "$TMP/axt.log"
-sed -n 's/.*frame \([0-9]*\): -aa \([0-9.]*\) took \([0-9.]*\) CPU s.*/\1 \2 \3/p' "$TMP/axt.log" \
-    > "$OUT/axt.txt"
-modes+=("axt:-axt $BUDGET .5 .1 (tpict -S)")
-MODES="$MODES;axt:-axt $BUDGET .5 .1 (tpict -S)"
 # References: the MID frames' and the last LAST frames' views at high accuracy.
 first=${modes[0]%%:*}
 ERRF="$MID $(seq -s ' ' $((FRAMES - LAST)) $((FRAMES - 1)))"

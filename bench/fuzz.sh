@@ -10,7 +10,7 @@ set -uo pipefail
 ROOT=$(cd "$(dirname "$0")/.." && pwd)
 SECS=${1:-600}
 shift || true
-TARGETS=${*:-"scene options view rgbe exr amblog radambient manifest task-names cal octree mesh"}
+TARGETS=${*:-"scene options view rgbe exr amblog radambient manifest task-names cal octree mesh obj"}
 SEED=${SEED:-$(date +%s%3N)}
 MEM_KB=${MEM_KB:-8000000}
 cd "$ROOT" || exit 1

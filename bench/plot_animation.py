@@ -21,15 +21,9 @@ mid = {int(k) for k in sys.argv[3].split()} if len(sys.argv) > 3 else set()
 rows = []
 fig, (ax1, ax2, ax3) = plt.subplots(3, 1, figsize=(8, 9.5), sharex=True)
 for name, opts in modes:
-    if name == "axt":
-        # tpict -S: per-frame CPU from its report lines (frame, -aa, CPU s); no value counts.
-        rows_t = [l.split() for l in open(os.path.join(out, "axt.txt"))]
-        cpu = [float(r[2]) for r in rows_t]
-        vals = [0]
-    else:
-        d = json.load(open(os.path.join(out, f"{name}.json")))
-        cpu = [f["cpu_seconds"] for f in d["frames"]]
-        vals = [f["new_values"] for f in d["frames"]]
+    d = json.load(open(os.path.join(out, f"{name}.json")))
+    cpu = [f["cpu_seconds"] for f in d["frames"]]
+    vals = [f["new_values"] for f in d["frames"]]
     errs = [(int(a), float(b)) for a, b in
             (l.split() for l in open(os.path.join(out, f"{name}-error.txt")))]
     err_mid = [e for k, e in errs if k in mid] or [float("nan")]
@@ -39,8 +33,7 @@ for name, opts in modes:
     rows.append((name, opts, sum(cpu), max(cpu), med, max(cpu) / med, sum(vals), max(vals),
                  statistics.mean(err_mid), statistics.mean(err_last)))
     ax1.plot(cpu, label=f"{name} ({opts})")
-    if name != "axt":
-        ax2.plot(vals, label=name)
+    ax2.plot(vals, label=name)
 ax1.set_ylabel("CPU seconds per frame")
 ax2.set_ylabel("new ambient values per frame")
 ax3.set_ylabel("error vs a high-accuracy render, %")

@@ -27,29 +27,46 @@ fn tool(name: &str) -> Command {
     c
 }
 
-/// New ambient values per frame of a job of `frames` identical views with `accuracy`.
-fn values_per_frame(dir: &Path, frames: usize, accuracy: &[&str]) -> Vec<u64> {
+/// A views file in `dir` holding the demo's view `n` times (a job of `n` still frames).
+fn still_views(dir: &Path, n: usize) -> PathBuf {
     let vf = dir.join("frames.vf");
     let line = std::fs::read_to_string(demo().join("demo.vf")).unwrap();
-    std::fs::write(&vf, format!("{}\n", line.trim()).repeat(frames)).unwrap();
-    let job = dir.join(format!("job{}", accuracy.join("_")));
+    std::fs::write(&vf, format!("{}\n", line.trim()).repeat(n)).unwrap();
+    vf
+}
+
+/// Plan a job for one worker at `job` (`plan`: tplan's frame arguments; `opts`: the render
+/// options and scene after `--`), render it with one single-thread worker and return
+/// `tstat --json`'s per-frame records.
+fn run_job(job: &Path, plan: &[&std::ffi::OsStr], opts: &[&str]) -> Vec<serde_json::Value> {
     run_ok(
         tool("tplan")
-            .args(["--workers", "1", "--frames"])
-            .arg(&vf)
+            .args(["--workers", "1"])
+            .args(plan)
             .arg("-o")
-            .arg(&job)
+            .arg(job)
             .arg("--")
-            .args(["-vf", "demo.vf", "-x", "64", "-y", "48", "-ab", "1"])
-            .args(accuracy)
-            .arg("demo.rad"),
+            .args(opts),
     );
-    run_ok(tool("tpiece").arg(&job).args(["--threads", "1", "-q"]));
-    let out = run_ok(tool("tstat").arg(&job).arg("--json"));
+    run_ok(tool("tpiece").arg(job).args(["--threads", "1", "-q"]));
+    let out = run_ok(tool("tstat").arg(job).arg("--json"));
     let v: serde_json::Value = serde_json::from_slice(&out).unwrap();
-    v["frames"]
-        .as_array()
-        .unwrap()
+    v["frames"].as_array().unwrap().clone()
+}
+
+/// `--frames FILE` as tplan arguments.
+fn frames_arg(vf: &Path) -> [&std::ffi::OsStr; 2] {
+    ["--frames".as_ref(), vf.as_os_str()]
+}
+
+/// New ambient values per frame of a job of `frames` identical views with `accuracy`.
+fn values_per_frame(dir: &Path, frames: usize, accuracy: &[&str]) -> Vec<u64> {
+    let vf = still_views(dir, frames);
+    let job = dir.join(format!("job{}", accuracy.join("_")));
+    let mut opts = vec!["-vf", "demo.vf", "-x", "64", "-y", "48", "-ab", "1"];
+    opts.extend_from_slice(accuracy);
+    opts.push("demo.rad");
+    run_job(&job, &frames_arg(&vf), &opts)
         .iter()
         .map(|f| f["new_values"].as_u64().unwrap())
         .collect()
@@ -130,23 +147,13 @@ fn ax_options_are_checked_and_recorded() {
 #[test]
 fn same_seeds_keep_static_frames_still() {
     let t = tempfile::tempdir().unwrap();
-    let line = std::fs::read_to_string(demo().join("demo.vf")).unwrap();
-    let vf = t.path().join("frames.vf");
-    std::fs::write(&vf, format!("{}\n", line.trim()).repeat(3)).unwrap();
+    let vf = still_views(t.path(), 3);
     let frames = |extra: &[&str]| {
         let job = t.path().join(format!("job{}", extra.len()));
-        run_ok(
-            tool("tplan")
-                .args(["--workers", "1", "--frames"])
-                .arg(&vf)
-                .arg("-o")
-                .arg(&job)
-                .arg("--")
-                .args(["-vf", "demo.vf", "-x", "32", "-y", "24", "-ab", "0"])
-                .args(extra)
-                .arg("demo.rad"),
-        );
-        run_ok(tool("tpiece").arg(&job).args(["--threads", "1", "-q"]));
+        let mut opts = vec!["-vf", "demo.vf", "-x", "32", "-y", "24", "-ab", "0"];
+        opts.extend_from_slice(extra);
+        opts.push("demo.rad");
+        run_job(&job, &frames_arg(&vf), &opts);
         (0..3)
             .map(|k| {
                 let out = t.path().join(format!("f{}-{k}.hdr", extra.len()));
@@ -250,23 +257,16 @@ fn moving_direction_accuracy_relaxes_what_leaves_the_view() {
     .unwrap();
     let values = |extra: &[&str]| -> u64 {
         let job = t.path().join(format!("job{}", extra.len()));
-        run_ok(
-            tool("tplan")
-                .args(["--workers", "1", "--path"])
-                .arg(&keys)
-                .args(["--path-frames", "9", "-o"])
-                .arg(&job)
-                .arg("--")
-                .args(["-x", "48", "-y", "36", "-ab", "1", "-aa", ".1"])
-                .args(extra)
-                .arg("demo.rad"),
-        );
-        run_ok(tool("tpiece").arg(&job).args(["--threads", "1", "-q"]));
-        let out = run_ok(tool("tstat").arg(&job).arg("--json"));
-        let v: serde_json::Value = serde_json::from_slice(&out).unwrap();
-        v["frames"]
-            .as_array()
-            .unwrap()
+        let mut opts = vec!["-x", "48", "-y", "36", "-ab", "1", "-aa", ".1"];
+        opts.extend_from_slice(extra);
+        opts.push("demo.rad");
+        let plan = [
+            "--path".as_ref(),
+            keys.as_os_str(),
+            "--path-frames".as_ref(),
+            "9".as_ref(),
+        ];
+        run_job(&job, &plan, &opts)
             .iter()
             .map(|f| f["new_values"].as_u64().unwrap())
             .sum()
@@ -287,19 +287,24 @@ fn moving_direction_accuracy_relaxes_what_leaves_the_view() {
 }
 
 /// `-axt`: tpict's view sequences choose each frame's `-aa` from the previous frame's cost
-/// (recorded as `TESSERA_FRAME_AA=` in each picture); jobs refuse it.
+/// (recorded as `TESSERA_FRAME_AA=` in each picture), and the accuracy takes effect: an
+/// impossible budget keeps the loosest accuracy and makes far fewer values.
 #[test]
 fn time_budget_picks_each_frames_accuracy() {
     let t = tempfile::tempdir().unwrap();
     let line = std::fs::read_to_string(demo().join("demo.vf")).unwrap();
-    let frame_aa = |budget: &str, tag: &str| -> Vec<String> {
+    let run = |budget: &str, tag: &str| -> (Vec<String>, u64) {
         let pattern = t.path().join(format!("{tag}%d.hdr"));
+        let stats = t.path().join(format!("{tag}.json"));
         let mut child = Command::new(tpict_bin())
             .current_dir(demo())
             .args(["-S", "1", "-o"])
             .arg(&pattern)
+            .arg("--stats")
+            .arg(&stats)
             .args(["-vf", "demo.vf", "-x", "32", "-y", "24", "-ab", "1"])
-            .args(["-axt", budget, ".4", ".1", "demo.rad"])
+            // -aa below START: the cache must file values for START all the same.
+            .args(["-aa", ".1", "-axt", budget, ".4", ".1", "demo.rad"])
             .stdin(std::process::Stdio::piped())
             .spawn()
             .unwrap();
@@ -312,27 +317,91 @@ fn time_budget_picks_each_frames_accuracy() {
             .write_all(input.as_bytes())
             .unwrap();
         assert!(child.wait().unwrap().success());
-        (1..=3)
-            .map(|k| {
-                let bytes = std::fs::read(t.path().join(format!("{tag}{k}.hdr"))).unwrap();
-                let text = String::from_utf8_lossy(&bytes[..bytes.len().min(4000)]).to_string();
-                text.lines()
-                    .find_map(|l| l.strip_prefix("TESSERA_FRAME_AA="))
-                    .unwrap_or("none")
-                    .trim()
-                    .to_string()
-            })
-            .collect()
+        let aa = (1..=3)
+            .map(|k| frame_aa_header(&t.path().join(format!("{tag}{k}.hdr"))))
+            .collect();
+        let v: serde_json::Value = serde_json::from_slice(&std::fs::read(&stats).unwrap()).unwrap();
+        let cached = v["ambient"]["cached_values"].as_u64().unwrap_or_else(|| {
+            panic!("no ambient.cached_values in {v}");
+        });
+        (aa, cached)
     };
     // A generous budget tightens to the end accuracy after the first frame; an impossible
     // one keeps the loosest.
-    assert_eq!(frame_aa("1000", "easy"), ["0.4", "0.1", "0.1"]);
-    assert_eq!(frame_aa("0.000001", "hard"), ["0.4", "0.4", "0.4"]);
+    let (easy, easy_values) = run("1000", "easy");
+    let (hard, hard_values) = run("0.000001", "hard");
+    assert_eq!(easy, ["0.4", "0.1", "0.1"]);
+    assert_eq!(hard, ["0.4", "0.4", "0.4"]);
+    assert!(
+        (hard_values as f64) < 0.7 * easy_values as f64,
+        "values at -aa .4: {hard_values}, tightened to .1: {easy_values}"
+    );
+}
+
+/// The `TESSERA_FRAME_AA=` value of a picture's header ("none" without one).
+fn frame_aa_header(path: &Path) -> String {
+    let bytes = std::fs::read(path).unwrap();
+    let text = String::from_utf8_lossy(&bytes[..bytes.len().min(4000)]).to_string();
+    text.lines()
+        .find_map(|l| l.strip_prefix("TESSERA_FRAME_AA="))
+        .unwrap_or("none")
+        .trim()
+        .to_string()
+}
+
+/// `-axt` in a job: each frame's `-aa` is decided once from the latest finished frame's CPU
+/// time (recorded in `JOB/budget/`), reported by tstat, written in the assembled headers,
+/// and taken by every tile; `-axt` with `-ax` is refused.
+#[test]
+fn time_budget_in_jobs() {
+    let t = tempfile::tempdir().unwrap();
+    let vf = still_views(t.path(), 3);
+    let job_run = |budget: &str, tag: &str| -> (Vec<f64>, Vec<u64>, PathBuf) {
+        let job = t.path().join(tag);
+        let opts = [
+            "-vf", "demo.vf", "-x", "32", "-y", "24", "-ab", "1", "-aa", ".1", "-axt", budget,
+            ".4", ".1", "demo.rad",
+        ];
+        let frames = run_job(&job, &frames_arg(&vf), &opts);
+        let aa = frames.iter().map(|f| f["aa"].as_f64().unwrap()).collect();
+        let values = frames
+            .iter()
+            .map(|f| f["new_values"].as_u64().unwrap())
+            .collect();
+        (aa, values, job)
+    };
+    let (easy, easy_values, job) = job_run("1000", "easy");
+    assert_eq!(easy, [0.4, 0.1, 0.1]);
+    let (hard, hard_values, _) = job_run("0.000001", "hard");
+    assert_eq!(hard, [0.4, 0.4, 0.4]);
+    // Frame 1 tightens from .4 to .1 with a generous budget: it makes many more values.
+    assert!(
+        hard_values[1] * 2 < easy_values[1],
+        "values: hard {hard_values:?} easy {easy_values:?}"
+    );
+    let record: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(job.join("budget/f00001.json")).unwrap()).unwrap();
+    assert_eq!(record["from_frame"].as_u64(), Some(0));
+    assert!(record["from_cpu_seconds"].as_f64().unwrap() > 0.0);
+    let pic = t.path().join("f1.hdr");
+    run_ok(
+        tool("tassemble")
+            .arg(&job)
+            .args(["--frame", "1", "-o"])
+            .arg(&pic),
+    );
+    assert_eq!(frame_aa_header(&pic), "0.1");
+    // A damaged record stops the worker with the file's name rather than being replaced.
+    std::fs::write(job.join("budget/f00002.json"), b"{\"frame\": 2, \"aa\": 7}").unwrap();
+    let out = tool("tstat").arg(&job).output().unwrap();
+    assert!(!out.status.success());
+    assert!(String::from_utf8_lossy(&out.stderr).contains("f00002.json"));
     let out = tool("tplan")
         .args(["-o"])
-        .arg(t.path().join("job"))
+        .arg(t.path().join("both"))
         .args([
-            "--", "-vf", "demo.vf", "-ab", "1", "-axt", "1", ".4", ".1", "demo.rad",
+            "--", "-vf", "demo.vf", "-ab", "1", "-axt", "1", ".4", ".1", "-ax", ".4", ".1", ".1",
+            "demo.rad",
         ])
         .output()
         .unwrap();
@@ -344,9 +413,7 @@ fn time_budget_picks_each_frames_accuracy() {
 #[test]
 fn tiles_are_claimed_in_frame_order() {
     let t = tempfile::tempdir().unwrap();
-    let line = std::fs::read_to_string(demo().join("demo.vf")).unwrap();
-    let vf = t.path().join("frames.vf");
-    std::fs::write(&vf, format!("{}\n", line.trim()).repeat(3)).unwrap();
+    let vf = still_views(t.path(), 3);
     let job = t.path().join("job");
     run_ok(
         tool("tplan")

@@ -16,21 +16,6 @@ use std::path::Path;
 use std::process::Command;
 use tessera::image::read_picture;
 
-/// Radiance's test-suite tolerances after reducing to `size`×`size`.
-struct Tol {
-    size: &'static str,
-    rms: f64,
-    max: f64,
-    mean: f64,
-}
-
-const SUITE: Tol = Tol {
-    size: "128",
-    rms: 0.10,
-    max: 1.50,
-    mean: 0.02,
-};
-
 /// With indirect light the two caches' noise differs pixel by pixel: compare at 32×32.
 const AMBIENT: Tol = Tol {
     size: "32",
@@ -86,32 +71,7 @@ fn check(bin: &Path, dir: &Path, input: &[&str], octree: &str, opts: &[&str], to
     std::fs::write(&reff, data).unwrap();
     let ours = dir.join(format!("ours-{name}.hdr"));
     run_ok(tpict(dir).args(opts).arg("-o").arg(&ours).args(input));
-    assert_finite(&read_picture(&ours).unwrap());
-    let reduce_with_pfilt = |p: &Path| {
-        let data = run_ok(
-            radiance(bin, "pfilt")
-                .args(["-1", "-r", "1", "-x", tol.size, "-y", tol.size, "-pa", "1"])
-                .arg(p),
-        );
-        let out = p.with_extension("small.hdr");
-        std::fs::write(&out, data).unwrap();
-        read_picture(&out).unwrap()
-    };
-    let a = reduce_with_pfilt(&ours);
-    let b = reduce_with_pfilt(&reff);
-    let c = compare(&a.pixels_f64(), &b.pixels_f64(), 0.007);
-    eprintln!("{input:?} {opts:?}: {c:?}");
-    assert!(
-        c.rms <= tol.rms,
-        "{input:?} {opts:?}: relative RMS {:.3}",
-        c.rms
-    );
-    assert!(c.max <= tol.max, "{input:?} {opts:?}: max {:.3}", c.max);
-    assert!(
-        c.mean_lum <= tol.mean,
-        "{input:?} {opts:?}: mean luminance differs by {:.2}%",
-        100.0 * c.mean_lum
-    );
+    assert_like_reference(bin, &ours, &reff, tol, &format!("{input:?} {opts:?}"));
 }
 
 fn oconv(bin: &Path, dir: &Path, files: &[&str], out: &str) {

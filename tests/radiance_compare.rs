@@ -21,21 +21,6 @@ struct Case<'a> {
     res: &'a str,
 }
 
-/// Radiance's test-suite tolerances after reducing to `size`×`size`.
-struct Tol {
-    size: &'static str,
-    rms: f64,
-    max: f64,
-    mean: f64,
-}
-
-const SUITE: Tol = Tol {
-    size: "128",
-    rms: 0.10,
-    max: 1.50,
-    mean: 0.02,
-};
-
 fn check(case: &Case) {
     check_tol(case, &SUITE)
 }
@@ -69,55 +54,7 @@ fn check_tol(case: &Case, tol: &Tol) {
             .arg(&ours)
             .args(case.files),
     );
-    let full = read_picture(&ours).unwrap();
-    assert_finite(&full);
-    let b = read_picture(&reff).unwrap();
-    assert_eq!(
-        (full.width, full.height),
-        (b.width, b.height),
-        "resolution differs"
-    );
-    // Reduce both as Radiance's test suite does: pfilt -1 -r 1 -x 128 -y 128 -pa 1.
-    let reduce_with_pfilt = |p: &Path| {
-        let data = run_ok(
-            radiance(&bin, "pfilt")
-                .args(["-1", "-r", "1", "-x", tol.size, "-y", tol.size, "-pa", "1"])
-                .arg(p),
-        );
-        let out = p.with_extension("128.hdr");
-        std::fs::write(&out, data).unwrap();
-        read_picture(&out).unwrap()
-    };
-    let a = reduce_with_pfilt(&ours);
-    let b = reduce_with_pfilt(&reff);
-    let c = compare(&a.pixels_f64(), &b.pixels_f64(), 0.007);
-    eprintln!("{}: {c:?}", case.dir);
-    if std::env::var("TESSERA_KEEP_COMPARE").is_ok() {
-        let keep = Path::new(env!("CARGO_TARGET_TMPDIR")).join(case.dir.replace('/', "_"));
-        std::fs::create_dir_all(&keep).unwrap();
-        std::fs::copy(&ours, keep.join("ours.hdr")).unwrap();
-        std::fs::copy(&reff, keep.join("ref.hdr")).unwrap();
-    }
-    assert!(
-        c.rms <= tol.rms,
-        "{}: relative RMS {:.3} > {}",
-        case.dir,
-        c.rms,
-        tol.rms
-    );
-    assert!(
-        c.max <= tol.max,
-        "{}: max relative difference {:.3} > {}",
-        case.dir,
-        c.max,
-        tol.max
-    );
-    assert!(
-        c.mean_lum <= tol.mean,
-        "{}: mean luminance differs by {:.2}%",
-        case.dir,
-        100.0 * c.mean_lum
-    );
+    assert_like_reference(&bin, &ours, &reff, tol, case.dir);
 }
 
 #[test]

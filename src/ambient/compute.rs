@@ -109,11 +109,12 @@ impl Ambient {
             (size * 1e-6, 0.2 * size)
         };
         let aa = params.aa.max(0.0);
-        // Under -ax values are filed for the schedule's loosest accuracy, so that every
+        // Under -ax (and -axt) values are filed for the loosest accuracy, so that every
         // later (tighter) lookup finds them in the cells it reads.
         // -axm relaxes regions leaving the view by its factor on top.
-        let aa_max =
-            params.ax.map_or(aa, |s| s.start.max(aa)) * params.axm.map_or(1.0, |m| m.relax);
+        let loosest = params.ax.map_or(aa, |s| s.start.max(aa));
+        let loosest = params.axt.map_or(loosest, |b| b.start.max(loosest));
+        let aa_max = loosest * params.axm.map_or(1.0, |m| m.relax);
         let settings = params.amb.clone();
         let (ad, as_) = split_divisions(params);
         Some(Ambient {

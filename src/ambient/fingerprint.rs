@@ -22,12 +22,16 @@ impl Hasher {
         ])
     }
     fn bytes(&mut self, b: &[u8]) {
-        for (i, h) in self.0.iter_mut().enumerate() {
-            for &x in b {
-                *h ^= x as u64 ^ (i as u64) << 8;
-                *h = h.wrapping_mul(0x0100_0000_01b3);
-            }
+        // The four streams side by side (independent chains of multiplications).
+        let [mut h0, mut h1, mut h2, mut h3] = self.0;
+        for &x in b {
+            let x = x as u64;
+            h0 = (h0 ^ x).wrapping_mul(0x0100_0000_01b3);
+            h1 = (h1 ^ x ^ 1 << 8).wrapping_mul(0x0100_0000_01b3);
+            h2 = (h2 ^ x ^ 2 << 8).wrapping_mul(0x0100_0000_01b3);
+            h3 = (h3 ^ x ^ 3 << 8).wrapping_mul(0x0100_0000_01b3);
         }
+        self.0 = [h0, h1, h2, h3];
     }
     fn str(&mut self, s: &str) {
         self.bytes(&(s.len() as u64).to_le_bytes());
@@ -68,12 +72,34 @@ pub fn with_inputs(
     h.str("tessera-inputs-v1");
     h.bytes(&fp);
     for (name, path) in sorted {
-        let data = std::fs::read(path).map_err(|e| format!("{}: {e}", path.display()))?;
         h.str(name);
-        h.bytes(&(data.len() as u64).to_le_bytes());
-        h.bytes(&data);
+        hash_file(&mut h, path).map_err(|e| format!("{}: {e}", path.display()))?;
     }
     Ok(h.finish())
+}
+
+/// Hash a file's length and contents, read in blocks (a large mesh is not held twice).
+fn hash_file(h: &mut Hasher, path: &std::path::Path) -> std::io::Result<()> {
+    use std::io::Read;
+    let mut f = std::fs::File::open(path)?;
+    let len = f.metadata()?.len();
+    h.bytes(&len.to_le_bytes());
+    let mut buf = vec![0u8; 1 << 16];
+    let mut seen = 0u64;
+    loop {
+        let n = match f.read(&mut buf) {
+            Ok(0) => break,
+            Ok(n) => n,
+            Err(e) if e.kind() == std::io::ErrorKind::Interrupted => continue,
+            Err(e) => return Err(e),
+        };
+        h.bytes(&buf[..n]);
+        seen += n as u64;
+    }
+    if seen != len {
+        return Err(std::io::Error::other("changed while it was read"));
+    }
+    Ok(())
 }
 
 /// Fingerprint of a scene's primitives and the ambient-relevant options.
@@ -215,5 +241,40 @@ mod tests {
             ..RenderParams::default()
         };
         assert_eq!(base, fingerprint(&[prim(0.5)], &q));
+    }
+
+    #[test]
+    fn input_files_are_hashed_as_whole_contents() {
+        // The streams side by side and the file read in blocks give the digest of the
+        // whole contents hashed one stream after the other (stores made before still match).
+        let data: Vec<u8> = (0..200_000u32).map(|i| (i * 7 + i / 300) as u8).collect();
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("in.dat");
+        std::fs::write(&path, &data).unwrap();
+        let fp = [3u8; 32];
+        let got = with_inputs(fp, &[("in.dat".into(), path)]).unwrap();
+        let mut h = Hasher::new();
+        let mut serial = |b: &[u8]| {
+            for (i, s) in h.0.iter_mut().enumerate() {
+                for &x in b {
+                    *s ^= x as u64 ^ (i as u64) << 8;
+                    *s = s.wrapping_mul(0x0100_0000_01b3);
+                }
+            }
+        };
+        for part in [
+            &(17u64.to_le_bytes())[..],
+            b"tessera-inputs-v1",
+            &fp,
+            &(6u64.to_le_bytes())[..],
+            b"in.dat",
+            &(data.len() as u64).to_le_bytes(),
+            &data,
+        ] {
+            serial(part);
+        }
+        assert_eq!(got, h.finish());
+        let missing = with_inputs(fp, &[("no".into(), dir.path().join("no"))]);
+        assert!(missing.is_err());
     }
 }

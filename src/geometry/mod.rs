@@ -35,17 +35,18 @@ pub mod source;
 pub mod sphere;
 pub mod trimesh;
 
-/// A finite surface.
+/// A finite surface. The large kinds are boxed, so that a sphere (the smallest) does not
+/// take a polygon's room: a scene's objects stay compact.
 #[derive(Clone, Debug)]
 pub enum Surface {
     /// A planar polygon (possibly concave, possibly with seam-joined holes).
-    Polygon(polygon::Polygon),
+    Polygon(Box<polygon::Polygon>),
     /// A sphere or bubble.
     Sphere(sphere::Sphere),
     /// A cone, cup, cylinder or tube (open-ended).
-    Cone(cone::Cone),
+    Cone(Box<cone::Cone>),
     /// A ring or disk.
-    Ring(ring::Ring),
+    Ring(Box<ring::Ring>),
 }
 
 /// Geometry at a hit point.
@@ -189,16 +190,17 @@ impl Surface {
     ) -> Result<(Surface, Option<String>), String> {
         check_finite(p)?;
         match p.ptype.as_str() {
-            "polygon" => {
-                polygon::Polygon::from_primitive(p, origin).map(|(s, w)| (Surface::Polygon(s), w))
-            }
+            "polygon" => polygon::Polygon::from_primitive(p, origin)
+                .map(|(s, w)| (Surface::Polygon(Box::new(s)), w)),
             "sphere" | "bubble" => {
                 sphere::Sphere::from_primitive(p, origin).map(|(s, w)| (Surface::Sphere(s), w))
             }
             "cone" | "cup" | "cylinder" | "tube" => {
-                cone::Cone::from_primitive(p, origin).map(|(s, w)| (Surface::Cone(s), w))
+                cone::Cone::from_primitive(p, origin).map(|(s, w)| (Surface::Cone(Box::new(s)), w))
             }
-            "ring" => ring::Ring::from_primitive(p, origin).map(|s| (Surface::Ring(s), None)),
+            "ring" => {
+                ring::Ring::from_primitive(p, origin).map(|s| (Surface::Ring(Box::new(s)), None))
+            }
             other => Err(format!("type \"{other}\" is not a finite surface")),
         }
     }

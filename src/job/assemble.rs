@@ -14,6 +14,15 @@ pub struct MissingTile {
     pub reason: String,
 }
 
+/// The frame's own `-aa` when it varies from frame to frame (`-ax`, `-axg`, `-axt`; for
+/// `-axt` once decided), as `tpict -S` records it.
+pub fn frame_accuracy(job: &JobDir, m: &Manifest, frame: u32) -> Result<Option<f64>> {
+    match &m.params.axt {
+        Some(b) => Ok(super::budget::read(job, b, frame)?.map(|r| r.aa)),
+        None => Ok(m.params.frame_accuracy(frame)),
+    }
+}
+
 /// Assemble frame `frame`. Returns the picture and the tiles that were missing or invalid
 /// (filled black). The caller decides whether a partial picture is acceptable.
 pub fn assemble_frame(
@@ -77,6 +86,11 @@ pub fn assemble_frame(
         ..Header::default()
     };
     let p = &m.params;
+    if let Some(aa) = frame_accuracy(job, m, frame)? {
+        img.header
+            .extra
+            .push(("TESSERA_FRAME_AA".into(), format!(" {aa}")));
+    }
     if crate::ambient::settings::computes(p.ab, p.ad) {
         img.header.extra.push((
             crate::session::AMBIENT_HEADER_VAR.into(),

@@ -310,12 +310,8 @@ pub fn create_job(dir: &Path, req: &PlanRequest) -> Result<Manifest> {
     if opts.picture.pm != 0.0 || opts.picture.pd != 0.0 {
         bail!("-pm (motion blur) and -pd (depth of field) are not supported yet; use -pm 0 -pd 0");
     }
-    if opts.params.axt.is_some() {
-        bail!(
-            "-axt (a per-frame time budget) is for tpict's view sequences: a job's frames \
-             render in parallel, so a frame's cost is not known before the next starts; \
-             use -ax or -axg in jobs"
-        );
+    if opts.params.axt.is_some() && opts.params.ax.is_some() {
+        bail!("-axt and -ax/-axg both choose -aa per frame: give one of them");
     }
     if let Some(why) = opts.params.refused() {
         bail!("{why}");

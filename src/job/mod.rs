@@ -15,6 +15,7 @@
 //! JOB/workers/<owner>.json     each worker's heartbeat and counters (rewritten atomically)
 //! JOB/merged/store.json        the merged ambient store's index (names its store file)
 //! JOB/merged/store-<n>.log     a merged store (Tessera's ambient log format)
+//! JOB/budget/f<frame>.json     with -axt: each frame's -aa, decided once (job::budget)
 //! JOB/logs/                    free for batch-system output (slurm/)
 //! ```
 //!
@@ -24,6 +25,7 @@
 //! each race, and nothing depends on file locks, `O_APPEND` across hosts, or clocks agreeing.
 
 pub mod assemble;
+pub mod budget;
 pub mod cli;
 pub mod heartbeat;
 pub mod manifest;

@@ -40,6 +40,8 @@ pub struct FrameProgress {
     pub new_values: u64,
     /// Seconds spent computing them.
     pub ambient_seconds: f64,
+    /// The frame's own `-aa` when it varies (`-ax`, `-axg`, `-axt` once decided).
+    pub aa: Option<f64>,
 }
 
 /// Aggregated metrics (sums over workers).
@@ -147,6 +149,7 @@ pub fn status(job: &JobDir) -> Result<JobStatus> {
         let mut p = FrameProgress {
             frame: f.index,
             tiles: f.tiles.len(),
+            aa: super::assemble::frame_accuracy(job, &m, f.index)?,
             ..FrameProgress::default()
         };
         for (i, r) in f.tiles.iter().enumerate() {
@@ -303,12 +306,13 @@ pub fn render_text(st: &JobStatus) -> String {
     for f in &st.frames {
         let _ = writeln!(
             s,
-            "  frame {:>5}: {:>5} todo {:>5} claimed {:>5} done (of {}){}{}",
+            "  frame {:>5}: {:>5} todo {:>5} claimed {:>5} done (of {}){}{}{}",
             f.frame,
             f.todo,
             f.claimed,
             f.done,
             f.tiles,
+            f.aa.map(|aa| format!(", -aa {aa:.4}")).unwrap_or_default(),
             if f.done > 0 {
                 format!(
                     ": CPU {:.2} s, {} new ambient values in {:.2} s",

@@ -263,6 +263,7 @@ pub fn run_worker(job: &JobDir, wo: &WorkerOptions) -> Result<WorkerSummary> {
         },
         done_count: 0,
         results: ResultDir::open(&job.tiles())?,
+        budget_aa: Default::default(),
     };
     let result = worker.work().and_then(|s| session.finish().map(|()| s));
     beater.stop();
@@ -317,6 +318,8 @@ struct Worker<'a> {
     done_count: usize,
     /// `tiles/`, kept open for the results.
     results: ResultDir,
+    /// `-axt`: the frames' accuracies read or decided so far ([`super::budget`]).
+    budget_aa: std::cell::RefCell<HashMap<u32, f64>>,
 }
 
 impl Worker<'_> {
@@ -555,6 +558,16 @@ impl Worker<'_> {
         }
     }
 
+    /// `-axt`: frame `frame`'s accuracy, read or decided once per frame.
+    fn budget_accuracy(&self, frame: u32) -> Result<f64> {
+        if let Some(&aa) = self.budget_aa.borrow().get(&frame) {
+            return Ok(aa);
+        }
+        let aa = super::budget::frame_accuracy(self.job, self.m, frame)?;
+        self.budget_aa.borrow_mut().insert(frame, aa);
+        Ok(aa)
+    }
+
     /// Render the tile `rect` of frame `fp`: its pixels and the result's metadata.
     fn render_tile(
         &self,
@@ -572,6 +585,9 @@ impl Worker<'_> {
             .frame_setup(&self.m.params, &vf, (fp.xres, fp.yres), fp.index);
         // Frames are numbered from 0 in the job: the index is the position in the animation.
         fs.aa = self.m.params.frame_accuracy(fp.index);
+        if self.m.params.axt.is_some() {
+            fs.aa = Some(self.budget_accuracy(fp.index)?);
+        }
         if let Some(mo) = self.m.params.axm {
             // Every tile sets its accuracy: the previous tile's may have been relaxed.
             let base = fs.aa.unwrap_or(self.m.params.aa);

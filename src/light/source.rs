@@ -243,7 +243,8 @@ impl LightSet {
                 Surface::Cone(_) => {
                     set.warnings.push(format!(
                         "{}: cones, cups and tubes cannot be light sources; '{}' only glows when seen",
-                        o.loc, o.name
+                        scene.objects.loc(i),
+                        scene.objects.name(i)
                     ));
                     continue;
                 }
@@ -317,7 +318,8 @@ impl LightSet {
                 _ => {
                     self.warnings.push(format!(
                         "{}: mirror '{}' is not flat and relays no light sources",
-                        o.loc, o.name
+                        scene.objects.loc(mi),
+                        scene.objects.name(mi)
                     ));
                     continue;
                 }

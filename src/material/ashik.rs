@@ -87,18 +87,10 @@ impl Ashik {
     /// Shade a hit.
     pub fn shade(&self, tr: &Tracer, ray: &Ray, sp: &ShadingPoint, rng: &mut Sampler) -> Color {
         let hit = &sp.hit;
-        let mut n = sp.normal;
-        let mut fsp = *sp;
-        if hit.back {
-            if !tr.params.bv {
-                return tr.pass_through(ray, hit, rng);
-            }
-            n = -n;
-            fsp.hit.normal = -fsp.hit.normal;
-        }
-        if ray.kind == RayKind::Shadow {
-            return Color::ZERO;
-        }
+        let (n, fsp) = match super::turn_to_ray(tr, ray, sp, rng) {
+            Ok(front) => front,
+            Err(c) => return c,
+        };
         let v = -ray.dir;
         let dcolor = self.diffuse * sp.pcol;
         // Schlick's Fresnel at the view angle, for the whole specular part.

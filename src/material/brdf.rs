@@ -27,7 +27,7 @@ use crate::cal::{EvalError, Evaluation, FuncRef};
 use crate::color::{bright, Color};
 use crate::modifier::data::DataArray;
 use crate::modifier::func::{finite, function, load_context, FuncCall};
-use crate::render::ray::{Ray, RayKind};
+use crate::render::ray::Ray;
 use crate::render::sampler::Sampler;
 use crate::render::shading::ShadingPoint;
 use crate::render::trace::Tracer;
@@ -192,19 +192,11 @@ impl BrdfMat {
     /// Shade a hit: direct light through the function, indirect light as diffuse.
     pub fn shade(&self, tr: &Tracer, ray: &Ray, sp: &ShadingPoint, rng: &mut Sampler) -> Color {
         let hit = &sp.hit;
-        let mut n = sp.normal;
         // The functions see the surface turned toward the ray (Nx.., Rdot included).
-        let mut fsp = *sp;
-        if hit.back {
-            if !tr.params.bv {
-                return tr.pass_through(ray, hit, rng);
-            }
-            n = -n;
-            fsp.hit.normal = -fsp.hit.normal;
-        }
-        if ray.kind == RayKind::Shadow {
-            return Color::ZERO;
-        }
+        let (n, fsp) = match super::turn_to_ray(tr, ray, sp, rng) {
+            Ok(front) => front,
+            Err(c) => return c,
+        };
         let mcolor = self.color * sp.pcol;
         let rspec = self.rspec;
         let (trans, tspec) = if self.kind == BrdfKind::Trans {

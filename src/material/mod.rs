@@ -172,3 +172,27 @@ pub fn reflect(d: DVec3, n: DVec3) -> DVec3 {
 
 /// White.
 pub const WHITE: Color = DVec3::ONE;
+
+/// A hit as a material opaque to shadow rays sees it: the shading normal and the shading
+/// point turned toward the ray. `Err(c)`: return `c` at once (a back face without `-bv` is
+/// passed through; a shadow ray is stopped).
+pub(crate) fn turn_to_ray<'s>(
+    tr: &crate::render::trace::Tracer,
+    ray: &crate::render::ray::Ray,
+    sp: &crate::render::shading::ShadingPoint<'s>,
+    rng: &mut crate::render::sampler::Sampler,
+) -> Result<(glam::DVec3, crate::render::shading::ShadingPoint<'s>), crate::color::Color> {
+    let mut n = sp.normal;
+    let mut fsp = *sp;
+    if sp.hit.back {
+        if !tr.params.bv {
+            return Err(tr.pass_through(ray, &sp.hit, rng));
+        }
+        n = -n;
+        fsp.hit.normal = -fsp.hit.normal;
+    }
+    if ray.kind == crate::render::ray::RayKind::Shadow {
+        return Err(crate::color::Color::ZERO);
+    }
+    Ok((n, fsp))
+}

@@ -2,7 +2,7 @@
 //! geometry in f64 relative to the scene origin, and the BVH over them.
 
 use super::error::SceneError;
-pub use super::object::Object;
+pub use super::object::{Object, Objects};
 use super::primitive::{Location, Primitive};
 use super::sets::{flatten, map_box, Child, ObjectSet, Placement};
 use crate::geometry::bvh::Bvh;
@@ -97,7 +97,7 @@ pub struct Scene {
     /// Patterns, textures and mixtures, indexed by [`crate::modifier::ModId`].
     pub modifiers: Vec<ModifierDef>,
     /// Finite surfaces, indexed as in the BVH.
-    pub objects: Vec<Object>,
+    pub objects: Objects,
     /// Distant sources.
     pub distant: Vec<DistantObject>,
     /// Acceleration structure over `objects`.
@@ -266,7 +266,7 @@ pub(super) struct Level {
     pub(super) origin: DVec3,
     pub(super) size: f64,
     pub(super) eps: f64,
-    pub(super) objects: Vec<Object>,
+    pub(super) objects: Objects,
     pub(super) distant: Vec<DistantObject>,
     /// Its instances and meshes.
     pub(super) children: Vec<Child>,
@@ -287,6 +287,7 @@ impl Builder<'_> {
         let mut lo = DVec3::splat(f64::INFINITY);
         let mut hi = DVec3::splat(f64::NEG_INFINITY);
         let mut pending: Vec<(usize, Transform)> = Vec::new();
+        let mut nsurf = 0;
         for p in prims {
             if p.ptype == "instance" || p.ptype == "mesh" {
                 let (set, xf) = self.child_set(p)?;
@@ -307,6 +308,7 @@ impl Builder<'_> {
                 let (a, b) = s.bounds();
                 lo = lo.min(a);
                 hi = hi.max(b);
+                nsurf += 1;
             }
         }
         let full = (lo.x.is_finite() && hi.x.is_finite()).then_some((lo, hi));
@@ -319,7 +321,7 @@ impl Builder<'_> {
         };
         let eps = length_tolerance(size);
 
-        let mut objects = Vec::new();
+        let mut objects = Objects::with_capacity(nsurf);
         let mut distant = Vec::new();
         let mut children = Vec::new();
         let mut defined = Vec::with_capacity(prims.len());
@@ -376,14 +378,16 @@ impl Builder<'_> {
                             continue;
                         }
                     };
-                    objects.push(Object {
-                        surface,
-                        material,
-                        chain,
-                        name: p.name.clone(),
-                        modifier: p.modifier.clone(),
-                        loc: p.loc.clone(),
-                    });
+                    objects.push(
+                        Object {
+                            surface,
+                            material,
+                            chain,
+                        },
+                        &p.name,
+                        &p.modifier,
+                        &p.loc,
+                    );
                 }
             } else if MATERIAL_TYPES.contains(&t) {
                 let chain = mods
@@ -432,6 +436,7 @@ impl Builder<'_> {
             }
             defined.push(def);
         }
+        objects.finish();
         Ok(Level {
             origin,
             size,

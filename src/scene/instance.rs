@@ -105,19 +105,21 @@ impl Builder<'_> {
             self.mods.files.note_input(&n, p);
         }
         let level = self.in_own_namespace(|b| b.level(&prims))?;
+        // The primitives' text is not needed any more: free it before the BVH build, the
+        // peak of a set's memory.
+        drop(prims);
         if !level.distant.is_empty() {
             self.warnings.push(format!(
                 "{name}: {} distant source(s) inside an instanced octree ignored",
                 level.distant.len()
             ));
         }
-        let bounds: Vec<(DVec3, DVec3)> =
-            level.objects.iter().map(|o| o.surface.bounds()).collect();
+        let objects = &level.objects;
         let mut direct = None;
-        for b in &bounds {
-            union(&mut direct, *b);
+        for o in objects {
+            union(&mut direct, o.surface.bounds());
         }
-        let bvh = Bvh::build(&bounds, level.eps);
+        let bvh = Bvh::build_from(objects.len(), |i| objects[i].surface.bounds(), level.eps);
         let expanded = level.objects.len() as u64
             + level
                 .children
@@ -204,7 +206,8 @@ pub(super) fn mesh_object_set(
         None => (DVec3::ZERO, 1.0),
     };
     let mut mesh = TriMesh {
-        pos: pos.iter().map(|p| *p - origin).collect(),
+        // In place: the file's positions are not kept twice.
+        pos: pos.into_iter().map(|p| p - origin).collect(),
         normal,
         uv,
         flags,
@@ -364,7 +367,7 @@ impl Scene {
             return HitInfo {
                 chain: o.chain,
                 material: o.material,
-                modifier: &o.modifier,
+                modifier: self.objects.modifier(r.obj),
                 frame: None,
             };
         }

@@ -4,7 +4,7 @@
 
 use glam::{DAffine3, DMat3, DMat4, DVec3};
 
-use super::object::Object;
+use super::object::Objects;
 use super::primitive::Primitive;
 use super::transform::{parse_transform, Transform};
 use crate::geometry::bvh::Bvh;
@@ -32,7 +32,7 @@ pub struct MeshModifier {
 /// What a set holds.
 pub enum SetGeom {
     /// Surfaces with their materials (an octree).
-    Objects(Vec<Object>),
+    Objects(Objects),
     /// Triangles (a mesh) and their modifiers by object index of the mesh's scene.
     Mesh {
         /// The triangles.
@@ -102,7 +102,7 @@ impl ObjectSet {
     /// Chain, material and modifier name of object `j`.
     pub fn shading(&self, j: usize) -> (ModRef, Option<MatId>, &str) {
         match &self.geom {
-            SetGeom::Objects(objs) => (objs[j].chain, objs[j].material, &objs[j].modifier),
+            SetGeom::Objects(objs) => (objs[j].chain, objs[j].material, objs.modifier(j)),
             SetGeom::Mesh { mesh, mods } => {
                 let k = mesh.tris[j].modifier;
                 match usize::try_from(k)

@@ -181,3 +181,64 @@ pub fn scene_from_text(text: &str) -> tessera::scene::Scene {
     .unwrap();
     Scene::build(&prims).unwrap()
 }
+
+/// Tolerances for comparing two pictures after reducing both to `size`×`size` as Radiance's
+/// test suite does (`pfilt -1 -r 1 -x size -y size -pa 1`): relative RMS, largest relative
+/// difference and relative difference of the mean luminance.
+pub struct Tol {
+    pub size: &'static str,
+    pub rms: f64,
+    pub max: f64,
+    pub mean: f64,
+}
+
+/// Radiance's test-suite tolerances at 128×128.
+pub const SUITE: Tol = Tol {
+    size: "128",
+    rms: 0.10,
+    max: 1.50,
+    mean: 0.02,
+};
+
+/// Reduce `ours` and `reference` with real pfilt to `tol.size` (both must have the same
+/// resolution), compare them and assert `tol`; `label` names the case in messages.
+pub fn assert_like_reference(bin: &Path, ours: &Path, reference: &Path, tol: &Tol, label: &str) {
+    let reduce = |p: &Path| {
+        let data = run_ok(
+            radiance(bin, "pfilt")
+                .args(["-1", "-r", "1", "-x", tol.size, "-y", tol.size, "-pa", "1"])
+                .arg(p),
+        );
+        let out = p.with_extension("small.hdr");
+        std::fs::write(&out, data).unwrap();
+        tessera::image::read_picture(&out).unwrap()
+    };
+    let full = tessera::image::read_picture(ours).unwrap();
+    assert_finite(&full);
+    let full_ref = tessera::image::read_picture(reference).unwrap();
+    assert_eq!(
+        (full.width, full.height),
+        (full_ref.width, full_ref.height),
+        "{label}: resolution differs"
+    );
+    let (a, b) = (reduce(ours), reduce(reference));
+    let c = compare(&a.pixels_f64(), &b.pixels_f64(), 0.007);
+    eprintln!("{label}: {c:?}");
+    assert!(
+        c.rms <= tol.rms,
+        "{label}: relative RMS {:.4} > {}",
+        c.rms,
+        tol.rms
+    );
+    assert!(
+        c.max <= tol.max,
+        "{label}: max relative difference {:.3} > {}",
+        c.max,
+        tol.max
+    );
+    assert!(
+        c.mean_lum <= tol.mean,
+        "{label}: mean luminance differs by {:.3}%",
+        100.0 * c.mean_lum
+    );
+}
