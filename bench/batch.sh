@@ -12,7 +12,7 @@
 # Usage: bash bench/batch.sh [OUTDIR (default docs/benchmarks/batch)]
 # Environment: WORKERS="1 2 4 8 16", NA_LIST="1 5 20 122 auto", NA_WORKERS=16,
 #              RES="-x 320 -y 240", AMB="-ab 2 -ad 512 -as 128 -aa .15 -ar 64", REPEAT=1,
-#              COSTS_RES="-x 640 -y 480" (the cost jobs), COSTS=0 skips them
+#              COSTS_RES="-x 640 -y 480" (the cost jobs), COSTS=0 skips them, TILES=1280
 set -euo pipefail
 ROOT=$(cd "$(dirname "$0")/.." && pwd)
 OUT=${1:-$ROOT/docs/benchmarks/batch}
@@ -23,6 +23,9 @@ RES=${RES:-"-x 320 -y 240"}
 AMB=${AMB:-"-ab 2 -ad 512 -as 128 -aa .15 -ar 64"}
 REPEAT=${REPEAT:-1}
 COSTS_RES=${COSTS_RES:-"-x 640 -y 480"}
+# 80 tiles per worker for 16 workers: tplan's default estimates this scene's pixels far
+# cheaper than they are at these settings (docs/batch.md, "The tile plan").
+TILES=${TILES:-1280}
 mkdir -p "$OUT"
 (cd "$ROOT" && cargo build --release --quiet --bins)
 B=$ROOT/target/release
@@ -34,7 +37,7 @@ trap 'rm -rf "$TMP"' EXIT
 run_job() {
     local name=$1 n=$2 na=$3 job="$TMP/$1"
     # shellcheck disable=SC2086
-    "$B/tplan" --workers 16 -o "$job" -- -vf "$ROOT/demo/demo.vf" $RES $AMB "$ROOT/demo/demo.rad" 2>/dev/null
+    "$B/tplan" --workers 16 --tiles "$TILES" -o "$job" -- -vf "$ROOT/demo/demo.vf" $RES $AMB "$ROOT/demo/demo.rad" 2>/dev/null
     local t0 t1 pids=()
     t0=$(date +%s.%N)
     for i in $(seq 1 "$n"); do
@@ -62,7 +65,7 @@ costs_job() {
     local name=$1 n=$2 store=${3:-} job="$TMP/costs-$1" seed=()
     [ -n "$store" ] && seed=(--ambient "$store")
     # shellcheck disable=SC2086
-    "$B/tplan" --workers 16 "${seed[@]}" -o "$job" -- -vf "$ROOT/demo/demo.vf" $COSTS_RES $AMB "$ROOT/demo/demo.rad" 2>/dev/null
+    "$B/tplan" --workers 16 --tiles "$TILES" "${seed[@]}" -o "$job" -- -vf "$ROOT/demo/demo.vf" $COSTS_RES $AMB "$ROOT/demo/demo.rad" 2>/dev/null
     local pids=()
     for i in $(seq 1 "$n"); do
         "$B/tpiece" "$job" --worker-id "c$i" --threads 1 -q &
@@ -87,7 +90,7 @@ if [ "${COSTS:-1}" = 1 ]; then
     costs_job 1w-cold 1
     costs_job 1w-warm 1 "$TMP/store-16w.log"
     for c in 16w 1w-cold 1w-warm; do
-        (cd "$ROOT" && cargo bench --quiet --bench tilesim -- "$OUT/costs-$c.json" --json "$OUT/tilesim-$c.json") | tee "$OUT/tilesim-$c.txt"
+        (cd "$ROOT" && cargo bench --quiet --bench tilesim -- "$OUT/costs-$c.json" --tiles-per-worker 80 --json "$OUT/tilesim-$c.json") | tee "$OUT/tilesim-$c.txt"
         python3 "$ROOT/bench/plot_tilesim.py" "$OUT/tilesim-$c.json" "$OUT/tilesim-$c.png" || true
     done
 fi

@@ -20,8 +20,10 @@
 //! 1. The measured costs become a per-pixel cost map: each measured tile's seconds are
 //!    spread uniformly over its pixels (summed-area table, so any rectangle's cost is
 //!    four look-ups).
-//! 2. For each P, the plan `tplan` would make (`plan_tiles(W, H, tiles_per_worker · P)`,
-//!    largest tiles first) is costed on the map, plus `--sync-cost` per tile, and replayed
+//! 2. For each P, the plan `tplan` would make (`plan_tiles(W, H, tiles, 4)`, largest tiles
+//!    first, edges on the `-ps 4` grid; `tiles` is `tplan`'s default for P workers given the
+//!    frame's measured cost and the per-tile overhead — `--sync-cost`, else
+//!    `plan::TILE_OVERHEAD` — or `--tiles-per-worker` · P) is costed on the map, plus `--sync-cost` per tile, and replayed
 //!    in plan order: a min-heap holds the workers' finish times; the worker that is free
 //!    first takes the next tile.
 //! 3. The same is done for a naive plan: a uniform grid with about as many tiles, taken
@@ -49,7 +51,10 @@ use serde::Deserialize;
 use std::cmp::Ordering;
 use std::collections::BinaryHeap;
 use std::process::ExitCode;
-use tessera::job::plan::{check_cover, plan_tiles, TileRect, TILES_PER_WORKER};
+use tessera::job::plan::{check_cover, plan_tiles, tiles_for_cost, TileRect, TILE_OVERHEAD};
+
+/// The sample grid of the plans (`-ps 4`, rpict's default).
+const GRID: usize = 4;
 
 const ASSUMPTIONS: [&str; 4] = [
     "identical workers, all available from time 0",
@@ -353,7 +358,14 @@ fn evaluate(map: &CostMap, args: &Args) -> Vec<Outcome> {
     let (tpw, sync) = (args.tpw, args.sync);
     let mut out = Vec::new();
     for &p in &args.workers {
-        let shrink = plan_tiles(map.width, map.height, tpw * p);
+        let tiles = match tpw {
+            Some(n) => n * p,
+            None => {
+                let overhead = if sync > 0.0 { sync } else { TILE_OVERHEAD };
+                tiles_for_cost(map.width * map.height, p, map.total(), overhead)
+            }
+        };
+        let shrink = plan_tiles(map.width, map.height, tiles, GRID);
         let grid = plan_grid(map.width, map.height, shrink.len());
         out.push(run_plan("shrinking", map, &shrink, p, sync, false));
         out.push(run_plan("grid", map, &grid, p, sync, false));
@@ -361,7 +373,7 @@ fn evaluate(map: &CostMap, args: &Args) -> Vec<Outcome> {
             out.push(run_plan("shrink-lpt", map, &shrink, p, sync, true));
         }
         if let Some(bands) = &args.bands {
-            let alt = plan_bands(map.width, map.height, tpw * p, bands);
+            let alt = plan_bands(map.width, map.height, tiles, bands);
             out.push(run_plan("bands", map, &alt, p, sync, false));
         }
     }
@@ -495,7 +507,7 @@ fn self_test() -> Result<(), String> {
     // 1. Uniform cost over the shrinking plan at P = 1: efficiency 1.
     let map = CostMap::new(&uniform_costs(640, 480, 37, 1e-3))?;
     for &tiles in &[1, 20, 80, 333] {
-        let plan = plan_tiles(640, 480, tiles);
+        let plan = plan_tiles(640, 480, tiles, GRID);
         let o = run_plan("shrinking", &map, &plan, 1, 0.0, false);
         check(
             &format!("uniform cost, {} tiles, P=1: efficiency 1", plan.len()),
@@ -504,7 +516,7 @@ fn self_test() -> Result<(), String> {
         );
     }
     // With a per-tile overhead, P = 1 loses exactly that overhead.
-    let plan = plan_tiles(640, 480, 20);
+    let plan = plan_tiles(640, 480, 20, GRID);
     let o = run_plan("shrinking", &map, &plan, 1, 0.5, false);
     let want = map.total() / (map.total() + 0.5 * plan.len() as f64);
     check(
@@ -514,7 +526,7 @@ fn self_test() -> Result<(), String> {
     );
 
     // 2. One tile holding the whole picture: efficiency 1/P.
-    let one = plan_tiles(640, 480, 1);
+    let one = plan_tiles(640, 480, 1, GRID);
     for p in [1, 2, 3, 8, 256] {
         let o = run_plan("one", &map, &one, p, 0.0, false);
         check(
@@ -529,7 +541,7 @@ fn self_test() -> Result<(), String> {
     let mut worst = 0.0f64;
     for _ in 0..50 {
         let (w, h) = (1 + rng.below(40) as usize, 1 + rng.below(30) as usize);
-        let measured = plan_tiles(w, h, 1 + rng.below(30) as usize);
+        let measured = plan_tiles(w, h, 1 + rng.below(30) as usize, GRID);
         let costs = Costs {
             width: w,
             height: h,
@@ -628,7 +640,7 @@ fn self_test() -> Result<(), String> {
         (7, 1000, 20),
         (1920, 1080, 1280),
     ] {
-        if check_cover(w, h, &plan_tiles(w, h, n)).is_err()
+        if check_cover(w, h, &plan_tiles(w, h, n, GRID)).is_err()
             || check_cover(w, h, &plan_bands(w, h, n, &default)).is_err()
             || check_cover(w, h, &plan_bands(w, h, n, &other)).is_err()
         {
@@ -681,7 +693,7 @@ fn self_test() -> Result<(), String> {
 struct Args {
     costs: Option<String>,
     workers: Vec<usize>,
-    tpw: usize,
+    tpw: Option<usize>,
     sync: f64,
     json: Option<String>,
     lpt: bool,
@@ -701,7 +713,7 @@ fn parse_args() -> Result<Args, String> {
     let mut a = Args {
         costs: None,
         workers: DEFAULT_WORKERS.to_vec(),
-        tpw: TILES_PER_WORKER,
+        tpw: None,
         sync: 0.0,
         json: None,
         lpt: false,
@@ -735,7 +747,7 @@ fn parse_args() -> Result<Args, String> {
             }
             "--tiles-per-worker" => {
                 a.tpw = match value("--tiles-per-worker")?.parse() {
-                    Ok(n) if n > 0 => n,
+                    Ok(n) if n > 0 => Some(n),
                     _ => return Err("--tiles-per-worker: expected a positive integer".into()),
                 }
             }
@@ -829,9 +841,13 @@ fn run() -> Result<(), String> {
         costs.tiles.len(),
         map.total()
     );
+    let count = match args.tpw {
+        Some(n) => format!("{n} x P"),
+        None => "tplan's default for the measured frame cost".into(),
+    };
     let mut plans = format!(
-        "shrinking = plan_tiles(W, H, {} x P); grid = equal tiles, same count, reading order",
-        args.tpw
+        "shrinking = plan_tiles(W, H, {count}, grid {GRID}); grid = equal tiles, same count, \
+         reading order"
     );
     if args.lpt {
         plans += "; shrink-lpt = shrinking tiles by decreasing cost (oracle)";

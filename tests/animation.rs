@@ -417,7 +417,7 @@ fn tiles_are_claimed_in_frame_order() {
     let job = t.path().join("job");
     run_ok(
         tool("tplan")
-            .args(["--workers", "2", "--frames"])
+            .args(["--workers", "2", "--tiles", "6", "--frames"])
             .arg(&vf)
             .arg("-o")
             .arg(&job)

@@ -122,23 +122,58 @@ fn within_tolerance(a: &Image, b: &Image, what: &str) {
     );
 }
 
+/// At `-ab 0` a job's picture is bit-identical to tpict's, and its tiles, whose edges lie on
+/// the `-ps` grid, trace exactly the rays of one `tpict -n 1` render: no cell is traced by two
+/// tiles. Checked on the default plan and on plans of many small tiles, at `-ps 4` and 3.
 #[test]
 fn ab0_jobs_are_pixel_identical_to_tpict_at_any_worker_count() {
-    let args = view_args(96, 72, &["-ab", "0"]);
-    let reference = tpict(&args);
-    for n in [1usize, 2, 4] {
+    for ps in ["4", "3"] {
+        let args = view_args(96, 72, &["-ab", "0", "-ps", ps]);
         let d = tempfile::tempdir().unwrap();
-        let job = d.path().join("job");
-        plan(&job, &["--workers", &n.to_string()], &args);
-        run_workers(&job, n, &[]);
-        let img = assemble(&job);
-        assert_eq!((img.width, img.height), (reference.width, reference.height));
-        assert!(
-            img.pixels == reference.pixels,
-            "{n} workers: picture differs from tpict's"
-        );
-        let st = stat(&job);
-        assert_eq!(st["done"], st["tiles"]);
+        let stats = d.path().join("stats.json");
+        let mut refargs = vec!["-n".to_string(), "1".into(), "--stats".into()];
+        refargs.push(stats.display().to_string());
+        refargs.extend(args.iter().cloned());
+        let reference = tpict(&refargs);
+        let st: serde_json::Value =
+            serde_json::from_str(&std::fs::read_to_string(&stats).unwrap()).unwrap();
+        let rays = st["total_rays"].as_u64().unwrap();
+        for (n, tiles) in [(1usize, None), (1, Some(40)), (2, Some(60)), (4, Some(120))] {
+            let job = d.path().join(format!("job{n}-{tiles:?}"));
+            let mut p = vec!["--workers".to_string(), n.to_string()];
+            if let Some(t) = tiles {
+                p.extend(["--tiles".to_string(), t.to_string()]);
+            }
+            let p: Vec<&str> = p.iter().map(|s| s.as_str()).collect();
+            plan(&job, &p, &args);
+            let m: serde_json::Value =
+                serde_json::from_str(&std::fs::read_to_string(job.join("manifest.json")).unwrap())
+                    .unwrap();
+            let plan_tiles = m["frames"][0]["tiles"].as_array().unwrap();
+            let g: u64 = ps.parse().unwrap();
+            let (w, h) = (reference.width as u64, reference.height as u64);
+            for t in plan_tiles {
+                let (x0, y0) = (t["x0"].as_u64().unwrap(), t["y0"].as_u64().unwrap());
+                let (x1, y1) = (x0 + t["w"].as_u64().unwrap(), y0 + t["h"].as_u64().unwrap());
+                for (v, end) in [(x0, w), (x1, w), (y0, h), (y1, h)] {
+                    assert!(
+                        v.is_multiple_of(g) || v == end,
+                        "-ps {ps}: tile {t} is off the grid"
+                    );
+                }
+            }
+            if let Some(t) = tiles {
+                assert!(plan_tiles.len() >= t / 2, "{} tiles", plan_tiles.len());
+            }
+            run_workers(&job, n, &[]);
+            let img = assemble(&job);
+            let what = format!("-ps {ps}, {n} workers, {} tiles", plan_tiles.len());
+            assert_eq!((img.width, img.height), (reference.width, reference.height));
+            assert!(img.pixels == reference.pixels, "{what}: picture differs");
+            let st = stat(&job);
+            assert_eq!(st["done"], st["tiles"]);
+            assert_eq!(st["aggregate"]["rays"].as_u64(), Some(rays), "{what}: rays");
+        }
     }
 }
 
@@ -154,7 +189,12 @@ fn ambient_values_are_shared_and_not_recomputed() {
     for n in [1usize, 2, 4] {
         let d = tempfile::tempdir().unwrap();
         let job = d.path().join("job");
-        plan(&job, &["--workers", &n.to_string()], &args);
+        let tiles = (80 * n).to_string();
+        plan(
+            &job,
+            &["--workers", &n.to_string(), "--tiles", &tiles],
+            &args,
+        );
         run_workers(&job, n, &["--amb-flush", "auto"]);
         let img = assemble(&job);
         let st = stat(&job);
@@ -254,7 +294,8 @@ fn killed_workers_lose_nothing() {
     let d = tempfile::tempdir().unwrap();
     // The fault-free picture.
     let clean = d.path().join("clean");
-    plan(&clean, &["--workers", "4", "--lease", "0.3"], &args);
+    // Many small tiles (the default plan would give few at this cost): kills land mid-job.
+    plan(&clean, &["--tiles", "320", "--lease", "0.3"], &args);
     run_workers(&clean, 2, &[]);
     let clean_img = assemble(&clean);
     let mut rng = Rng(0x9E37_79B9_7F4A_7C15);
@@ -262,7 +303,7 @@ fn killed_workers_lose_nothing() {
     let mut reclaimed = 0;
     for round in 0..rounds {
         let job = d.path().join(format!("job{round}"));
-        plan(&job, &["--workers", "4", "--lease", "0.3"], &args);
+        plan(&job, &["--tiles", "320", "--lease", "0.3"], &args);
         let mut kids: Vec<Option<Child>> = (0..4)
             .map(|i| {
                 Some(
@@ -1028,7 +1069,7 @@ fn damaged_jobs_are_reported_not_finished() {
     let d = tempfile::tempdir().unwrap();
     let job = d.path().join("job");
     let args = view_args(160, 120, &["-ab", "1", "-ad", "64", "-as", "0"]);
-    plan(&job, &["--workers", "2"], &args);
+    plan(&job, &["--tiles", "160"], &args);
     // Entries deleted: tstat says so.
     let first = std::fs::read_dir(job.join("tasks"))
         .unwrap()
@@ -1055,7 +1096,7 @@ fn damaged_jobs_are_reported_not_finished() {
     let job2 = d.path().join("job2");
     // Several seconds of work on one thread: the deletion comes long before the end.
     let long = view_args(320, 240, &["-ab", "1", "-ad", "256", "-as", "0"]);
-    plan(&job2, &["--workers", "2"], &long);
+    plan(&job2, &["--tiles", "160"], &long);
     let w = worker(&job2, "w0", &[])
         .stderr(Stdio::piped())
         .spawn()

@@ -46,7 +46,8 @@ fn command_line() -> String {
     after_help = "Example: tplan --workers 8 -o job -- -vf view.vf -x 1024 -y 768 -ab 2 scene.rad"
 )]
 struct TplanArgs {
-    /// Tiles per frame (default: 80 per expected worker, see docs/batch.md).
+    /// Tiles per frame (default: as many as keep the per-tile overhead within 2% of the
+    /// frame's estimated cost, at most 80 per expected worker; see docs/batch.md).
     #[arg(long, conflicts_with = "tile_size")]
     tiles: Option<usize>,
     /// Fixed tile size WxH (in reading order instead of largest first).

@@ -1,6 +1,6 @@
 //! The job manifest (`manifest.json`) and job creation (`tplan`).
 
-use super::plan::{check_cover, plan_fixed, plan_tiles, TileRect, TILES_PER_WORKER};
+use super::plan::{check_cover, default_tiles, pixel_cost_floor, plan_fixed, plan_tiles, TileRect};
 use super::{check_plain_name, hex32, parse_hex32, task_name, JobDir};
 use crate::options::{parse_rpict_args, Command, PictureParams, RenderParams, RpictOptions};
 use crate::scene::{read_scene_files, Primitive, ReadOptions, Scene};
@@ -383,10 +383,15 @@ pub fn create_job(dir: &Path, req: &PlanRequest) -> Result<Manifest> {
         if x == 0 || y == 0 || x > MAX_RES || y > MAX_RES {
             bail!("resolution {x}x{y} is out of range");
         }
+        // Tile edges on the -ps grid: no cell is traced by two tiles.
+        let grid = opts.picture.ps.max(1);
         let tiles = match (req.tile_size, req.tiles) {
             (Some((tw, th)), _) => plan_fixed(x, y, tw, th),
-            (None, Some(n)) => plan_tiles(x, y, n),
-            (None, None) => plan_tiles(x, y, TILES_PER_WORKER * workers),
+            (None, Some(n)) => plan_tiles(x, y, n, grid),
+            (None, None) => {
+                let n = default_tiles(x, y, workers, pixel_cost_floor(opts.params.ab));
+                plan_tiles(x, y, n, grid)
+            }
         };
         if tiles.len() > MAX_INDEX {
             bail!("{} tiles per frame (at most {MAX_INDEX})", tiles.len());

@@ -10,13 +10,23 @@
 //! a 10× hot spot in the corner handed out last, measured 98% simulated efficiency at 16 and
 //! 64 workers with these bands against 94% and 92% with four bands of 1/2, 1/4, 1/8, 1/8;
 //! see docs/benchmarks.md.) Inside a band, tiles are as square as the
-//! row count allows; widths differ by at most one pixel. Within a band the tiles are handed
+//! row count allows. Within a band the tiles are handed
 //! out in farthest-point order (each next tile is the one farthest from every tile handed out
 //! before it), so tiles rendered at the same time by different workers are far apart and a
 //! tile's neighbours are usually rendered after it is finished and its ambient values are
-//! shared — fewer values are computed twice. Tile boundaries never change
-//! pixels (every pixel is seeded by its position alone), so the plan is free to be any
-//! rectangles.
+//! shared — fewer values are computed twice.
+//!
+//! Every tile edge inside the picture lies on the `-ps` grid (a multiple of the sample
+//! spacing): adaptive image sampling works on cells of that grid fixed by the full picture,
+//! and a tile renders every cell it touches, so a tile edge through a cell would trace that
+//! cell in both tiles. On the grid, each cell is traced once in the whole job and the job's
+//! rays at `-ab 0` equal one render's. (Pixels never depend on the tiling: every pixel is
+//! seeded by its position alone.)
+//!
+//! The default tile count ([`default_tiles`]) keeps the per-tile overhead (claiming, writing
+//! and fsyncing the result: [`TILE_OVERHEAD`]) under 2% of the frame's cost, estimated from a
+//! lower bound of the cost of a pixel at the job's `-ab` ([`pixel_cost_floor`]), and is at
+//! most [`TILES_PER_WORKER`] per expected worker.
 
 use serde::{Deserialize, Serialize};
 
@@ -40,23 +50,88 @@ impl TileRect {
     }
 }
 
-/// Default `tiles` per expected worker (the plan then has about 1.4 × 80 tiles per worker,
-/// fewer where the 64-pixel floor applies). Radiance's own notes measured 16% idle time with
-/// 5 tiles per CPU; replaying the tile costs of a 16-worker `-ab 2` job of the demo scene
-/// (whose mirror and glass make a few tiles cost 20× the mean), `bench/tilesim` gives 83%
-/// efficiency at 16 workers with 40 and 99% with 80 (docs/benchmarks.md).
+/// Most `tiles` per expected worker (the plan then has about 1.4 × 80 tiles per worker,
+/// fewer where tiles would cost too little: [`default_tiles`]). Radiance's own notes
+/// measured 16% idle time with 5 tiles per CPU; replaying the tile costs of a 16-worker
+/// `-ab 2` job of the demo scene (whose mirror and glass make a few tiles cost 20× the mean),
+/// `bench/tilesim` gives 83% efficiency at 16 workers with 20 and 99% with 40 or 80
+/// (docs/benchmarks.md).
 pub const TILES_PER_WORKER: usize = 80;
+
+/// CPU seconds a worker spends on a tile besides rendering it: claiming it, writing,
+/// fsyncing and renaming its result, marking it done (`bench/jobcost.sh`: 32×32 tiles
+/// against one tile at `-ab 0`, docs/benchmarks.md "Job cost").
+pub const TILE_OVERHEAD: f64 = 0.8e-3;
+
+/// The share of a tile's cost its overhead may take in the default plan.
+pub const OVERHEAD_SHARE: f64 = 0.02;
+
+/// A lower bound of the CPU seconds one pixel costs at `-ab` `ab`, from the cheapest
+/// benchmark scene (`tests/scenes/daffodil` at `-ps 4`, rpict's defaults otherwise: 0.75,
+/// 1.6 and 7.6 µs at `-ab` 0, 1 and 2; docs/benchmarks.md "Job cost"). Scenes cost more
+/// per pixel, never much less, so tiles planned with it cost at least what the 2% rule
+/// needs.
+pub fn pixel_cost_floor(ab: i32) -> f64 {
+    match ab {
+        ..=0 => 0.75e-6,
+        1 => 1.5e-6,
+        _ => 7.5e-6,
+    }
+}
+
+/// The default `tiles` for a `width × height` frame and `workers` expected workers, when a
+/// pixel costs at least `pixel_cost` CPU seconds: [`tiles_for_cost`] with the frame's cost
+/// and [`TILE_OVERHEAD`].
+pub fn default_tiles(width: usize, height: usize, workers: usize, pixel_cost: f64) -> usize {
+    let frame = (width * height) as f64 * pixel_cost;
+    tiles_for_cost(width * height, workers, frame, TILE_OVERHEAD)
+}
+
+/// `tiles` for a frame of `area` pixels costing `frame_cost` CPU seconds, `workers` expected
+/// workers and `overhead` seconds per tile: as many as keep the overhead of all the plan's
+/// tiles (about 1.4 × `tiles`) within [`OVERHEAD_SHARE`] of the frame's cost, and at most
+/// [`TILES_PER_WORKER`] × `workers` (at least 1).
+pub fn tiles_for_cost(area: usize, workers: usize, frame_cost: f64, overhead: f64) -> usize {
+    let most = TILES_PER_WORKER.saturating_mul(workers.max(1));
+    let cheap_enough = (frame_cost * OVERHEAD_SHARE / overhead / PLANNED_PER_TILE).floor();
+    if cheap_enough.is_nan() || area == 0 {
+        return most;
+    }
+    (cheap_enough.min(most as f64) as usize).max(1)
+}
+
+/// Tiles [`plan_tiles`] makes per requested tile (where the 64-pixel floor does not apply).
+pub const PLANNED_PER_TILE: f64 = 1.4;
 
 /// Smallest planned tile area in pixels (tiny tiles cost more to claim and write than to
 /// render).
 pub const MIN_TILE_AREA: f64 = 64.0;
 
-/// Plan about 1.4 × `tiles` tiles (at least one) over a `width × height` picture, largest first.
-pub fn plan_tiles(width: usize, height: usize, tiles: usize) -> Vec<TileRect> {
+/// Cut points `0 = c_0 < c_1 < ... < c_n = len` near `len·i/n`, each on a multiple of
+/// `grid` (the ends are exact); cuts that would meet are merged, so there may be fewer than
+/// `n` parts.
+fn cuts(len: usize, n: usize, grid: usize) -> Vec<usize> {
+    let grid = grid.max(1);
+    let mut out = vec![0];
+    for i in 1..n {
+        let exact = len * i / n;
+        let snapped = ((exact + grid / 2) / grid * grid).min(len);
+        if snapped > *out.last().unwrap_or(&0) && snapped < len {
+            out.push(snapped);
+        }
+    }
+    out.push(len);
+    out
+}
+
+/// Plan about 1.4 × `tiles` tiles (at least one) over a `width × height` picture, largest
+/// first, every edge inside the picture on the `grid` (`-ps`) lines.
+pub fn plan_tiles(width: usize, height: usize, tiles: usize, grid: usize) -> Vec<TileRect> {
     if width == 0 || height == 0 {
         return Vec::new();
     }
     let tiles = tiles.max(1);
+    let grid = grid.max(1);
     let area = (width * height) as f64;
     if tiles == 1 {
         return vec![TileRect {
@@ -67,13 +142,14 @@ pub fn plan_tiles(width: usize, height: usize, tiles: usize) -> Vec<TileRect> {
         }];
     }
     let base = 1.25 * area / tiles as f64;
-    // Row shares of the four bands, rounded so that they add up to `height`.
+    // Row shares of the six bands, on the grid, adding up to `height`.
     let shares = [0.5, 0.25, 0.125, 0.0625, 0.03125, 0.03125];
     let mut bounds = [0usize; 7];
     let mut acc = 0.0;
     for (k, s) in shares.iter().enumerate() {
         acc += s;
-        bounds[k + 1] = ((acc * height as f64).round() as usize).min(height);
+        let exact = (acc * height as f64).round() as usize;
+        bounds[k + 1] = ((exact + grid / 2) / grid * grid).clamp(bounds[k], height);
     }
     bounds[6] = height;
     let mut out = Vec::new();
@@ -87,19 +163,16 @@ pub fn plan_tiles(width: usize, height: usize, tiles: usize) -> Vec<TileRect> {
         let side = tile_area.sqrt().max(1.0);
         let rows = r1 - r0;
         let nbands = ((rows as f64 / side).round() as usize).clamp(1, rows);
-        for b in 0..nbands {
-            let y0 = r0 + rows * b / nbands;
-            let y1 = r0 + rows * (b + 1) / nbands;
-            let h = y1 - y0;
+        let ys = cuts(rows, nbands, grid);
+        for yw in ys.windows(2) {
+            let (y0, h) = (r0 + yw[0], yw[1] - yw[0]);
             let ncols = ((width * h) as f64 / tile_area).round() as usize;
-            let ncols = ncols.clamp(1, width);
-            for c in 0..ncols {
-                let x0 = width * c / ncols;
-                let x1 = width * (c + 1) / ncols;
+            let xs = cuts(width, ncols.clamp(1, width), grid);
+            for xw in xs.windows(2) {
                 out.push(TileRect {
-                    x0,
+                    x0: xw[0],
                     y0,
-                    w: x1 - x0,
+                    w: xw[1] - xw[0],
                     h,
                 });
             }
@@ -107,6 +180,15 @@ pub fn plan_tiles(width: usize, height: usize, tiles: usize) -> Vec<TileRect> {
         spread(&mut out[band_start..]);
     }
     out
+}
+
+/// Whether every tile edge inside the `width × height` picture lies on a multiple of `grid`.
+pub fn on_grid(width: usize, height: usize, tiles: &[TileRect], grid: usize) -> bool {
+    let grid = grid.max(1);
+    let ok = |v: usize, end: usize| v.is_multiple_of(grid) || v == end;
+    tiles.iter().all(|t| {
+        ok(t.x0, width) && ok(t.x0 + t.w, width) && ok(t.y0, height) && ok(t.y0 + t.h, height)
+    })
 }
 
 /// Reorder tiles in farthest-point order, starting from the first.
@@ -203,12 +285,22 @@ pub fn check_cover(width: usize, height: usize, tiles: &[TileRect]) -> Result<()
             ));
         }
         for y in t.y0..t.y0 + t.h {
-            for p in y * width + t.x0..y * width + t.x0 + t.w {
-                let (word, bit) = (p / 64, 1u64 << (p % 64));
-                if seen[word] & bit != 0 {
+            // The row's bits [p, end), a word at a time (every tool validates the plan at
+            // start: a bit at a time cost a millisecond per megapixel).
+            let (mut p, end) = (y * width + t.x0, y * width + t.x0 + t.w);
+            while p < end {
+                let (word, lo) = (p / 64, p % 64);
+                let n = (64 - lo).min(end - p);
+                let mask = if n == 64 {
+                    u64::MAX
+                } else {
+                    ((1u64 << n) - 1) << lo
+                };
+                if seen[word] & mask != 0 {
                     return Err(format!("tile {i} overlaps another tile at row {y}"));
                 }
-                seen[word] |= bit;
+                seen[word] |= mask;
+                p += n;
             }
         }
     }
@@ -230,11 +322,11 @@ mod tests {
             (7, 1000, 20),
             (160, 120, 80),
         ] {
-            let p = plan_tiles(w, h, n);
+            let p = plan_tiles(w, h, n, 1);
             check_cover(w, h, &p).unwrap();
             assert!(p.first().unwrap().area() >= p.last().unwrap().area());
         }
-        let p = plan_tiles(640, 480, 80);
+        let p = plan_tiles(640, 480, 80, 1);
         assert!((90..=135).contains(&p.len()), "{} tiles", p.len());
         let first = p[0].area() as f64;
         let last = p[p.len() - 1].area() as f64;
@@ -242,6 +334,50 @@ mod tests {
         // Non-increasing by band.
         for w in p.windows(2) {
             assert!(w[1].area() as f64 <= w[0].area() as f64 * 1.6);
+        }
+    }
+
+    #[test]
+    fn plans_lie_on_the_sample_grid() {
+        for &(w, h, n, g) in &[
+            (1024, 1024, 1280, 4),
+            (640, 440, 320, 4),
+            (513, 257, 100, 4),
+            (17, 3, 40, 4),
+            (1000, 7, 20, 8),
+            (7, 1000, 20, 3),
+            (33, 33, 5000, 16),
+            (1, 1, 5, 4),
+        ] {
+            let p = plan_tiles(w, h, n, g);
+            check_cover(w, h, &p).unwrap();
+            assert!(on_grid(w, h, &p, g), "{w}x{h} {n} tiles, grid {g}");
+        }
+        let p = plan_tiles(1024, 1024, 1280, 4);
+        assert!(p.len() > 1200, "{} tiles", p.len());
+        assert!(!on_grid(1024, 1024, &plan_fixed(1024, 1024, 30, 30), 4));
+    }
+
+    #[test]
+    fn default_tile_counts_keep_the_overhead_small() {
+        // A cheap frame gets few tiles, an expensive one the most per worker.
+        let cheap = default_tiles(1024, 1024, 16, pixel_cost_floor(0));
+        assert!((10..=200).contains(&cheap), "{cheap}");
+        assert_eq!(default_tiles(1024, 1024, 16, 1e-3), 16 * TILES_PER_WORKER);
+        assert_eq!(default_tiles(4, 4, 16, pixel_cost_floor(0)), 1);
+        assert_eq!(default_tiles(4, 4, 16, f64::NAN), 16 * TILES_PER_WORKER);
+        // The overhead of all tiles stays within about 2% of the frame's cost (the plan has
+        // about 1.4 tiles per requested tile; a few more when there are few).
+        for ab in 0..3 {
+            let c = pixel_cost_floor(ab);
+            let n = default_tiles(1024, 768, 16, c);
+            let p = plan_tiles(1024, 768, n, 4);
+            let frame = (1024 * 768) as f64 * c;
+            assert!(
+                p.len() as f64 * TILE_OVERHEAD <= OVERHEAD_SHARE * frame * 1.25,
+                "-ab {ab}: {n} -> {} tiles",
+                p.len()
+            );
         }
     }
 
@@ -257,6 +393,32 @@ mod tests {
         let mut p = plan_fixed(10, 10, 5, 5);
         p[1].x0 = 0;
         assert!(check_cover(10, 10, &p).unwrap_err().contains("overlap"));
+        // Overlaps of one pixel are found anywhere in a word, also across word boundaries.
+        for (w, x) in [(200, 63), (200, 64), (200, 0), (200, 127), (70, 69)] {
+            let mut p = plan_fixed(w, 3, w, 1);
+            p[1] = TileRect {
+                x0: 0,
+                y0: 1,
+                w: x,
+                h: 1,
+            };
+            p.push(TileRect {
+                x0: x,
+                y0: 1,
+                w: w - x,
+                h: 1,
+            });
+            if x > 0 {
+                check_cover(w, 3, &p).unwrap();
+                p[1].w += 1;
+                p[2].w -= 1; // row 2 gives the pixel back: equal areas
+                assert!(
+                    check_cover(w, 3, &p).unwrap_err().contains("overlap"),
+                    "{w} {x}"
+                );
+            }
+        }
+        check_cover(1023, 517, &plan_tiles(1023, 517, 300, 4)).unwrap();
         p.pop();
         assert!(check_cover(10, 10, &p).is_err());
     }

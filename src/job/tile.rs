@@ -5,13 +5,15 @@
 //! | CRC32 of every byte before it (u32 LE)
 //! ```
 //!
-//! A result is written to a temporary file in `tiles/`, fsynced, then renamed over its name,
-//! so readers see a whole result or none; two workers finishing the same tile write equal
+//! A result is written to a temporary file in `tiles/`, fsynced, then renamed over its name
+//! (and the directory fsynced: [`ResultDir`]), so readers see a whole result or none; two workers finishing the same tile write equal
 //! pixels (every pixel is seeded by its position and frame alone) and the later rename wins.
 
 use anyhow::{anyhow, bail, Result};
 use serde::{Deserialize, Serialize};
-use std::path::Path;
+use std::fs::File;
+use std::io::Write;
+use std::path::{Path, PathBuf};
 
 const MAGIC: &[u8; 9] = b"TSRTILE1\n";
 
@@ -120,22 +122,63 @@ pub fn decode(bytes: &[u8]) -> Result<(TileMeta, Vec<[f32; 3]>)> {
     Ok((meta, pixels))
 }
 
-/// Write a tile result atomically (temporary in `tiles/`, fsync, rename).
-pub fn write(path: &Path, meta: &TileMeta, pixels: &[[f32; 3]]) -> Result<()> {
-    let bytes = encode(meta, pixels)?;
-    if crate::fault::injected("TILE_ENOSPC") {
-        // Test hook: behave as a full disk would.
-        return Err(anyhow!(
-            "cannot write tile result {}: No space left on device (os error 28, injected)",
-            path.display()
-        ));
+/// The `tiles/` directory of a job as one worker writes into it: kept open, so that each
+/// result costs one `open` (its temporary), two `fsync`s (the data, then the directory entry)
+/// and one `rename`, whatever the number of tiles.
+pub struct ResultDir {
+    dir: PathBuf,
+    handle: Option<File>,
+}
+
+impl ResultDir {
+    /// Open `dir` (its handle is kept for the directory fsync; a file system that refuses to
+    /// open directories gets none, as `sync_dir` is best effort).
+    pub fn open(dir: &Path) -> Result<ResultDir> {
+        Ok(ResultDir {
+            dir: dir.to_path_buf(),
+            handle: File::open(dir).ok(),
+        })
     }
-    super::write_file_atomic(path, &bytes)
-        .map_err(|e| anyhow!("cannot write tile result {}: {e}", path.display()))?;
-    if let Some(dir) = path.parent() {
-        super::sync_dir(dir);
+
+    /// Write the result `name` (`<task>.tile`) atomically: the temporary
+    /// `.<name>.<tag>.tmp` (`tag`: the writer's owner name, unique among live processes) is
+    /// written, fsynced, closed and renamed over `name`, then the directory is fsynced so that
+    /// the name is durable before the task is marked done.
+    pub fn write(&self, name: &str, tag: &str, meta: &TileMeta, pixels: &[[f32; 3]]) -> Result<()> {
+        let path = self.dir.join(name);
+        let err = |e: std::io::Error| anyhow!("cannot write tile result {}: {e}", path.display());
+        let bytes = encode(meta, pixels)?;
+        if crate::fault::injected("TILE_ENOSPC") {
+            // Test hook: behave as a full disk would.
+            return Err(anyhow!(
+                "cannot write tile result {}: No space left on device (os error 28, injected)",
+                path.display()
+            ));
+        }
+        let tmp = self.dir.join(format!(".{name}.{tag}.tmp"));
+        let written = (|| {
+            let mut o = std::fs::OpenOptions::new();
+            o.write(true).create(true).truncate(true);
+            #[cfg(unix)]
+            {
+                use std::os::unix::fs::OpenOptionsExt;
+                o.mode(0o666);
+            }
+            let mut f = o.open(&tmp)?;
+            f.write_all(&bytes)?;
+            f.sync_all()?;
+            drop(f);
+            std::fs::rename(&tmp, &path)
+        })();
+        if let Err(e) = written {
+            let _ = std::fs::remove_file(&tmp);
+            return Err(err(e));
+        }
+        if let Some(h) = &self.handle {
+            let _ = h.sync_all();
+        }
+        Ok(())
     }
-    Ok(())
 }
 
 /// Read and check a tile result file.

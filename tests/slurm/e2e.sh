@@ -121,7 +121,9 @@ timing "cluster start" "$(secs "$t")"
 # --- plan and submit ------------------------------------------------------------------------
 echo "== tplan ($WORKERS workers)"
 t="$(now_ms)"
-"$BIN/tplan" --workers "$WORKERS" --lease 10 -o "$JOB" -- "${OPTS[@]}" "$SCENE"
+# Many tiles (80 per worker): the default plan gives this cheap frame a handful, and task 0
+# must hold a claim long enough to be requeued mid-render.
+"$BIN/tplan" --workers "$WORKERS" --tiles $((80 * WORKERS)) --lease 10 -o "$JOB" -- "${OPTS[@]}" "$SCENE"
 [ -d "$JOB" ] || die "tplan did not create $JOB"
 timing "tplan" "$(secs "$t")"
 
