@@ -383,8 +383,9 @@ pub fn create_job(dir: &Path, req: &PlanRequest) -> Result<Manifest> {
         if x == 0 || y == 0 || x > MAX_RES || y > MAX_RES {
             bail!("resolution {x}x{y} is out of range");
         }
-        // Tile edges on the -ps grid: no cell is traced by two tiles.
-        let grid = opts.picture.ps.max(1);
+        // Tile edges on the sampling grid (cells of `cell_size(-ps)` pixels): no cell is
+        // traced by two tiles.
+        let grid = crate::render::cell_size(opts.picture.ps.max(1));
         let tiles = match (req.tile_size, req.tiles) {
             (Some((tw, th)), _) => plan_fixed(x, y, tw, th),
             (None, Some(n)) => plan_tiles(x, y, n, grid),

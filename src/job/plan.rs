@@ -16,12 +16,12 @@
 //! tile's neighbours are usually rendered after it is finished and its ambient values are
 //! shared — fewer values are computed twice.
 //!
-//! Every tile edge inside the picture lies on the `-ps` grid (a multiple of the sample
-//! spacing): adaptive image sampling works on cells of that grid fixed by the full picture,
-//! and a tile renders every cell it touches, so a tile edge through a cell would trace that
-//! cell in both tiles. On the grid, each cell is traced once in the whole job and the job's
-//! rays at `-ab 0` equal one render's. (Pixels never depend on the tiling: every pixel is
-//! seeded by its position alone.)
+//! Every tile edge inside the picture lies on the sampling grid (a multiple of the cell side,
+//! [`crate::render::cell_size`] of `-ps`): adaptive image sampling works on cells of that grid
+//! fixed by the full picture, and a tile renders every cell it touches, so a tile edge through
+//! a cell would trace that cell in both tiles. On the grid each cell is traced by one tile;
+//! only the samples on an edge between two tiles are traced by both. (Pixels never depend on
+//! the tiling: every pixel is seeded by its position alone.)
 //!
 //! The default tile count ([`default_tiles`]) keeps the per-tile overhead (claiming, writing
 //! and fsyncing the result: [`TILE_OVERHEAD`]) under 2% of the frame's cost, estimated from a
