@@ -197,18 +197,23 @@ pub fn render_region(
         .store(overture_rows.len() + rows, Ordering::Relaxed);
     overture(tr, fs, x0, x1, &overture_rows, progress);
     if ps == 1 {
-        out.par_chunks_mut(w).enumerate().for_each(|(row, line)| {
-            if tr.scene.fatal_error().is_some() {
-                return;
-            }
-            let mut rays = 0;
-            for (i, px) in line.iter_mut().enumerate() {
-                let s = sample_pixel(tr, fs, x0 + i, y0 + row, &mut rays);
-                *px = to_f32(s.color);
-            }
-            progress.rays.fetch_add(rays, Ordering::Relaxed);
-            progress.rows_done.fetch_add(1, Ordering::Relaxed);
-        });
+        // One row per job (with_max_len): rows differ in cost, and rayon's adaptive split
+        // otherwise leaves a quarter of the rows to one thread at the end.
+        out.par_chunks_mut(w)
+            .enumerate()
+            .with_max_len(1)
+            .for_each(|(row, line)| {
+                if tr.scene.fatal_error().is_some() {
+                    return;
+                }
+                let mut rays = 0;
+                for (i, px) in line.iter_mut().enumerate() {
+                    let s = sample_pixel(tr, fs, x0 + i, y0 + row, &mut rays);
+                    *px = to_f32(s.color);
+                }
+                progress.rays.fetch_add(rays, Ordering::Relaxed);
+                progress.rows_done.fetch_add(1, Ordering::Relaxed);
+            });
         return out;
     }
     let cx0 = x0 / ps;
@@ -258,8 +263,9 @@ pub fn render_region(
     };
     let even: Vec<_> = (cy0..cy1).step_by(2).collect();
     let odd: Vec<_> = (cy0 + 1..cy1).step_by(2).collect();
-    let even_px: Vec<_> = even.into_par_iter().map(band).collect();
-    let odd_px: Vec<_> = odd.into_par_iter().map(band).collect();
+    // One band per job, as the rows above.
+    let even_px: Vec<_> = even.into_par_iter().with_max_len(1).map(band).collect();
+    let odd_px: Vec<_> = odd.into_par_iter().with_max_len(1).map(band).collect();
     for (x, y, c) in even_px.into_iter().chain(odd_px).flatten() {
         out[(y - y0) * w + (x - x0)] = c;
     }
@@ -354,7 +360,7 @@ fn overture(
         fill_only: true,
         ..*tr
     };
-    rows.par_iter().for_each(|&y| {
+    rows.par_iter().with_max_len(1).for_each(|&y| {
         let mut rays = 0;
         for x in (x0.div_ceil(step) * step..x1).step_by(step) {
             sample_pixel(tr, fs, x, y, &mut rays);
