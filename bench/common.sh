@@ -33,3 +33,14 @@ fi
 TPICT=${TPICT:-"$ROOT/target/release/tpict"}
 [[ $TPICT == /* ]] || TPICT="$PWD/$TPICT"
 [[ -x "$TPICT" ]] || { echo "$NAME: $TPICT missing" >&2; exit 1; }
+
+# The direct-light benchmark scenes (bench/run.sh, bench/direct_error.sh):
+# scene_def NAME prints "folder (under tests/scenes) | files | view file | -av".
+scene_def() {
+    case $1 in
+    spheres | curved | glassy | mirrors | aniso) echo "|$1.rad|$1.vf|.05" ;;
+    examp) echo "examp|examp|examp.vp|.5" ;;
+    daffodil) echo "daffodil|daffodil.flat.rad room.flat.rad|daffodil.vp|.2" ;;
+    *) return 1 ;;
+    esac
+}

@@ -52,15 +52,7 @@ cleanup() { rm -rf "$TMP"; }
 trap cleanup EXIT
 trap 'exit 130' INT TERM
 
-# Scenes: folder (under tests/scenes) | files | view file | -av (as bench/run.sh).
-scene_def() {
-    case $1 in
-    spheres | curved | glassy | mirrors | aniso) echo "|$1.rad|$1.vf|.05" ;;
-    examp) echo "examp|examp|examp.vp|.5" ;;
-    daffodil) echo "daffodil|daffodil.flat.rad room.flat.rad|daffodil.vp|.2" ;;
-    *) return 1 ;;
-    esac
-}
+# Scenes: scene_def in bench/common.sh.
 
 # cpu_of OUT cmd... : run REPEAT times with stdout to OUT; prints the minimum user+sys.
 cpu_of() {

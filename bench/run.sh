@@ -35,15 +35,7 @@ cleanup() { rm -rf "$TMP"; }
 trap cleanup EXIT
 trap 'exit 130' INT TERM
 
-# --- Scenes: name | folder (under tests/scenes) | files | view file | -av ------------------
-scene_def() {
-    case $1 in
-    spheres | curved | glassy | mirrors | aniso) echo "|$1.rad|$1.vf|.05" ;;
-    examp) echo "examp|examp|examp.vp|.5" ;;
-    daffodil) echo "daffodil|daffodil.flat.rad room.flat.rad|daffodil.vp|.2" ;;
-    *) return 1 ;;
-    esac
-}
+# Scenes: scene_def in bench/common.sh.
 
 # time_cmd OUT ERR cmd... : run cmd with stdout to OUT, stderr to ERR; prints "wall cpu".
 time_cmd() {

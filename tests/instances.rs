@@ -306,17 +306,7 @@ fn fails_with(dir: &Path, files: &[&str], want: &str) {
             .args(["-o", "out.hdr"])
             .args(files),
     );
-    let err = String::from_utf8_lossy(&o.stderr).into_owned();
-    assert_eq!(o.status.code(), Some(1), "{files:?}: {err}");
-    assert!(!err.contains("panicked"), "{files:?} panicked: {err}");
-    let lines: Vec<&str> = err.lines().filter(|l| l.contains("error")).collect();
-    assert_eq!(lines.len(), 1, "{files:?}: {err}");
-    assert!(
-        lines[0].contains(want),
-        "{files:?}: want '{want}' in: {}",
-        lines[0]
-    );
-    assert!(!dir.join("out.hdr").exists());
+    assert_one_error_line(&o, &format!("{files:?}"), want, &dir.join("out.hdr"));
 }
 
 /// Damaged octrees and meshes (truncated, wrong magic, wrong format), an octree that

@@ -242,3 +242,19 @@ pub fn assert_like_reference(bin: &Path, ours: &Path, reference: &Path, tol: &To
         100.0 * c.mean_lum
     );
 }
+
+/// A run that failed as bad input must: exit status 1, exactly one error line, which contains
+/// `want`, no panic, and no output file at `out`; `what` names the case in messages.
+pub fn assert_one_error_line(o: &std::process::Output, what: &str, want: &str, out: &Path) {
+    let err = String::from_utf8_lossy(&o.stderr).into_owned();
+    assert_eq!(o.status.code(), Some(1), "{what}: {err}");
+    assert!(!err.contains("panicked"), "{what} panicked: {err}");
+    let lines: Vec<&str> = err.lines().filter(|l| l.contains("error")).collect();
+    assert_eq!(lines.len(), 1, "{what}: {err}");
+    assert!(
+        lines[0].contains(want),
+        "{what}: want '{want}' in: {}",
+        lines[0]
+    );
+    assert!(!out.exists(), "{what}: {} was written", out.display());
+}
