@@ -5,7 +5,7 @@
 # proposed; -axm, moving-direction accuracy; -axt, a per-frame CPU budget of BUDGET seconds). Per-frame CPU and new ambient values come from tstat --json; the error of the
 # last frames is measured against a high-accuracy render of the same views.
 # Usage: bash bench/animation.sh [OUTDIR (default docs/benchmarks/animation)]
-# Environment: FRAMES=60, BUDGET=0.12, RES="-x 160 -y 120", AMB="-ab 1 -ad 512 -as 128 -ar 64",
+# Environment: FRAMES=60, BUDGET=0.12, TILES=80, RES="-x 160 -y 120", AMB="-ab 1 -ad 512 -as 128 -ar 64",
 #              MODES (name:options;...), REF="-aa .03 -ad 2048 -as 1024",
 #              MID (frames along the path whose error is measured; default every frame
 #              before the last LAST), LAST=5
@@ -19,6 +19,9 @@ BUDGET=${BUDGET:-0.12}
 MODES=${MODES:-"constant:-aa .1;ax:-ax .5 .1 .0075;axg:-axg .5 .1 .93;axm:-aa .1 -axm 2 5;axt:-aa .1 -axt $BUDGET .5 .1"}
 REF=${REF:-"-aa .03 -ad 2048 -as 1024"}
 LAST=${LAST:-5}
+# Tiles per frame: -axm decides per tile, so the frames are cut finer than the default plan
+# for one worker would.
+TILES=${TILES:-80}
 MID=${MID:-$(seq -s ' ' 0 $((FRAMES - LAST - 1)))}
 NAME=animation
 NO_BUILD=1
@@ -42,7 +45,7 @@ for m in "${modes[@]}"; do
     opts=${m#*:}
     job=$TMP/$name
     # shellcheck disable=SC2086
-    "$B/tplan" --workers 1 --path "$TMP/keys.vf" --path-frames "$FRAMES" -o "$job" -- \
+    "$B/tplan" --workers 1 --tiles "$TILES" --path "$TMP/keys.vf" --path-frames "$FRAMES" -o "$job" -- \
         $RES $AMB $opts demo.rad 2>/dev/null
     /usr/bin/time -f "%U %S %e" -o "$TMP/$name.time" "$B/tpiece" "$job" --threads 1 -q
     "$B/tstat" "$job" --json > "$OUT/$name.json"
