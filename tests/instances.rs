@@ -14,12 +14,6 @@ use std::path::Path;
 use std::process::{Command, Output};
 use tessera::image::{read_picture, Image};
 
-/// With indirect light the two caches' noise differs pixel by pixel: compare at 32×32.
-const AMBIENT: Tol = Tol {
-    size: "32",
-    ..SUITE
-};
-
 const SRC: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/tests/scenes/instances");
 
 /// A sphere of 24×12 quads (two triangles each) with normals and (u,v), in group `ball`
@@ -82,29 +76,6 @@ fn workdir(bin: &Path) -> tempfile::TempDir {
     t
 }
 
-fn tpict(dir: &Path) -> Command {
-    let mut c = Command::new(tpict_bin());
-    c.current_dir(dir).env("RAYPATH", ".");
-    c
-}
-
-/// Render `input` (scene files or an octree) with tpict, and `octree` with rpict, both
-/// with `opts`; compare as Radiance's test suite does.
-fn check(bin: &Path, dir: &Path, input: &[&str], octree: &str, opts: &[&str], tol: &Tol) {
-    let name = format!("{}{}", input.join("_"), opts.join(""));
-    let reff = dir.join(format!("ref-{name}.hdr"));
-    let data = run_ok(
-        radiance(bin, "rpict")
-            .current_dir(dir)
-            .args(opts)
-            .arg(octree),
-    );
-    std::fs::write(&reff, data).unwrap();
-    let ours = dir.join(format!("ours-{name}.hdr"));
-    run_ok(tpict(dir).args(opts).arg("-o").arg(&ours).args(input));
-    assert_like_reference(bin, &ours, &reff, tol, &format!("{input:?} {opts:?}"));
-}
-
 fn opts<'a>(view: &'a str, ab: &'a str) -> Vec<&'a str> {
     vec![
         "-vf", view, "-x", "256", "-y", "200", "-ab", ab, "-ps", "1", "-pj", "0", "-av", ".05",
@@ -129,7 +100,7 @@ fn octree_instances_void_and_modified() {
     std::fs::write(d.join("instf.oct"), frozen).unwrap();
     for ab in ["0", "1"] {
         let tol = if ab == "0" { &SUITE } else { &AMBIENT };
-        check(
+        check_against_rpict(
             &bin,
             d,
             &["inst.rad"],
@@ -138,7 +109,7 @@ fn octree_instances_void_and_modified() {
             tol,
         );
     }
-    check(
+    check_against_rpict(
         &bin,
         d,
         &["instf.oct"],
@@ -148,8 +119,8 @@ fn octree_instances_void_and_modified() {
     );
     // The unfrozen octree is its scene file: the same picture, bit for bit.
     let o = opts("inst.vf", "0");
-    run_ok(tpict(d).args(&o).args(["-o", "a.hdr", "inst.rad"]));
-    run_ok(tpict(d).args(&o).args(["-o", "b.hdr", "inst.oct"]));
+    run_ok(tpict_in(d).args(&o).args(["-o", "a.hdr", "inst.rad"]));
+    run_ok(tpict_in(d).args(&o).args(["-o", "b.hdr", "inst.oct"]));
     let (a, b) = (
         read_picture(&d.join("a.hdr")).unwrap(),
         read_picture(&d.join("b.hdr")).unwrap(),
@@ -169,7 +140,7 @@ fn nested_instances_with_patterns() {
     std::fs::write(d.join("nest.oct"), oct).unwrap();
     for ab in ["0", "1"] {
         let tol = if ab == "0" { &SUITE } else { &AMBIENT };
-        check(
+        check_against_rpict(
             &bin,
             d,
             &["nest.rad"],
@@ -191,7 +162,7 @@ fn meshes_with_normals_and_uv() {
     std::fs::write(d.join("mesh.oct"), oct).unwrap();
     for ab in ["0", "1"] {
         let tol = if ab == "0" { &SUITE } else { &AMBIENT };
-        check(
+        check_against_rpict(
             &bin,
             d,
             &["mesh.rad"],
@@ -235,7 +206,7 @@ fn a_large_instance_count_renders() {
         "-vp", "25", "-20", "30", "-vd", "0", "1", "-1", "-vh", "60", "-vv", "50", "-x", "256",
         "-y", "200", "-ab", "0", "-ps", "1", "-pj", "0", "-av", ".05", ".05", ".05",
     ];
-    check(&bin, d, &["many.rad"], "many.oct", &o, &SUITE);
+    check_against_rpict(&bin, d, &["many.rad"], "many.oct", &o, &SUITE);
 }
 
 /// The instance scene moved 1e6 away, or scaled by 1e3 and 1e-3 (instances, their
@@ -255,7 +226,7 @@ fn instances_moved_far_away_or_scaled_render_the_same() {
         let vh = format!("{}", 60);
         let _ = s;
         run_ok(
-            tpict(d)
+            tpict_in(d)
                 .args([
                     "-vtv", "-vp", &vp[0], &vp[1], &vp[2], "-vd", "0", "1", "-0.6",
                 ])
@@ -299,7 +270,7 @@ fn output(c: &mut Command) -> Output {
 /// tpict fails with exit status 1 and one error line that holds `want`.
 fn fails_with(dir: &Path, files: &[&str], want: &str) {
     let o = output(
-        tpict(dir)
+        tpict_in(dir)
             .args([
                 "-x", "8", "-y", "8", "-vp", "0", "-12", "8", "-vd", "0", "1", "-0.6",
             ])
@@ -437,7 +408,11 @@ fn a_job_carries_its_instanced_files() {
     );
     let pic = run_ok(Command::new(env!("CARGO_BIN_EXE_tassemble")).arg(&job));
     std::fs::write(d.join("job.hdr"), pic).unwrap();
-    run_ok(tpict(d).args(view).args(["-o", "direct.hdr", "nest.rad"]));
+    run_ok(
+        tpict_in(d)
+            .args(view)
+            .args(["-o", "direct.hdr", "nest.rad"]),
+    );
     let a = read_picture(&d.join("job.hdr")).unwrap();
     let b = read_picture(&d.join("direct.hdr")).unwrap();
     assert!(

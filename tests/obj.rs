@@ -16,12 +16,6 @@ use std::path::Path;
 use std::process::Command;
 use tessera::image::read_picture;
 
-/// With indirect light the two caches' noise differs pixel by pixel: compare at 32×32.
-const AMBIENT: Tol = Tol {
-    size: "32",
-    ..SUITE
-};
-
 const SRC: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/tests/scenes/obj");
 
 fn copy_scenes(to: &Path) {
@@ -44,34 +38,11 @@ fn workdir(bin: &Path) -> tempfile::TempDir {
     t
 }
 
-fn tpict(dir: &Path) -> Command {
-    let mut c = Command::new(tpict_bin());
-    c.current_dir(dir).env("RAYPATH", ".");
-    c
-}
-
 fn opts<'a>(view: &'a str, ab: &'a str) -> Vec<&'a str> {
     vec![
         "-vf", view, "-x", "256", "-y", "200", "-ab", ab, "-ps", "1", "-pj", "0", "-av", ".05",
         ".05", ".05",
     ]
-}
-
-/// Render `input` with tpict and `octree` with rpict, both with `opts`; compare as
-/// Radiance's test suite does.
-fn check(bin: &Path, dir: &Path, input: &[&str], octree: &str, opts: &[&str], tol: &Tol) {
-    let name = format!("{}{}", input.join("_"), opts.join(""));
-    let reff = dir.join(format!("ref-{name}.hdr"));
-    let data = run_ok(
-        radiance(bin, "rpict")
-            .current_dir(dir)
-            .args(opts)
-            .arg(octree),
-    );
-    std::fs::write(&reff, data).unwrap();
-    let ours = dir.join(format!("ours-{name}.hdr"));
-    run_ok(tpict(dir).args(opts).arg("-o").arg(&ours).args(input));
-    assert_like_reference(bin, &ours, &reff, tol, &format!("{input:?} {opts:?}"));
 }
 
 fn oconv(bin: &Path, dir: &Path, files: &[&str], out: &str) {
@@ -89,7 +60,7 @@ fn an_obj_scene_file_renders_as_obj2mesh_and_mesh() {
     oconv(&bin, d, &["light.rad", "one.rad"], "one.oct");
     for ab in ["0", "1"] {
         let tol = if ab == "0" { &SUITE } else { &AMBIENT };
-        check(
+        check_against_rpict(
             &bin,
             d,
             &["light.rad", "mat.rad", "model.obj"],
@@ -110,7 +81,7 @@ fn mesh_primitives_naming_an_obj_file() {
     oconv(&bin, d, &["light.rad", "rtm.rad"], "two.oct");
     for ab in ["0", "1"] {
         let tol = if ab == "0" { &SUITE } else { &AMBIENT };
-        check(
+        check_against_rpict(
             &bin,
             d,
             &["light.rad", "mat.rad", "objmesh.rad"],
@@ -214,7 +185,12 @@ fn a_job_carries_its_obj_file() {
     );
     let pic = run_ok(Command::new(env!("CARGO_BIN_EXE_tassemble")).arg(&job));
     std::fs::write(d.join("job.hdr"), pic).unwrap();
-    run_ok(tpict(d).args(view).args(["-o", "direct.hdr"]).args(scene));
+    run_ok(
+        tpict_in(d)
+            .args(view)
+            .args(["-o", "direct.hdr"])
+            .args(scene),
+    );
     let a = read_picture(&d.join("job.hdr")).unwrap();
     let b = read_picture(&d.join("direct.hdr")).unwrap();
     assert!(
@@ -223,7 +199,7 @@ fn a_job_carries_its_obj_file() {
     );
     // Without the default the floor's triangles are void: invisible, another picture.
     run_ok(
-        tpict(d)
+        tpict_in(d)
             .args(view)
             .args(["-o", "void.hdr"])
             .args(&scene[2..]),
@@ -234,7 +210,7 @@ fn a_job_carries_its_obj_file() {
 
 /// tpict fails with exit status 1 and one error line that holds `want`.
 fn fails_with(dir: &Path, files: &[&str], want: &str) {
-    let o = tpict(dir)
+    let o = tpict_in(dir)
         .args([
             "-x", "8", "-y", "8", "-vp", "0", "-12", "8", "-vd", "0", "1", "-0.6",
         ])

@@ -258,3 +258,41 @@ pub fn assert_one_error_line(o: &std::process::Output, what: &str, want: &str, o
     );
     assert!(!out.exists(), "{what}: {} was written", out.display());
 }
+
+/// With indirect light two renderers' caches differ pixel by pixel: Radiance's tolerances
+/// after reducing to 32×32.
+pub const AMBIENT: Tol = Tol {
+    size: "32",
+    ..SUITE
+};
+
+/// tpict run in `dir` with `RAYPATH=.` (files are found there only).
+pub fn tpict_in(dir: &Path) -> Command {
+    let mut c = Command::new(tpict_bin());
+    c.current_dir(dir).env("RAYPATH", ".");
+    c
+}
+
+/// Render `input` (scene files or an octree) with tpict and `octree` with rpict, both in
+/// `dir` with `opts`, and compare them as Radiance's test suite does.
+pub fn check_against_rpict(
+    bin: &Path,
+    dir: &Path,
+    input: &[&str],
+    octree: &str,
+    opts: &[&str],
+    tol: &Tol,
+) {
+    let name = format!("{}{}", input.join("_"), opts.join(""));
+    let reff = dir.join(format!("ref-{name}.hdr"));
+    let data = run_ok(
+        radiance(bin, "rpict")
+            .current_dir(dir)
+            .args(opts)
+            .arg(octree),
+    );
+    std::fs::write(&reff, data).unwrap();
+    let ours = dir.join(format!("ours-{name}.hdr"));
+    run_ok(tpict_in(dir).args(opts).arg("-o").arg(&ours).args(input));
+    assert_like_reference(bin, &ours, &reff, tol, &format!("{input:?} {opts:?}"));
+}
