@@ -29,7 +29,7 @@ pub(crate) fn stack_here() -> usize {
 
 /// Arguments cached per call (Radiance caches the first 10; later ones are re-evaluated on
 /// each use, which is equivalent since evaluation has no side effects).
-const NCACHE: usize = 8;
+pub(crate) const NCACHE: usize = 8;
 
 /// A run-time error inside the machine.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -64,7 +64,7 @@ pub(crate) enum ArgSrc<'f> {
 }
 
 impl ArgSrc<'_> {
-    fn len(&self) -> usize {
+    pub fn len(&self) -> usize {
         match self {
             ArgSrc::None => 0,
             ArgSrc::Nodes { list, .. } => list.len(),
@@ -75,11 +75,12 @@ impl ArgSrc<'_> {
 
 /// One function call's frame.
 pub(crate) struct Frame<'f> {
-    src: ArgSrc<'f>,
+    pub src: ArgSrc<'f>,
     /// The function called (for messages); u32::MAX at top level.
-    func: SlotId,
-    done: Cell<u32>,
-    vals: [Cell<f64>; NCACHE],
+    pub func: SlotId,
+    /// Bit i: parameter i is in `vals[i]`.
+    pub done: Cell<u32>,
+    pub vals: [Cell<f64>; NCACHE],
 }
 
 impl<'f> Frame<'f> {
@@ -110,7 +111,7 @@ pub(crate) struct Machine<'a> {
     pub fatal: Option<String>,
 }
 
-fn check(v: f64) -> R {
+pub(crate) fn check(v: f64) -> R {
     if v.is_nan() {
         Err(Trap::Domain)
     } else if v.is_infinite() {
@@ -122,8 +123,8 @@ fn check(v: f64) -> R {
 
 /// A fatal error, described when it happens (out of line: keeps the evaluator's frames
 /// small).
-#[derive(Clone, Copy)]
-enum Fail {
+#[derive(Debug, Clone, Copy)]
+pub(crate) enum Fail {
     TooDeep(NodeId),
     ConstChan(u32, NodeId),
     BadChan(u32, NodeId),
@@ -141,102 +142,95 @@ enum Fail {
     MissingArg(i64, usize, NodeId),
 }
 
-impl<'a> Machine<'a> {
-    fn at(&self, node: NodeId) -> String {
-        match self.code.locs.get(node as usize) {
-            Some(l) => self.code.place(*l),
-            None => "a call from the renderer".to_string(),
+/// The message of a fatal error.
+#[cold]
+#[inline(never)]
+pub(crate) fn describe(code: &Code, f: Fail) -> String {
+    let at = |node: NodeId| match code.locs.get(node as usize) {
+        Some(l) => code.place(*l),
+        None => "a call from the renderer".to_string(),
+    };
+    let defined_at = |s: SlotId| code.place(code.slots[s as usize].def_loc);
+    let name = |s: SlotId| code.name(s).to_string();
+    match f {
+        Fail::TooDeep(n) => format!(
+            "recursion too deep (more than {MAX_DEPTH} nested evaluations or {} KB of \
+                 stack) at {}",
+            MAX_STACK >> 10,
+            at(n)
+        ),
+        Fail::ConstChan(c, n) => format!(
+            "ray parameter used in constant expression (${c} at {})",
+            at(n)
+        ),
+        Fail::BadChan(c, n) => format!("illegal channel number ${c} at {}", at(n)),
+        Fail::ConstVar(s, n) => format!(
+            "ray parameter used in constant expression ({} at {})",
+            name(s),
+            at(n)
+        ),
+        Fail::NoBrdf(s, n) => format!(
+            "{}: undefined variable (only BRDF materials define it; used at {})",
+            name(s),
+            at(n)
+        ),
+        Fail::FuncAsVar(s, n) => format!(
+            "{}: function used as a variable at {} (defined at {})",
+            name(s),
+            at(n),
+            defined_at(s)
+        ),
+        Fail::UndefVar(s, n) => {
+            format!("{}: undefined variable (used at {})", name(s), at(n))
         }
+        Fail::FewArgs(s, i) => format!(
+            "{}(): too few arguments (parameter {} used; {} defined at {})",
+            name(s),
+            i + 1,
+            name(s),
+            defined_at(s)
+        ),
+        Fail::UndefFunc(s, n) => {
+            format!("{}(): undefined function (called at {})", name(s), at(n))
+        }
+        Fail::NotFunc(s, n) => format!(
+            "{}(): not a function (defined as a variable at {}, called at {})",
+            name(s),
+            defined_at(s),
+            at(n)
+        ),
+        Fail::FewFuncArgs(s, i, n) => format!(
+            "{}(): too few arguments (function parameter {} called at {})",
+            name(s),
+            i + 1,
+            at(n)
+        ),
+        Fail::NotFuncName(s, i, n) => format!(
+            "{}(): argument {} is not a function name (called at {})",
+            name(s),
+            i + 1,
+            at(n)
+        ),
+        Fail::FewLibArgs(l, n) => {
+            format!("{}(): too few arguments (called at {})", l.name(), at(n))
+        }
+        Fail::ConstArg(n) => format!(
+            "arg() used in a constant expression at {} (a ':' definition that depends \
+                 on the primitive's arguments?)",
+            at(n)
+        ),
+        Fail::MissingArg(k, have, n) => format!(
+            "missing real argument {k} (the primitive has {have}; arg() called at {})",
+            at(n)
+        ),
     }
+}
 
-    fn defined_at(&self, s: SlotId) -> String {
-        self.code.place(self.code.slots[s as usize].def_loc)
-    }
-
+impl<'a> Machine<'a> {
     #[cold]
     #[inline(never)]
     fn fail(&mut self, f: Fail) -> Trap {
-        let name = |s: SlotId| self.code.name(s).to_string();
-        let msg = match f {
-            Fail::TooDeep(n) => format!(
-                "recursion too deep (more than {MAX_DEPTH} nested evaluations or {} KB of \
-                 stack) at {}",
-                MAX_STACK >> 10,
-                self.at(n)
-            ),
-            Fail::ConstChan(c, n) => format!(
-                "ray parameter used in constant expression (${c} at {})",
-                self.at(n)
-            ),
-            Fail::BadChan(c, n) => format!("illegal channel number ${c} at {}", self.at(n)),
-            Fail::ConstVar(s, n) => format!(
-                "ray parameter used in constant expression ({} at {})",
-                name(s),
-                self.at(n)
-            ),
-            Fail::NoBrdf(s, n) => format!(
-                "{}: undefined variable (only BRDF materials define it; used at {})",
-                name(s),
-                self.at(n)
-            ),
-            Fail::FuncAsVar(s, n) => format!(
-                "{}: function used as a variable at {} (defined at {})",
-                name(s),
-                self.at(n),
-                self.defined_at(s)
-            ),
-            Fail::UndefVar(s, n) => {
-                format!("{}: undefined variable (used at {})", name(s), self.at(n))
-            }
-            Fail::FewArgs(s, i) => format!(
-                "{}(): too few arguments (parameter {} used; {} defined at {})",
-                name(s),
-                i + 1,
-                name(s),
-                self.defined_at(s)
-            ),
-            Fail::UndefFunc(s, n) => {
-                format!(
-                    "{}(): undefined function (called at {})",
-                    name(s),
-                    self.at(n)
-                )
-            }
-            Fail::NotFunc(s, n) => format!(
-                "{}(): not a function (defined as a variable at {}, called at {})",
-                name(s),
-                self.defined_at(s),
-                self.at(n)
-            ),
-            Fail::FewFuncArgs(s, i, n) => format!(
-                "{}(): too few arguments (function parameter {} called at {})",
-                name(s),
-                i + 1,
-                self.at(n)
-            ),
-            Fail::NotFuncName(s, i, n) => format!(
-                "{}(): argument {} is not a function name (called at {})",
-                name(s),
-                i + 1,
-                self.at(n)
-            ),
-            Fail::FewLibArgs(l, n) => {
-                format!(
-                    "{}(): too few arguments (called at {})",
-                    l.name(),
-                    self.at(n)
-                )
-            }
-            Fail::ConstArg(n) => format!(
-                "arg() used in a constant expression at {} (a ':' definition that depends \
-                 on the primitive's arguments?)",
-                self.at(n)
-            ),
-            Fail::MissingArg(k, have, n) => format!(
-                "missing real argument {k} (the primitive has {have}; arg() called at {})",
-                self.at(n)
-            ),
-        };
+        let msg = describe(self.code, f);
         if self.fatal.is_none() {
             self.fatal = Some(msg);
         }

@@ -57,6 +57,7 @@ mod library;
 mod noise;
 mod parser;
 mod program;
+mod vm;
 
 pub use builder::{
     builtin_library, CalBuilder, BRDF_VARS, BUILTIN_LIBRARY, BUILTIN_RAYINIT, CHANNELS,

@@ -2,7 +2,8 @@
 //! evaluation clock, with this thread's variable cache).
 
 use super::code::{Code, NodeId};
-use super::eval::{ArgSrc, Entry, Frame, Machine, Trap};
+use super::eval::{ArgSrc, Entry, Frame, Trap};
+use super::vm::{Compiled, Vm};
 use super::{Env, EvalError, ExprId, FuncRef};
 use std::cell::{Cell, RefCell};
 use std::sync::atomic::{AtomicU64, Ordering};
@@ -13,10 +14,17 @@ static NEXT_ID: AtomicU64 = AtomicU64::new(1);
 const POOL_SIZE: usize = 16;
 
 thread_local! {
-    /// Variable caches not in use, by program id.
-    static POOL: RefCell<Vec<(u64, Vec<Entry>)>> = const { RefCell::new(Vec::new()) };
+    /// Variable caches and value stacks not in use, by program id.
+    static POOL: RefCell<Vec<(u64, Scratch)>> = const { RefCell::new(Vec::new()) };
     /// This thread's evaluation clock.
     static TICK: Cell<u64> = const { Cell::new(0) };
+}
+
+/// What one evaluation writes: the variable cache and the value stack.
+#[derive(Default)]
+struct Scratch {
+    cache: Vec<Entry>,
+    stack: Vec<f64>,
 }
 
 /// Compiled definitions and expressions. Immutable; evaluate it from any number of threads
@@ -24,15 +32,20 @@ thread_local! {
 #[derive(Debug)]
 pub struct Program {
     code: Code,
-    exprs: Vec<NodeId>,
+    /// The run-time form of `code`.
+    vm: Compiled,
+    /// The block of each expression.
+    exprs: Vec<u32>,
     outputs: Vec<(u32, ExprId)>,
     id: u64,
 }
 
 impl Program {
     pub(crate) fn new(code: Code, exprs: Vec<NodeId>, outputs: Vec<(u32, ExprId)>) -> Program {
+        let (vm, exprs) = Compiled::new(&code, &exprs);
         Program {
             code,
+            vm,
             exprs,
             outputs,
             id: NEXT_ID.fetch_add(1, Ordering::Relaxed),
@@ -48,7 +61,7 @@ impl Program {
             t.get()
         });
         let n = self.code.slots.len();
-        let cache = POOL
+        let scratch = POOL
             .try_with(|p| {
                 let mut p = p.borrow_mut();
                 p.iter()
@@ -57,11 +70,14 @@ impl Program {
             })
             .ok()
             .flatten()
-            .unwrap_or_else(|| vec![Entry::default(); n]);
+            .unwrap_or_else(|| Scratch {
+                cache: vec![Entry::default(); n],
+                stack: Vec::with_capacity(64),
+            });
         Evaluation {
             prog: self,
             env,
-            cache,
+            scratch,
             tick,
         }
     }
@@ -81,19 +97,21 @@ impl Program {
 pub struct Evaluation<'a> {
     prog: &'a Program,
     env: &'a Env<'a>,
-    cache: Vec<Entry>,
+    scratch: Scratch,
     tick: u64,
 }
 
 impl Evaluation<'_> {
-    fn run(&mut self, f: impl FnOnce(&mut Machine) -> Result<f64, Trap>) -> Result<f64, EvalError> {
-        let mut m = Machine {
+    fn run(&mut self, f: impl FnOnce(&mut Vm) -> Result<f64, Trap>) -> Result<f64, EvalError> {
+        let mut m = Vm {
+            prog: &self.prog.vm,
             code: &self.prog.code,
-            env: Some(self.env),
-            cache: &mut self.cache,
+            env: self.env,
+            cache: &mut self.scratch.cache,
+            stack: &mut self.scratch.stack,
             tick: self.tick,
             depth: 0,
-            stack: super::eval::stack_here(),
+            origin: super::eval::stack_here(),
             fatal: None,
         };
         let r = f(&mut m);
@@ -106,8 +124,8 @@ impl Evaluation<'_> {
 
     /// The value of a compiled expression.
     pub fn eval(&mut self, e: ExprId) -> Result<f64, EvalError> {
-        let node = self.prog.exprs[e.0 as usize];
-        self.run(|m| m.eval(node, &Frame::top()))
+        let block = self.prog.exprs[e.0 as usize];
+        self.run(|m| m.run(block, &Frame::top()))
     }
 
     /// Call a function with values.
@@ -118,14 +136,14 @@ impl Evaluation<'_> {
 
 impl Drop for Evaluation<'_> {
     fn drop(&mut self) {
-        let cache = std::mem::take(&mut self.cache);
+        let scratch = std::mem::take(&mut self.scratch);
         let id = self.prog.id;
         let _ = POOL.try_with(|p| {
             if let Ok(mut p) = p.try_borrow_mut() {
                 if p.len() >= POOL_SIZE {
                     p.remove(0);
                 }
-                p.push((id, cache));
+                p.push((id, scratch));
             }
         });
     }

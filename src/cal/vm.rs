@@ -1,0 +1,741 @@
+//! The run-time evaluator of a finished [`super::Program`]: every variable definition,
+//! function body, top-level expression and call argument is compiled once into a block of
+//! stack code (jumps for `if` and `select`), run in a loop. Only what the language itself
+//! nests recurses: a variable not yet computed in this evaluation, a function call, and an
+//! argument evaluated lazily in its caller's frame.
+//!
+//! The semantics are the tree walker's ([`super::eval::Machine`], which folds constants
+//! while compiling): the same lazy, per-call cached arguments, per-evaluation cached
+//! variables, error rules and messages, and the same order of evaluation. The recursion
+//! limit counts nested blocks (each a variable, call or argument evaluation), not nodes.
+
+use super::code::{Callee, Code, Def, Node, NodeId, Op, SlotId};
+use super::eval::{
+    binop, check, describe, stack_here, ArgSrc, Entry, Fail, Frame, Trap, MAX_DEPTH, MAX_STACK,
+    NCACHE, R,
+};
+use super::library::Lib;
+use super::noise;
+use super::Env;
+
+/// "No block" in [`Compiled::block_of`] and in jump fix-ups.
+const NONE: u32 = u32::MAX;
+
+/// One instruction. Values live on the evaluation's stack.
+#[derive(Debug, Clone, Copy)]
+enum Ins {
+    Num(f64),
+    /// Ray channel (0-based).
+    Chan(u8),
+    /// A variable defined by an expression: its cached value, or its block run now.
+    Var {
+        slot: SlotId,
+        block: u32,
+    },
+    /// One of the BRDF variables.
+    Brdf {
+        i: u8,
+        slot: SlotId,
+        site: NodeId,
+    },
+    /// Parameter `i` of the current frame.
+    Param(u16),
+    Neg,
+    Add,
+    Sub,
+    Mul,
+    Div,
+    Pow,
+    Unary(fn(f64) -> f64),
+    Atan2,
+    Noise(Lib),
+    /// `min`/`max` of the top `n` values (pushed from the last argument to the first).
+    MinMax {
+        max: bool,
+        n: u16,
+    },
+    /// `arg(x)`.
+    ArgFn(NodeId),
+    /// Pop; jump unless the value is positive (`if`).
+    JumpUnlessPos(u32),
+    Jump(u32),
+    /// Pop `d`; `select`'s rule; the targets are `table[at..=at+count]` (`at` is the end,
+    /// for `select(0, …)`).
+    Select {
+        count: u16,
+        at: u32,
+    },
+    /// Call function `func` (body block `body`) with the arguments `code.args(first, n)`.
+    Call {
+        body: u32,
+        func: SlotId,
+        first: u32,
+        n: u16,
+    },
+    /// Call the function the caller passed as parameter `i`.
+    CallParam {
+        i: u16,
+        first: u32,
+        n: u16,
+        site: NodeId,
+    },
+    /// A fatal error ([`Compiled::fails`]).
+    Fail(u32),
+    Ret,
+}
+
+/// The compiled blocks of a program.
+#[derive(Debug, Default)]
+pub(crate) struct Compiled {
+    ins: Vec<Ins>,
+    /// The node each instruction came from (for messages).
+    site: Vec<NodeId>,
+    /// Jump tables of `select`.
+    table: Vec<u32>,
+    fails: Vec<Fail>,
+    /// The block of each node compiled as a call argument (NONE otherwise).
+    block_of: Vec<u32>,
+    /// The block of each slot's definition (a variable's expression, a function's body).
+    slot_block: Vec<u32>,
+}
+
+struct Compiler<'c> {
+    code: &'c Code,
+    out: Compiled,
+    /// Argument nodes waiting for their own block.
+    pending: Vec<NodeId>,
+    /// Instructions whose block field is a slot waiting for its block.
+    fixups: Vec<usize>,
+    /// Slots whose definition must be compiled.
+    wanted: Vec<SlotId>,
+}
+
+impl Compiled {
+    /// Compile every definition and every expression of `code`; returns the blocks of
+    /// `exprs` in order.
+    pub fn new(code: &Code, exprs: &[NodeId]) -> (Compiled, Vec<u32>) {
+        let mut c = Compiler {
+            code,
+            out: Compiled {
+                block_of: vec![NONE; code.nodes.len()],
+                slot_block: vec![NONE; code.slots.len()],
+                ..Compiled::default()
+            },
+            pending: Vec::new(),
+            fixups: Vec::new(),
+            wanted: (0..code.slots.len() as u32).collect(),
+        };
+        let blocks = exprs.iter().map(|&e| c.block(e)).collect();
+        loop {
+            if let Some(n) = c.pending.pop() {
+                if c.out.block_of[n as usize] == NONE {
+                    let b = c.block(n);
+                    c.out.block_of[n as usize] = b;
+                }
+            } else if let Some(s) = c.wanted.pop() {
+                if c.out.slot_block[s as usize] == NONE {
+                    let body = match code.slots[s as usize].def {
+                        Def::Var { expr, .. } => Some(expr),
+                        Def::Func { body, .. } => Some(body),
+                        _ => None,
+                    };
+                    if let Some(e) = body {
+                        let b = c.block(e);
+                        c.out.slot_block[s as usize] = b;
+                    }
+                }
+            } else {
+                break;
+            }
+        }
+        for pc in std::mem::take(&mut c.fixups) {
+            match &mut c.out.ins[pc] {
+                Ins::Var { slot, block } => *block = c.out.slot_block[*slot as usize],
+                Ins::Call { body, func, .. } => *body = c.out.slot_block[*func as usize],
+                _ => {}
+            }
+        }
+        (c.out, blocks)
+    }
+}
+
+impl Compiler<'_> {
+    fn emit(&mut self, i: Ins, site: NodeId) -> usize {
+        self.out.ins.push(i);
+        self.out.site.push(site);
+        self.out.ins.len() - 1
+    }
+
+    fn fail(&mut self, f: Fail, site: NodeId) {
+        self.out.fails.push(f);
+        let k = self.out.fails.len() as u32 - 1;
+        self.emit(Ins::Fail(k), site);
+    }
+
+    fn here(&self) -> u32 {
+        self.out.ins.len() as u32
+    }
+
+    /// A block computing node `n` (ends with `Ret`).
+    fn block(&mut self, n: NodeId) -> u32 {
+        let start = self.here();
+        self.node(n);
+        self.emit(Ins::Ret, n);
+        start
+    }
+
+    /// Code pushing the value of node `n`.
+    fn node(&mut self, n: NodeId) {
+        match self.code.nodes[n as usize] {
+            Node::Num(v) => {
+                self.emit(Ins::Num(v), n);
+            }
+            Node::Chan(c) => {
+                if (1..=27).contains(&c) {
+                    self.emit(Ins::Chan(c as u8 - 1), n);
+                } else {
+                    self.fail(Fail::BadChan(c, n), n);
+                }
+            }
+            Node::Var(s) => match self.code.slots[s as usize].def {
+                Def::Num(v) => {
+                    self.emit(Ins::Num(v), n);
+                }
+                Def::Var { .. } => {
+                    let pc = self.emit(
+                        Ins::Var {
+                            slot: s,
+                            block: NONE,
+                        },
+                        n,
+                    );
+                    self.fixups.push(pc);
+                }
+                Def::Brdf(i) => {
+                    self.emit(
+                        Ins::Brdf {
+                            i,
+                            slot: s,
+                            site: n,
+                        },
+                        n,
+                    );
+                }
+                Def::Func { .. } => self.fail(Fail::FuncAsVar(s, n), n),
+                Def::None => self.fail(Fail::UndefVar(s, n), n),
+            },
+            Node::Param(i) => {
+                self.emit(Ins::Param(i), n);
+            }
+            Node::Neg(a) => {
+                self.node(a);
+                self.emit(Ins::Neg, n);
+            }
+            Node::Bin(op, a, b) => {
+                self.node(a);
+                self.node(b);
+                let i = match op {
+                    Op::Add => Ins::Add,
+                    Op::Sub => Ins::Sub,
+                    Op::Mul => Ins::Mul,
+                    Op::Div => Ins::Div,
+                    Op::Pow => Ins::Pow,
+                };
+                self.emit(i, n);
+            }
+            Node::Call {
+                callee,
+                first,
+                n: k,
+            } => self.call(callee, first, k, n),
+        }
+    }
+
+    fn call(&mut self, callee: Callee, first: u32, k: u16, site: NodeId) {
+        match callee {
+            Callee::Slot(s) => {
+                let slot = &self.code.slots[s as usize];
+                match slot.def {
+                    Def::Func { .. } => {
+                        self.args_later(first, k);
+                        let pc = self.emit(
+                            Ins::Call {
+                                body: NONE,
+                                func: s,
+                                first,
+                                n: k,
+                            },
+                            site,
+                        );
+                        self.fixups.push(pc);
+                    }
+                    Def::None => match slot.lib {
+                        Some(l) => self.lib(l, first, k, site),
+                        None => self.fail(Fail::UndefFunc(s, site), site),
+                    },
+                    _ => self.fail(Fail::NotFunc(s, site), site),
+                }
+            }
+            Callee::Lib(l) => self.lib(l, first, k, site),
+            Callee::Param(i) => {
+                self.args_later(first, k);
+                self.emit(
+                    Ins::CallParam {
+                        i,
+                        first,
+                        n: k,
+                        site,
+                    },
+                    site,
+                );
+            }
+        }
+    }
+
+    /// The arguments of a call get blocks of their own (run lazily in this frame).
+    fn args_later(&mut self, first: u32, k: u16) {
+        let list = self.code.args(first, k);
+        self.pending.extend_from_slice(list);
+    }
+
+    /// Argument `i` of a library call inline, or the fatal error of a missing one.
+    fn lib_arg(&mut self, l: Lib, list: &[NodeId], i: usize, site: NodeId) -> bool {
+        match list.get(i) {
+            Some(&a) => {
+                self.node(a);
+                true
+            }
+            None => {
+                self.fail(Fail::FewLibArgs(l, site), site);
+                false
+            }
+        }
+    }
+
+    fn lib(&mut self, l: Lib, first: u32, k: u16, site: NodeId) {
+        let list = self.code.args(first, k);
+        if let Some(f) = l.unary() {
+            if self.lib_arg(l, list, 0, site) {
+                self.emit(Ins::Unary(f), site);
+            }
+            return;
+        }
+        match l {
+            Lib::If => {
+                if !self.lib_arg(l, list, 0, site) {
+                    return;
+                }
+                let jf = self.emit(Ins::JumpUnlessPos(NONE), site);
+                self.lib_arg(l, list, 1, site);
+                let je = self.emit(Ins::Jump(NONE), site);
+                let else_at = self.here();
+                self.lib_arg(l, list, 2, site);
+                let end = self.here();
+                self.out.ins[jf] = Ins::JumpUnlessPos(else_at);
+                self.out.ins[je] = Ins::Jump(end);
+            }
+            Lib::Select => {
+                if !self.lib_arg(l, list, 0, site) {
+                    return;
+                }
+                let count = list.len() - 1;
+                let at = self.out.table.len();
+                self.out.table.resize(at + count + 1, NONE);
+                self.emit(
+                    Ins::Select {
+                        count: count as u16,
+                        at: at as u32,
+                    },
+                    site,
+                );
+                let mut ends = Vec::with_capacity(count);
+                for kk in 1..=count {
+                    self.out.table[at + kk] = self.here();
+                    self.node(list[kk]);
+                    ends.push(self.emit(Ins::Jump(NONE), site));
+                }
+                let end = self.here();
+                self.out.table[at] = end;
+                for pc in ends {
+                    self.out.ins[pc] = Ins::Jump(end);
+                }
+            }
+            Lib::Min | Lib::Max => {
+                // From the last argument backwards, as the tree walker (and Radiance).
+                if list.is_empty() {
+                    self.fail(Fail::FewLibArgs(l, site), site);
+                    return;
+                }
+                for &a in list.iter().rev() {
+                    self.node(a);
+                }
+                self.emit(
+                    Ins::MinMax {
+                        max: l == Lib::Max,
+                        n: list.len() as u16,
+                    },
+                    site,
+                );
+            }
+            Lib::Atan2 => {
+                if self.lib_arg(l, list, 0, site) && self.lib_arg(l, list, 1, site) {
+                    self.emit(Ins::Atan2, site);
+                }
+            }
+            Lib::Arg => {
+                if self.lib_arg(l, list, 0, site) {
+                    self.emit(Ins::ArgFn(site), site);
+                }
+            }
+            _ => {
+                if (0..3).all(|i| self.lib_arg(l, list, i, site)) {
+                    self.emit(Ins::Noise(l), site);
+                }
+            }
+        }
+    }
+}
+
+/// One evaluation's machine.
+pub(crate) struct Vm<'a> {
+    pub prog: &'a Compiled,
+    pub code: &'a Code,
+    pub env: &'a Env<'a>,
+    pub cache: &'a mut [Entry],
+    pub stack: &'a mut Vec<f64>,
+    pub tick: u64,
+    pub depth: u32,
+    /// [`stack_here`] where the evaluation started.
+    pub origin: usize,
+    pub fatal: Option<String>,
+}
+
+impl Vm<'_> {
+    #[cold]
+    #[inline(never)]
+    fn fail(&mut self, f: Fail) -> Trap {
+        if self.fatal.is_none() {
+            self.fatal = Some(describe(self.code, f));
+        }
+        Trap::Fatal
+    }
+
+    /// Run the block at `pc` in frame `f`.
+    pub fn run(&mut self, pc: u32, f: &Frame) -> R {
+        self.depth += 1;
+        if self.depth > MAX_DEPTH || self.origin.abs_diff(stack_here()) > MAX_STACK {
+            let site = self.prog.site.get(pc as usize).copied().unwrap_or(NONE);
+            return Err(self.fail(Fail::TooDeep(site)));
+        }
+        let base = self.stack.len();
+        let r = self.exec(pc as usize, f);
+        self.stack.truncate(base);
+        self.depth -= 1;
+        r
+    }
+
+    #[inline(always)]
+    fn pop(&mut self) -> f64 {
+        self.stack.pop().unwrap_or(0.0)
+    }
+
+    #[inline(always)]
+    fn top(&mut self) -> &mut f64 {
+        let n = self.stack.len();
+        &mut self.stack[n - 1]
+    }
+
+    fn exec(&mut self, mut pc: usize, f: &Frame) -> R {
+        let prog = self.prog;
+        loop {
+            match prog.ins[pc] {
+                Ins::Num(v) => self.stack.push(v),
+                Ins::Chan(c) => self.stack.push(self.env.chan[c as usize]),
+                Ins::Var { slot, block } => {
+                    let e = self.cache[slot as usize];
+                    let v = if e.tick == self.tick {
+                        e.value
+                    } else {
+                        let v = self.run(block, &Frame::top())?;
+                        self.cache[slot as usize] = Entry {
+                            tick: self.tick,
+                            value: v,
+                        };
+                        v
+                    };
+                    self.stack.push(v);
+                }
+                Ins::Brdf { i, slot, site } => match self.env.brdf {
+                    Some(b) => self.stack.push(b[i as usize]),
+                    None => return Err(self.fail(Fail::NoBrdf(slot, site))),
+                },
+                Ins::Param(i) => {
+                    let i = i as usize;
+                    let v = if i < NCACHE && f.done.get() >> i & 1 == 1 {
+                        f.vals[i].get()
+                    } else {
+                        self.param(f, i)?
+                    };
+                    self.stack.push(v);
+                }
+                Ins::Neg => *self.top() = -*self.top(),
+                Ins::Add => {
+                    let b = self.pop();
+                    *self.top() += b;
+                }
+                Ins::Sub => {
+                    let b = self.pop();
+                    *self.top() -= b;
+                }
+                Ins::Mul => {
+                    let b = self.pop();
+                    *self.top() *= b;
+                }
+                Ins::Div => {
+                    let b = self.pop();
+                    let a = self.top();
+                    *a = binop(Op::Div, *a, b)?;
+                }
+                Ins::Pow => {
+                    let b = self.pop();
+                    let a = self.top();
+                    *a = binop(Op::Pow, *a, b)?;
+                }
+                Ins::Unary(g) => {
+                    let a = self.top();
+                    *a = check(g(*a))?;
+                }
+                Ins::Atan2 => {
+                    let x = self.pop();
+                    let y = self.top();
+                    *y = check(y.atan2(x))?;
+                }
+                Ins::Noise(l) => {
+                    let z = self.pop();
+                    let y = self.pop();
+                    let x = self.top();
+                    *x = check(noise_fn(l, *x, y, z))?;
+                }
+                Ins::MinMax { max, n } => {
+                    let n = n as usize;
+                    let at = self.stack.len() - n;
+                    let best = min_max(max, &self.stack[at..]);
+                    self.stack.truncate(at);
+                    self.stack.push(check(best)?);
+                }
+                Ins::ArgFn(site) => {
+                    let x = self.pop();
+                    let v = self.arg_fn(x, site)?;
+                    self.stack.push(v);
+                }
+                Ins::JumpUnlessPos(t) => {
+                    if self.pop() > 0.0 {
+                        pc += 1;
+                    } else {
+                        pc = t as usize;
+                    }
+                    continue;
+                }
+                Ins::Jump(t) => {
+                    pc = t as usize;
+                    continue;
+                }
+                Ins::Select { count, at } => {
+                    let d = self.pop() + 0.5;
+                    let k = select_index(d, count as usize)?;
+                    if k == 0 {
+                        self.stack.push(count as f64);
+                    }
+                    pc = prog.table[at as usize + k] as usize;
+                    continue;
+                }
+                Ins::Call {
+                    body,
+                    func,
+                    first,
+                    n,
+                } => {
+                    let list = self.code.args(first, n);
+                    let frame = Frame::new(ArgSrc::Nodes { list, caller: f }, func);
+                    let v = self.run(body, &frame)?;
+                    self.stack.push(v);
+                }
+                Ins::CallParam { i, first, n, site } => {
+                    let list = self.code.args(first, n);
+                    let v =
+                        self.call_param(f, i as usize, ArgSrc::Nodes { list, caller: f }, site)?;
+                    self.stack.push(v);
+                }
+                Ins::Fail(k) => return Err(self.fail(prog.fails[k as usize])),
+                Ins::Ret => return Ok(self.pop()),
+            }
+            pc += 1;
+        }
+    }
+
+    /// Parameter `i` of frame `f` (not cached yet): evaluated in the caller's frame.
+    #[inline(never)]
+    fn param(&mut self, f: &Frame, i: usize) -> R {
+        let v = match f.src {
+            ArgSrc::Nodes { list, caller } if i < list.len() => {
+                let b = self.prog.block_of[list[i] as usize];
+                self.run(b, caller)?
+            }
+            ArgSrc::Values(v) if i < v.len() => v[i],
+            _ => return Err(self.fail(Fail::FewArgs(f.func, i))),
+        };
+        if i < NCACHE {
+            f.vals[i].set(v);
+            f.done.set(f.done.get() | 1 << i);
+        }
+        Ok(v)
+    }
+
+    /// `arg(x)`: the primitive's real arguments.
+    fn arg_fn(&mut self, x: f64, site: NodeId) -> R {
+        let k = (x + 0.5) as i64;
+        if k < 1 {
+            return Ok(self.env.args.len() as f64);
+        }
+        match self.env.args.get(k as usize - 1) {
+            Some(v) => Ok(*v),
+            None => Err(self.fail(Fail::MissingArg(k, self.env.args.len(), site))),
+        }
+    }
+
+    /// Call the definition of slot `s` (or its library fallback) with arguments `src`.
+    pub fn call_slot(&mut self, s: SlotId, src: ArgSrc, site: NodeId) -> R {
+        let slot = &self.code.slots[s as usize];
+        match slot.def {
+            Def::Func { .. } => {
+                let frame = Frame::new(src, s);
+                self.run(self.prog.slot_block[s as usize], &frame)
+            }
+            Def::None => match slot.lib {
+                Some(l) => self.lib(l, &src, site),
+                None => Err(self.fail(Fail::UndefFunc(s, site))),
+            },
+            _ => Err(self.fail(Fail::NotFunc(s, site))),
+        }
+    }
+
+    /// Call the function whose name the caller of frame `f` passed as parameter `i`.
+    #[inline(never)]
+    fn call_param(&mut self, f: &Frame, i: usize, src: ArgSrc, site: NodeId) -> R {
+        let mut frame = f;
+        let mut i = i;
+        loop {
+            let (list, caller) = match frame.src {
+                ArgSrc::Nodes { list, caller } if i < list.len() => (list, caller),
+                _ => return Err(self.fail(Fail::FewFuncArgs(frame.func, i, site))),
+            };
+            match self.code.nodes[list[i] as usize] {
+                Node::Var(s) => return self.call_slot(s, src, site),
+                Node::Param(j) => {
+                    frame = caller;
+                    i = j as usize;
+                }
+                _ => return Err(self.fail(Fail::NotFuncName(frame.func, i, site))),
+            }
+        }
+    }
+
+    /// Argument `i` of a library function called by name (not compiled inline).
+    fn arg(&mut self, src: &ArgSrc, i: usize, l: Lib, site: NodeId) -> R {
+        match *src {
+            ArgSrc::Nodes { list, caller } if i < list.len() => {
+                let b = self.prog.block_of[list[i] as usize];
+                self.run(b, caller)
+            }
+            ArgSrc::Values(v) if i < v.len() => Ok(v[i]),
+            _ => Err(self.fail(Fail::FewLibArgs(l, site))),
+        }
+    }
+
+    /// A library function called by name: through a function-name parameter, or by the
+    /// host program.
+    #[inline(never)]
+    fn lib(&mut self, l: Lib, src: &ArgSrc, site: NodeId) -> R {
+        if let Some(g) = l.unary() {
+            let x = self.arg(src, 0, l, site)?;
+            return check(g(x));
+        }
+        match l {
+            Lib::If => {
+                let c = self.arg(src, 0, l, site)?;
+                self.arg(src, if c > 0.0 { 1 } else { 2 }, l, site)
+            }
+            Lib::Select => {
+                let d = self.arg(src, 0, l, site)? + 0.5;
+                let count = src.len().saturating_sub(1);
+                match select_index(d, count)? {
+                    0 => Ok(count as f64),
+                    k => self.arg(src, k, l, site),
+                }
+            }
+            Lib::Min | Lib::Max => {
+                let n = src.len();
+                let mut vals = Vec::with_capacity(n.max(1));
+                for i in (0..n.max(1)).rev() {
+                    vals.push(self.arg(src, i, l, site)?);
+                }
+                check(min_max(l == Lib::Max, &vals))
+            }
+            Lib::Atan2 => {
+                let y = self.arg(src, 0, l, site)?;
+                let x = self.arg(src, 1, l, site)?;
+                check(y.atan2(x))
+            }
+            Lib::Arg => {
+                let x = self.arg(src, 0, l, site)?;
+                self.arg_fn(x, site)
+            }
+            _ => {
+                let x = self.arg(src, 0, l, site)?;
+                let y = self.arg(src, 1, l, site)?;
+                let z = self.arg(src, 2, l, site)?;
+                check(noise_fn(l, x, y, z))
+            }
+        }
+    }
+}
+
+/// `select`'s argument number from `d` = first argument + 0.5: 0 asks for the count;
+/// NaN, below 0 or past the count is a domain error.
+#[inline]
+fn select_index(d: f64, count: usize) -> Result<usize, Trap> {
+    if d.is_nan() || d < 0.0 {
+        return Err(Trap::Domain);
+    }
+    let k = d.trunc();
+    if k > count as f64 {
+        Err(Trap::Domain)
+    } else {
+        Ok(k as usize)
+    }
+}
+
+/// `min`/`max` of values listed from the last argument to the first: the last argument
+/// is the start, an earlier one replaces it only when strictly better (so a NaN last
+/// argument wins, as in Radiance).
+fn min_max(max: bool, from_last: &[f64]) -> f64 {
+    let mut it = from_last.iter().copied();
+    let mut best = it.next().unwrap_or(0.0);
+    for a in it {
+        if (!max && a < best) || (max && a > best) {
+            best = a;
+        }
+    }
+    best
+}
+
+#[inline(never)]
+fn noise_fn(l: Lib, x: f64, y: f64, z: f64) -> f64 {
+    match l {
+        Lib::Noise3 => noise::noise3(x, y, z),
+        Lib::Noise3x => noise::noise3_d(0, x, y, z),
+        Lib::Noise3y => noise::noise3_d(1, x, y, z),
+        Lib::Noise3z => noise::noise3_d(2, x, y, z),
+        _ => noise::fnoise3(x, y, z),
+    }
+}
