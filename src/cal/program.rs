@@ -103,7 +103,9 @@ pub struct Evaluation<'a> {
 
 impl Evaluation<'_> {
     fn run(&mut self, f: impl FnOnce(&mut Vm) -> Result<f64, Trap>) -> Result<f64, EvalError> {
+        let top = Frame::top();
         let mut m = Vm {
+            top: &top,
             prog: &self.prog.vm,
             code: &self.prog.code,
             env: self.env,

@@ -21,7 +21,22 @@ use super::Env;
 /// "No block" in [`Compiled::block_of`] and in jump fix-ups.
 const NONE: u32 = u32::MAX;
 
-/// One instruction. Values live on the evaluation's stack.
+/// Where the right operand of a binary operator comes from.
+#[derive(Debug, Clone, Copy)]
+enum Rhs {
+    /// The accumulator (the left operand was pushed).
+    Acc,
+    Num(f64),
+    Chan(u8),
+    Param(u16),
+    Var {
+        slot: SlotId,
+        block: u32,
+    },
+}
+
+/// One instruction. A block computes its value in an accumulator; a value waiting for the
+/// other operand of an operator or for more arguments is pushed on the evaluation's stack.
 #[derive(Debug, Clone, Copy)]
 enum Ins {
     Num(f64),
@@ -40,27 +55,34 @@ enum Ins {
     },
     /// Parameter `i` of the current frame.
     Param(u16),
+    /// Push the accumulator.
+    Push,
     Neg,
-    Add,
-    Sub,
-    Mul,
-    Div,
-    Pow,
+    /// `acc = left op right`: with [`Rhs::Acc`] the left operand is popped and the right
+    /// one is the accumulator; otherwise the accumulator is the left operand.
+    Bin(Op, Rhs),
+    /// `acc = v op acc` (a number on the left of an operand that is not a leaf).
+    NumBin(Op, f64),
+    /// `acc = chan op acc`.
+    ChanBin(Op, u8),
     Unary(fn(f64) -> f64),
+    /// `atan2(pop, acc)`.
     Atan2,
+    /// `noise(pop, pop, acc)` (x was pushed first).
     Noise(Lib),
-    /// `min`/`max` of the top `n` values (pushed from the last argument to the first).
+    /// `min`/`max` of `n - 1` pushed values and the accumulator (from the last argument
+    /// to the first).
     MinMax {
         max: bool,
         n: u16,
     },
-    /// `arg(x)`.
+    /// `arg(acc)`.
     ArgFn(NodeId),
-    /// Pop; jump unless the value is positive (`if`).
+    /// Jump unless the accumulator is positive (`if`).
     JumpUnlessPos(u32),
     Jump(u32),
-    /// Pop `d`; `select`'s rule; the targets are `table[at..=at+count]` (`at` is the end,
-    /// for `select(0, …)`).
+    /// `select`'s rule on the accumulator; the targets are `table[at..=at+count]` (`at`
+    /// is the end, for `select(0, …)`, which leaves the count in the accumulator).
     Select {
         count: u16,
         at: u32,
@@ -81,6 +103,7 @@ enum Ins {
     },
     /// A fatal error ([`Compiled::fails`]).
     Fail(u32),
+    /// The block's value is the accumulator.
     Ret,
 }
 
@@ -152,6 +175,7 @@ impl Compiled {
             match &mut c.out.ins[pc] {
                 Ins::Var { slot, block } => *block = c.out.slot_block[*slot as usize],
                 Ins::Call { body, func, .. } => *body = c.out.slot_block[*func as usize],
+                Ins::Bin(_, Rhs::Var { slot, block }) => *block = c.out.slot_block[*slot as usize],
                 _ => {}
             }
         }
@@ -184,7 +208,7 @@ impl Compiler<'_> {
         start
     }
 
-    /// Code pushing the value of node `n`.
+    /// Code leaving the value of node `n` in the accumulator.
     fn node(&mut self, n: NodeId) {
         match self.code.nodes[n as usize] {
             Node::Num(v) => {
@@ -232,22 +256,55 @@ impl Compiler<'_> {
                 self.emit(Ins::Neg, n);
             }
             Node::Bin(op, a, b) => {
-                self.node(a);
-                self.node(b);
-                let i = match op {
-                    Op::Add => Ins::Add,
-                    Op::Sub => Ins::Sub,
-                    Op::Mul => Ins::Mul,
-                    Op::Div => Ins::Div,
-                    Op::Pow => Ins::Pow,
-                };
-                self.emit(i, n);
+                if let Some(rhs) = self.leaf(b) {
+                    self.node(a);
+                    let pc = self.emit(Ins::Bin(op, rhs), n);
+                    if let Rhs::Var { .. } = rhs {
+                        self.fixups.push(pc);
+                    }
+                    return;
+                }
+                // A left operand that cannot fail may be read after the right one.
+                match self.leaf(a) {
+                    Some(Rhs::Num(v)) => {
+                        self.node(b);
+                        self.emit(Ins::NumBin(op, v), n);
+                    }
+                    Some(Rhs::Chan(c)) => {
+                        self.node(b);
+                        self.emit(Ins::ChanBin(op, c), n);
+                    }
+                    _ => {
+                        self.node(a);
+                        self.emit(Ins::Push, n);
+                        self.node(b);
+                        self.emit(Ins::Bin(op, Rhs::Acc), n);
+                    }
+                }
             }
             Node::Call {
                 callee,
                 first,
                 n: k,
             } => self.call(callee, first, k, n),
+        }
+    }
+
+    /// Node `n` as an operand read directly, when it is a leaf.
+    fn leaf(&self, n: NodeId) -> Option<Rhs> {
+        match self.code.nodes[n as usize] {
+            Node::Num(v) => Some(Rhs::Num(v)),
+            Node::Chan(c @ 1..=27) => Some(Rhs::Chan(c as u8 - 1)),
+            Node::Param(i) => Some(Rhs::Param(i)),
+            Node::Var(s) => match self.code.slots[s as usize].def {
+                Def::Num(v) => Some(Rhs::Num(v)),
+                Def::Var { .. } => Some(Rhs::Var {
+                    slot: s,
+                    block: NONE,
+                }),
+                _ => None,
+            },
+            _ => None,
         }
     }
 
@@ -298,7 +355,8 @@ impl Compiler<'_> {
         self.pending.extend_from_slice(list);
     }
 
-    /// Argument `i` of a library call inline, or the fatal error of a missing one.
+    /// Argument `i` of a library call inline, or the fatal error of a missing one
+    /// (false).
     fn lib_arg(&mut self, l: Lib, list: &[NodeId], i: usize, site: NodeId) -> bool {
         match list.get(i) {
             Some(&a) => {
@@ -310,6 +368,20 @@ impl Compiler<'_> {
                 false
             }
         }
+    }
+
+    /// Arguments `0..k` of a library call, each but the last pushed; false when one is
+    /// missing (its fatal error is then emitted).
+    fn lib_args(&mut self, l: Lib, list: &[NodeId], k: usize, site: NodeId) -> bool {
+        for i in 0..k {
+            if !self.lib_arg(l, list, i, site) {
+                return false;
+            }
+            if i + 1 < k {
+                self.emit(Ins::Push, site);
+            }
+        }
+        true
     }
 
     fn lib(&mut self, l: Lib, first: u32, k: u16, site: NodeId) {
@@ -349,9 +421,9 @@ impl Compiler<'_> {
                     site,
                 );
                 let mut ends = Vec::with_capacity(count);
-                for kk in 1..=count {
+                for (kk, &a) in list.iter().enumerate().skip(1) {
                     self.out.table[at + kk] = self.here();
-                    self.node(list[kk]);
+                    self.node(a);
                     ends.push(self.emit(Ins::Jump(NONE), site));
                 }
                 let end = self.here();
@@ -366,8 +438,11 @@ impl Compiler<'_> {
                     self.fail(Fail::FewLibArgs(l, site), site);
                     return;
                 }
-                for &a in list.iter().rev() {
+                for (i, &a) in list.iter().enumerate().rev() {
                     self.node(a);
+                    if i > 0 {
+                        self.emit(Ins::Push, site);
+                    }
                 }
                 self.emit(
                     Ins::MinMax {
@@ -378,7 +453,7 @@ impl Compiler<'_> {
                 );
             }
             Lib::Atan2 => {
-                if self.lib_arg(l, list, 0, site) && self.lib_arg(l, list, 1, site) {
+                if self.lib_args(l, list, 2, site) {
                     self.emit(Ins::Atan2, site);
                 }
             }
@@ -388,7 +463,7 @@ impl Compiler<'_> {
                 }
             }
             _ => {
-                if (0..3).all(|i| self.lib_arg(l, list, i, site)) {
+                if self.lib_args(l, list, 3, site) {
                     self.emit(Ins::Noise(l), site);
                 }
             }
@@ -403,6 +478,8 @@ pub(crate) struct Vm<'a> {
     pub env: &'a Env<'a>,
     pub cache: &'a mut [Entry],
     pub stack: &'a mut Vec<f64>,
+    /// The frame variables are evaluated in (no arguments).
+    pub top: &'a Frame<'a>,
     pub tick: u64,
     pub depth: u32,
     /// [`stack_here`] where the evaluation started.
@@ -439,112 +516,100 @@ impl Vm<'_> {
         self.stack.pop().unwrap_or(0.0)
     }
 
+    /// Variable `slot` (block `block`): cached in this evaluation, or computed now.
     #[inline(always)]
-    fn top(&mut self) -> &mut f64 {
-        let n = self.stack.len();
-        &mut self.stack[n - 1]
+    fn var(&mut self, slot: SlotId, block: u32) -> R {
+        let e = self.cache[slot as usize];
+        if e.tick == self.tick {
+            return Ok(e.value);
+        }
+        let v = self.run(block, self.top)?;
+        self.cache[slot as usize] = Entry {
+            tick: self.tick,
+            value: v,
+        };
+        Ok(v)
+    }
+
+    /// Parameter `i` of frame `f`.
+    #[inline(always)]
+    fn param_of(&mut self, f: &Frame, i: u16) -> R {
+        let i = i as usize;
+        if i < NCACHE && f.done.get() >> i & 1 == 1 {
+            Ok(f.vals[i].get())
+        } else {
+            self.param(f, i)
+        }
     }
 
     fn exec(&mut self, mut pc: usize, f: &Frame) -> R {
         let prog = self.prog;
+        let mut acc = 0.0;
         loop {
             match prog.ins[pc] {
-                Ins::Num(v) => self.stack.push(v),
-                Ins::Chan(c) => self.stack.push(self.env.chan[c as usize]),
-                Ins::Var { slot, block } => {
-                    let e = self.cache[slot as usize];
-                    let v = if e.tick == self.tick {
-                        e.value
-                    } else {
-                        let v = self.run(block, &Frame::top())?;
-                        self.cache[slot as usize] = Entry {
-                            tick: self.tick,
-                            value: v,
-                        };
-                        v
-                    };
-                    self.stack.push(v);
-                }
+                Ins::Num(v) => acc = v,
+                Ins::Chan(c) => acc = self.env.chan[c as usize],
+                Ins::Var { slot, block } => acc = self.var(slot, block)?,
                 Ins::Brdf { i, slot, site } => match self.env.brdf {
-                    Some(b) => self.stack.push(b[i as usize]),
+                    Some(b) => acc = b[i as usize],
                     None => return Err(self.fail(Fail::NoBrdf(slot, site))),
                 },
-                Ins::Param(i) => {
-                    let i = i as usize;
-                    let v = if i < NCACHE && f.done.get() >> i & 1 == 1 {
-                        f.vals[i].get()
-                    } else {
-                        self.param(f, i)?
-                    };
-                    self.stack.push(v);
+                Ins::Param(i) => acc = self.param_of(f, i)?,
+                Ins::Push => self.stack.push(acc),
+                Ins::Neg => acc = -acc,
+                Ins::Bin(op, rhs) => {
+                    acc = match rhs {
+                        Rhs::Acc => {
+                            let a = self.pop();
+                            apply(op, a, acc)?
+                        }
+                        Rhs::Num(v) => apply(op, acc, v)?,
+                        Rhs::Chan(c) => apply(op, acc, self.env.chan[c as usize])?,
+                        Rhs::Param(i) => {
+                            let b = self.param_of(f, i)?;
+                            apply(op, acc, b)?
+                        }
+                        Rhs::Var { slot, block } => {
+                            let b = self.var(slot, block)?;
+                            apply(op, acc, b)?
+                        }
+                    }
                 }
-                Ins::Neg => *self.top() = -*self.top(),
-                Ins::Add => {
-                    let b = self.pop();
-                    *self.top() += b;
-                }
-                Ins::Sub => {
-                    let b = self.pop();
-                    *self.top() -= b;
-                }
-                Ins::Mul => {
-                    let b = self.pop();
-                    *self.top() *= b;
-                }
-                Ins::Div => {
-                    let b = self.pop();
-                    let a = self.top();
-                    *a = binop(Op::Div, *a, b)?;
-                }
-                Ins::Pow => {
-                    let b = self.pop();
-                    let a = self.top();
-                    *a = binop(Op::Pow, *a, b)?;
-                }
-                Ins::Unary(g) => {
-                    let a = self.top();
-                    *a = check(g(*a))?;
-                }
+                Ins::NumBin(op, v) => acc = apply(op, v, acc)?,
+                Ins::ChanBin(op, c) => acc = apply(op, self.env.chan[c as usize], acc)?,
+                Ins::Unary(g) => acc = check(g(acc))?,
                 Ins::Atan2 => {
-                    let x = self.pop();
-                    let y = self.top();
-                    *y = check(y.atan2(x))?;
+                    let y = self.pop();
+                    acc = check(y.atan2(acc))?;
                 }
                 Ins::Noise(l) => {
-                    let z = self.pop();
                     let y = self.pop();
-                    let x = self.top();
-                    *x = check(noise_fn(l, *x, y, z))?;
+                    let x = self.pop();
+                    acc = check(noise_fn(l, x, y, acc))?;
                 }
                 Ins::MinMax { max, n } => {
-                    let n = n as usize;
-                    let at = self.stack.len() - n;
+                    // n - 1 values pushed, the first argument in the accumulator.
+                    self.stack.push(acc);
+                    let at = self.stack.len() - n as usize;
                     let best = min_max(max, &self.stack[at..]);
                     self.stack.truncate(at);
-                    self.stack.push(check(best)?);
+                    acc = check(best)?;
                 }
-                Ins::ArgFn(site) => {
-                    let x = self.pop();
-                    let v = self.arg_fn(x, site)?;
-                    self.stack.push(v);
-                }
+                Ins::ArgFn(site) => acc = self.arg_fn(acc, site)?,
                 Ins::JumpUnlessPos(t) => {
-                    if self.pop() > 0.0 {
-                        pc += 1;
-                    } else {
+                    if !(acc > 0.0) {
                         pc = t as usize;
+                        continue;
                     }
-                    continue;
                 }
                 Ins::Jump(t) => {
                     pc = t as usize;
                     continue;
                 }
                 Ins::Select { count, at } => {
-                    let d = self.pop() + 0.5;
-                    let k = select_index(d, count as usize)?;
+                    let k = select_index(acc + 0.5, count as usize)?;
                     if k == 0 {
-                        self.stack.push(count as f64);
+                        acc = count as f64;
                     }
                     pc = prog.table[at as usize + k] as usize;
                     continue;
@@ -557,17 +622,15 @@ impl Vm<'_> {
                 } => {
                     let list = self.code.args(first, n);
                     let frame = Frame::new(ArgSrc::Nodes { list, caller: f }, func);
-                    let v = self.run(body, &frame)?;
-                    self.stack.push(v);
+                    acc = self.run(body, &frame)?;
                 }
                 Ins::CallParam { i, first, n, site } => {
                     let list = self.code.args(first, n);
-                    let v =
-                        self.call_param(f, i as usize, ArgSrc::Nodes { list, caller: f }, site)?;
-                    self.stack.push(v);
+                    let src = ArgSrc::Nodes { list, caller: f };
+                    acc = self.call_param(f, i as usize, src, site)?;
                 }
                 Ins::Fail(k) => return Err(self.fail(prog.fails[k as usize])),
-                Ins::Ret => return Ok(self.pop()),
+                Ins::Ret => return Ok(acc),
             }
             pc += 1;
         }
@@ -727,6 +790,17 @@ fn min_max(max: bool, from_last: &[f64]) -> f64 {
         }
     }
     best
+}
+
+/// A binary operator (the tree walker's rules).
+#[inline(always)]
+fn apply(op: Op, x: f64, y: f64) -> R {
+    match op {
+        Op::Add => Ok(x + y),
+        Op::Sub => Ok(x - y),
+        Op::Mul => Ok(x * y),
+        _ => binop(op, x, y),
+    }
 }
 
 #[inline(never)]

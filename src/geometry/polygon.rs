@@ -50,6 +50,9 @@ pub struct Polygon {
     /// the inside test is then one half-plane test per edge. None for concave polygons,
     /// polygons with holes and degenerate ones (the general crossing test).
     convex: Option<f64>,
+    /// A convex polygon whose projection is an axis-aligned rectangle: its edge tests are
+    /// the bounding-box test.
+    is_box: bool,
     /// 2-D bounding box of the projection, grown by `FTINY`.
     lo2: [f64; 2],
     hi2: [f64; 2],
@@ -194,6 +197,9 @@ impl Polygon {
             hi2[k] += FTINY;
         }
         let convex = convex_turn(&edges);
+        let is_box = convex.is_some()
+            && edges.len() == 4
+            && edges.iter().all(|ed| (ed.e[0] == 0.0) != (ed.e[1] == 0.0));
         Ok((
             Polygon {
                 verts,
@@ -205,6 +211,7 @@ impl Polygon {
                 iv,
                 edges,
                 convex,
+                is_box,
                 lo2,
                 hi2,
                 raw2,
@@ -258,6 +265,9 @@ impl Polygon {
     fn contains_projected(&self, p: [f64; 2]) -> bool {
         if p[0] < self.lo2[0] || p[0] > self.hi2[0] || p[1] < self.lo2[1] || p[1] > self.hi2[1] {
             return false;
+        }
+        if self.is_box {
+            return true;
         }
         match self.convex {
             Some(s) => self.edges.iter().all(|ed| {

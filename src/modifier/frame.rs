@@ -15,6 +15,16 @@ use glam::{DMat4, DVec3};
 /// Number of ray channels (`$1..$27`).
 pub const CHANNELS: usize = 27;
 
+/// `Tx Ty Tz` (the world origin) and the unit axes `Ix … Kz` of a world → pattern matrix.
+fn axes(m: &DMat4) -> [f64; 12] {
+    let t0 = m.transform_point3(DVec3::ZERO);
+    let axis = |v: DVec3| m.transform_vector3(v).normalize_or_zero();
+    let (i, j, k) = (axis(DVec3::X), axis(DVec3::Y), axis(DVec3::Z));
+    [
+        t0.x, t0.y, t0.z, i.x, i.y, i.z, j.x, j.y, j.z, k.x, k.y, k.z,
+    ]
+}
+
 /// A modifier's world → pattern mapping.
 #[derive(Clone, Debug, PartialEq)]
 pub struct PatternFrame {
@@ -24,6 +34,8 @@ pub struct PatternFrame {
     inverse: DMat4,
     /// World → pattern scale (`-s 2` gives 0.5).
     scale: f64,
+    /// `Tx Ty Tz Ix … Kz` of `inverse` (the same at every hit of an untransformed object).
+    axes: [f64; 12],
 }
 
 impl Default for PatternFrame {
@@ -35,10 +47,15 @@ impl Default for PatternFrame {
 impl PatternFrame {
     /// No transform: pattern coordinates are world coordinates.
     pub fn identity() -> PatternFrame {
+        PatternFrame::new(None, DMat4::IDENTITY, 1.0)
+    }
+
+    fn new(forward: Option<DMat4>, inverse: DMat4, scale: f64) -> PatternFrame {
         PatternFrame {
-            forward: None,
-            inverse: DMat4::IDENTITY,
-            scale: 1.0,
+            forward,
+            inverse,
+            scale,
+            axes: axes(&inverse),
         }
     }
 
@@ -49,11 +66,7 @@ impl PatternFrame {
         if !(inverse.is_finite() && xf.scale().is_finite() && xf.scale() > 0.0) {
             return Err("singular transform".to_string());
         }
-        Ok(PatternFrame {
-            forward: Some(m),
-            inverse,
-            scale: 1.0 / xf.scale(),
-        })
+        Ok(PatternFrame::new(Some(m), inverse, 1.0 / xf.scale()))
     }
 
     /// The frame given by a primitive's string arguments after its fixed ones: empty → the
@@ -94,9 +107,10 @@ impl PatternFrame {
         let d = unit(sp.dir);
         let n = unit(sp.hit.normal);
         let p = m.transform_point3(sp.world_point());
-        let t0 = m.transform_point3(DVec3::ZERO);
-        let axis = |v: DVec3| m.transform_vector3(v).normalize_or_zero();
-        let (i, j, k) = (axis(DVec3::X), axis(DVec3::Y), axis(DVec3::Z));
+        let a = match sp.transform {
+            None => self.axes,
+            Some(_) => axes(&m),
+        };
         let rdot = (-sp.dir.dot(sp.hit.normal)).clamp(-1.0, 1.0);
         let (lu, lv) = sp.uv.map(|[u, v]| (u, v)).unwrap_or((0.0, 0.0));
         [
@@ -112,18 +126,18 @@ impl PatternFrame {
             sp.path_len * s,
             rdot,
             s,
-            t0.x,
-            t0.y,
-            t0.z,
-            i.x,
-            i.y,
-            i.z,
-            j.x,
-            j.y,
-            j.z,
-            k.x,
-            k.y,
-            k.z,
+            a[0],
+            a[1],
+            a[2],
+            a[3],
+            a[4],
+            a[5],
+            a[6],
+            a[7],
+            a[8],
+            a[9],
+            a[10],
+            a[11],
             sp.ray_len * s,
             lu,
             lv,

@@ -228,16 +228,18 @@ pub fn render_region(
     let lines: Vec<Mutex<Vec<Option<Sample>>>> = (cy0..=cy1)
         .map(|_| Mutex::new(vec![None; line_len]))
         .collect();
-    let band = |cy: usize| -> Vec<(usize, usize, [f32; 3])> {
+    // Each band writes its own rows of `out`.
+    let band = |(cy, rows): (usize, &mut [[f32; 3]])| {
         let mut rays = 0;
-        let mut pix = Vec::new();
         if tr.scene.fatal_error().is_some() {
-            return pix;
+            return;
         }
         let b = cy - cy0;
+        let ry0 = (cy * ps).max(y0);
         let mut top = lines[b].lock().unwrap_or_else(|e| e.into_inner());
         let mut bottom = lines[b + 1].lock().unwrap_or_else(|e| e.into_inner());
         let mut left = Vec::new();
+        let mut scratch = CellScratch::default();
         for cx in cx0..cx1 {
             let mut edges = CellEdges {
                 top: &mut top[cx * ps - lx0..],
@@ -249,27 +251,47 @@ pub fn render_region(
                 fs,
                 (cx, cy, ps),
                 &mut edges,
+                &mut scratch,
                 &mut rays,
                 &mut |x, y, c| {
-                    if x >= x0 && x < x1 && y >= y0 && y < y1 {
-                        pix.push((x, y, to_f32(c)));
+                    if x >= x0 && x < x1 && y >= ry0 && y < y1 {
+                        if let Some(px) = rows.get_mut((y - ry0) * w + (x - x0)) {
+                            *px = to_f32(c);
+                        }
                     }
                 },
             );
         }
         progress.rays.fetch_add(rays, Ordering::Relaxed);
         progress.rows_done.fetch_add(1, Ordering::Relaxed);
-        pix
     };
-    let even: Vec<_> = (cy0..cy1).step_by(2).collect();
-    let odd: Vec<_> = (cy0 + 1..cy1).step_by(2).collect();
-    // One band per job, as the rows above.
-    let even_px: Vec<_> = even.into_par_iter().with_max_len(1).map(band).collect();
-    let odd_px: Vec<_> = odd.into_par_iter().with_max_len(1).map(band).collect();
-    for (x, y, c) in even_px.into_iter().chain(odd_px).flatten() {
-        out[(y - y0) * w + (x - x0)] = c;
+    // The rows of each band: [max(cy*ps, y0), min((cy+1)*ps, y1)).
+    let mut even = Vec::new();
+    let mut odd = Vec::new();
+    let mut rest = &mut out[..];
+    for cy in cy0..cy1 {
+        let n = (((cy + 1) * ps).min(y1) - (cy * ps).max(y0)) * w;
+        let (rows, r) = std::mem::take(&mut rest).split_at_mut(n);
+        rest = r;
+        if (cy - cy0) % 2 == 0 {
+            even.push((cy, rows));
+        } else {
+            odd.push((cy, rows));
+        }
     }
+    // One band per job, as the rows above.
+    even.into_par_iter().with_max_len(1).for_each(band);
+    odd.into_par_iter().with_max_len(1).for_each(band);
     out
+}
+
+/// Buffers [`render_cell`] reuses from cell to cell.
+#[derive(Default)]
+struct CellScratch {
+    grid: Vec<Option<Sample>>,
+    known: Vec<Option<Sample>>,
+    values: Vec<Option<Color>>,
+    stack: Vec<(usize, usize, usize, usize, bool)>,
 }
 
 /// Samples a cell shares with its neighbours: its top and bottom rows (starting at the cell's
@@ -383,6 +405,7 @@ fn render_cell(
     fs: &FrameSetup,
     (cx, cy, ps): (usize, usize, usize),
     edges: &mut CellEdges,
+    scratch: &mut CellScratch,
     rays: &mut u64,
     emit: &mut dyn FnMut(usize, usize, Color),
 ) {
@@ -401,8 +424,18 @@ fn render_cell(
     // `grid`: the samples this cell asked for (they alone decide its pixels, so a pixel never
     // depends on which neighbours were rendered with it); `known`: those and the ones its
     // neighbours traced on the shared borders, taken instead of tracing again.
-    let mut grid: Vec<Option<Sample>> = vec![None; gw * gh];
-    let mut known = grid.clone();
+    let CellScratch {
+        grid,
+        known,
+        values,
+        stack,
+    } = scratch;
+    for v in [&mut *grid, &mut *known] {
+        v.clear();
+        v.resize(gw * gh, None);
+    }
+    values.clear();
+    values.resize(gw * gh, None);
     known[..gw].copy_from_slice(&edges.top[..gw]);
     known[(gh - 1) * gw..].copy_from_slice(&edges.bottom[..gw]);
     if edges.left.len() == gh {
@@ -410,7 +443,7 @@ fn render_cell(
             known[y * gw] = *s;
         }
     }
-    let mut get = |x: usize, y: usize, grid: &mut Vec<Option<Sample>>, rays: &mut u64| -> Sample {
+    let mut get = |x: usize, y: usize, grid: &mut [Option<Sample>], rays: &mut u64| -> Sample {
         let k = (y - ya) * gw + (x - xa);
         if let Some(s) = grid[k] {
             return s;
@@ -423,7 +456,6 @@ fn render_cell(
         known[k] = Some(s);
         s
     };
-    let mut values: Vec<Option<Color>> = vec![None; gw * gh];
     // Recursive subdivision with an explicit stack. A region is interpolated bilinearly from
     // its corners when its centre sample agrees with that interpolation (within -pt); else it
     // is split ([`split`]). Smooth gradients are therefore interpolated and only edges,
@@ -432,12 +464,13 @@ fn render_cell(
     // own corners agree lies beside the edge and is interpolated without a centre sample. A
     // region whose corners agree but whose centre does not holds something smaller than
     // itself (a thin light, a highlight): all its parts are probed.
-    let mut stack = vec![(xa, xb, ya, yb, true)];
+    stack.clear();
+    stack.push((xa, xb, ya, yb, true));
     while let Some((x0, x1, y0, y1, probe)) = stack.pop() {
-        let c00 = get(x0, y0, &mut grid, rays);
-        let c10 = get(x1, y0, &mut grid, rays);
-        let c01 = get(x0, y1, &mut grid, rays);
-        let c11 = get(x1, y1, &mut grid, rays);
+        let c00 = get(x0, y0, grid, rays);
+        let c10 = get(x1, y0, grid, rays);
+        let c01 = get(x0, y1, grid, rays);
+        let c11 = get(x1, y1, grid, rays);
         let small = x1 - x0 <= 1 && y1 - y0 <= 1;
         let xm = (x0 + x1) / 2;
         let ym = (y0 + y1) / 2;
@@ -460,7 +493,7 @@ fn render_cell(
         let corners = [c00, c10, c01, c11];
         let agree = (0..4).all(|i| (i + 1..4).all(|j| !bigdiff(&corners[i], &corners[j], fs.pt)));
         let refine = !small && (probe || !agree) && {
-            let centre = get(xm, ym, &mut grid, rays);
+            let centre = get(xm, ym, grid, rays);
             let predicted = Sample {
                 color: bilinear(xm, ym),
                 dist: if corners.iter().all(|c| c.dist.is_finite()) {
