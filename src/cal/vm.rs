@@ -597,7 +597,8 @@ impl Vm<'_> {
                 }
                 Ins::ArgFn(site) => acc = self.arg_fn(acc, site)?,
                 Ins::JumpUnlessPos(t) => {
-                    if !(acc > 0.0) {
+                    // NaN is not positive.
+                    if acc.partial_cmp(&0.0) != Some(std::cmp::Ordering::Greater) {
                         pc = t as usize;
                         continue;
                     }

@@ -273,7 +273,7 @@ pub fn render_region(
         let n = (((cy + 1) * ps).min(y1) - (cy * ps).max(y0)) * w;
         let (rows, r) = std::mem::take(&mut rest).split_at_mut(n);
         rest = r;
-        if (cy - cy0) % 2 == 0 {
+        if (cy - cy0).is_multiple_of(2) {
             even.push((cy, rows));
         } else {
             odd.push((cy, rows));
