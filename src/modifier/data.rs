@@ -343,25 +343,32 @@ impl DataArray {
             coords.len(),
             self.dims()
         );
-        self.interp_from(0, 0, coords)
+        // Each dimension's interval, weights and stride, once.
+        let mut w = [(0usize, 1.0, 0.0, 0usize); MAX_DIMS];
+        let mut stride = 1;
+        for d in (0..self.axes.len()).rev() {
+            let n = self.axes[d].len();
+            let (i, c0, c1) = if n == 1 {
+                (0, 1.0, 0.0)
+            } else {
+                weights(self.axes[d].index(coords[d]), n)
+            };
+            w[d] = (i, c0, c1, stride);
+            stride *= n;
+        }
+        self.interp_from(&w[..self.axes.len()], 0)
     }
 
-    fn interp_from(&self, d: usize, offset: usize, coords: &[f64]) -> f64 {
-        let axis = &self.axes[d];
-        let n = axis.len();
-        let stride: usize = self.axes[d + 1..].iter().map(Axis::len).product();
-        let at = |i: usize| -> f64 {
-            let o = offset + i * stride;
-            if d + 1 == self.axes.len() {
-                self.values[o] as f64
-            } else {
-                self.interp_from(d + 1, o, coords)
-            }
+    /// The value at `offset` (of the dimensions before `w`) interpolated along the
+    /// dimensions of `w` (interval, weights, stride).
+    fn interp_from(&self, w: &[(usize, f64, f64, usize)], offset: usize) -> f64 {
+        let Some((&(i, c0, c1, stride), rest)) = w.split_first() else {
+            return self.values.get(offset).map_or(0.0, |&v| v as f64);
         };
-        if n == 1 {
+        let at = |k: usize| self.interp_from(rest, offset + k * stride);
+        if self.axes[self.axes.len() - w.len()].len() == 1 {
             return at(0);
         }
-        let (i, c0, c1) = weights(axis.index(coords[d]), n);
         c0 * at(i) + c1 * at(i + 1)
     }
 }
