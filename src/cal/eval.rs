@@ -1,5 +1,7 @@
-//! The evaluator: a recursive walk over the node arena with lazy, per-call cached
-//! arguments, per-evaluation cached variables and a depth limit.
+//! The tree walker: a recursive walk over the node arena with lazy, per-call cached
+//! arguments, per-evaluation cached variables and a depth limit. The builder uses it to
+//! fold constants while compiling; a finished program runs on [`super::vm`], which keeps
+//! these semantics and shares the error messages ([`describe`]).
 //!
 //! Errors travel as a small [`Trap`]; a fatal error's message is kept in the machine
 //! until the public API turns it into [`super::EvalError::Fatal`].
@@ -10,9 +12,11 @@ use super::noise;
 use super::Env;
 use std::cell::Cell;
 
-/// The deepest nesting of node evaluations (expression depth plus function and variable
-/// calls, added up) one evaluation may reach; deeper is the fatal error "recursion too
-/// deep". A release build uses about 600 KB of stack for this depth.
+/// The deepest nesting one evaluation may reach; deeper is the fatal error "recursion too
+/// deep". The tree walker counts nested node evaluations (expression depth plus function
+/// and variable calls, added up; about 600 KB of stack in a release build), the run-time
+/// machine nested blocks (each a variable computed, a function called or an argument
+/// evaluated; arithmetic does not nest there).
 pub const MAX_DEPTH: u32 = 3000;
 
 /// The stack one evaluation may use, whichever limit comes first (debug builds have much

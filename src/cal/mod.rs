@@ -40,9 +40,11 @@
 //! "divide by zero constant", "bad constant expression", "ray parameter used in constant
 //! expression"); lazy, per-call cached arguments; function names as arguments; master's
 //! run-time error rules (NaN → domain, ±Inf → range from library calls and `^`; division
-//! by zero → range; `select` out of range → domain). Evaluation depth is limited to
-//! [`MAX_DEPTH`] nested node evaluations or [`MAX_STACK`] bytes of stack (a fatal error,
-//! never a stack overflow); an expression's tree to 2000 levels and its parentheses,
+//! by zero → range; `select` out of range → domain). A finished program runs as stack
+//! code (`vm`: one block per definition, expression and call argument, jumps for `if`
+//! and `select`); constants fold through the tree walker (`eval`). Evaluation depth is
+//! limited to [`MAX_DEPTH`] nested blocks (variables, calls and arguments) or [`MAX_STACK`]
+//! bytes of stack (a fatal error, never a stack overflow); an expression's tree to 2000 levels and its parentheses,
 //! calls and `^` to 200 (compile errors). Not implemented: `source_corr`, `source_theta`,
 //! `source_phi`, `fprism_val` (the reference does not define them fully).
 //! docs/functions.md describes the language, the dialects and the error rules.

@@ -36,17 +36,21 @@ pub struct Program {
     vm: Compiled,
     /// The block of each expression.
     exprs: Vec<u32>,
+    /// The node of each expression (for the tree walker's cross-check in tests).
+    #[cfg_attr(not(test), allow(dead_code))]
+    roots: Vec<NodeId>,
     outputs: Vec<(u32, ExprId)>,
     id: u64,
 }
 
 impl Program {
     pub(crate) fn new(code: Code, exprs: Vec<NodeId>, outputs: Vec<(u32, ExprId)>) -> Program {
-        let (vm, exprs) = Compiled::new(&code, &exprs);
+        let (vm, blocks) = Compiled::new(&code, &exprs);
         Program {
             code,
             vm,
-            exprs,
+            exprs: blocks,
+            roots: exprs,
             outputs,
             id: NEXT_ID.fetch_add(1, Ordering::Relaxed),
         }
@@ -128,6 +132,28 @@ impl Evaluation<'_> {
     pub fn eval(&mut self, e: ExprId) -> Result<f64, EvalError> {
         let block = self.prog.exprs[e.0 as usize];
         self.run(|m| m.run(block, &Frame::top()))
+    }
+
+    /// [`Evaluation::eval`] by the tree walker (the reference the run-time machine is
+    /// checked against).
+    #[cfg(test)]
+    pub(crate) fn eval_tree(&mut self, e: ExprId) -> Result<f64, EvalError> {
+        let node = self.prog.roots[e.0 as usize];
+        let mut m = super::eval::Machine {
+            code: &self.prog.code,
+            env: Some(self.env),
+            cache: &mut self.scratch.cache,
+            tick: self.tick,
+            depth: 0,
+            stack: super::eval::stack_here(),
+            fatal: None,
+        };
+        let r = m.eval(node, &Frame::top());
+        r.map_err(|t| match t {
+            Trap::Domain => EvalError::Domain,
+            Trap::Range => EvalError::Range,
+            Trap::Fatal => EvalError::Fatal(m.fatal.take().unwrap_or_default()),
+        })
     }
 
     /// Call a function with values.

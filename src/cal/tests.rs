@@ -543,3 +543,99 @@ fn many_threads_share_one_program() {
         .collect();
     assert!(handles.into_iter().all(|h| h.join().unwrap()));
 }
+
+/// The run-time machine (`vm`) against the tree walker on random expressions over
+/// definitions that use every kind of node: lazy and function-name arguments, recursion,
+/// `if`/`select`/`min`/`max`, `arg`, BRDF-free channels, and errors of every kind (fatal
+/// ones compared by message). Values must agree bit for bit.
+#[test]
+fn run_time_machine_matches_the_tree_walker() {
+    const DEFS: &str = "
+        a = Px*2 - 1; b = a*a + Py; c : 3;
+        f(x) = x*x - a; g(x, y) = if(x, y, -y); h(p, x) = p(x) + 1; k(p) = h(p, Pz);
+        r(n) = if(n - .5, n*r(n-1), 1); s(x, y, z) = select(x, y, z, x + y);
+        m(x) = min(x, a, b) + max(b, x); q(x) = x/(x - 1) + x^.5;
+        bad1 = nothere + 1; bad2(x) = g(x); bad3 = f; deep(n) = deep(n + 1);
+        t(x) = atan2(x, a) + noise3(x, a, b) + arg(1) + arg(0);
+    ";
+    let atoms = [
+        "a", "b", "c", "Px", "Py", "Pz", "A1", "arg(2)", "0", "1", "2.5", "-.5",
+    ];
+    let calls1 = ["f", "r", "m", "q", "t", "sin", "sqrt", "log", "floor"];
+    let mut seed: u64 = 0x9e37_79b9_7f4a_7c15;
+    let mut next = |n: usize| -> usize {
+        seed ^= seed << 13;
+        seed ^= seed >> 7;
+        seed ^= seed << 17;
+        (seed % n as u64) as usize
+    };
+    fn gen(
+        next: &mut dyn FnMut(usize) -> usize,
+        d: u32,
+        atoms: &[&str],
+        calls1: &[&str],
+    ) -> String {
+        if d == 0 || next(4) == 0 {
+            return atoms[next(atoms.len())].to_string();
+        }
+        let mut sub = || gen(next, d - 1, atoms, calls1);
+        let (x, y, z) = (sub(), sub(), sub());
+        match next(14) {
+            0 => format!("({x} + {y})"),
+            1 => format!("({x} - {y})"),
+            2 => format!("({x} * {y})"),
+            3 => format!("({x} / {y})"),
+            4 => format!("({x} ^ {y})"),
+            5 => format!("-({x})"),
+            6 => format!("{}({x})", calls1[next(calls1.len())]),
+            7 => format!("g({x}, {y})"),
+            8 => format!("h({}, {x})", ["f", "sin", "r", "q"][next(4)]),
+            9 => format!("s({x}, {y}, {z})"),
+            10 => format!("if({x}, {y}, {z})"),
+            11 => format!("select({x}, {y}, {z})"),
+            12 => format!("max({x}, {y}, {z})"),
+            _ => [
+                "bad1", "bad2(1)", "bad3", "deep(0)", "k(f)", "k(sqrt)", "min()",
+            ][next(7)]
+            .to_string(),
+        }
+    }
+    let mut b = CalBuilder::new(&[]).unwrap();
+    b.load_text(DEFS.as_bytes(), "defs", Ctx::GLOBAL).unwrap();
+    let mut exprs = Vec::new();
+    for i in 0..3000 {
+        let text = gen(&mut next, 5, &atoms, &calls1);
+        if let Ok(e) = b.expr(&text, Ctx::GLOBAL, &format!("case:{i}")) {
+            exprs.push((text, e));
+        }
+    }
+    assert!(exprs.len() > 2000, "only {} compiled", exprs.len());
+    let prog = b.finish();
+    let mut kinds = [0usize; 4];
+    for (i, (text, e)) in exprs.iter().enumerate() {
+        let mut chan = [0.0; 27];
+        chan[6] = (i as f64 * 0.37).sin() * 2.0;
+        chan[7] = (i as f64 * 0.11).cos();
+        chan[8] = i as f64 * 0.01 - 3.0;
+        let env = Env {
+            chan,
+            args: &[0.75, -2.0],
+            brdf: None,
+        };
+        let vm = prog.begin(&env).eval(*e);
+        let tree = prog.begin(&env).eval_tree(*e);
+        let same = match (&vm, &tree) {
+            (Ok(x), Ok(y)) => x.to_bits() == y.to_bits(),
+            (x, y) => x == y,
+        };
+        assert!(same, "{text}: machine {vm:?}, tree walker {tree:?}");
+        kinds[match vm {
+            Ok(_) => 0,
+            Err(EvalError::Domain) => 1,
+            Err(EvalError::Range) => 2,
+            Err(EvalError::Fatal(_)) => 3,
+        }] += 1;
+    }
+    // Every outcome occurs.
+    assert!(kinds.iter().all(|&k| k > 10), "{kinds:?}");
+}
