@@ -652,6 +652,10 @@ fn shape_center(s: &SourceShape) -> DVec3 {
 pub fn cone_dir(axis: DVec3, cos_max: f64, a: f64, b: f64) -> DVec3 {
     let (x, y) = square_to_disk(a, b);
     let r2 = x * x + y * y;
+    if r2 == 0.0 {
+        // The centre (every unjittered sample of an unpartitioned source): the axis.
+        return (axis + DVec3::ZERO).normalize();
+    }
     let cos_t = 1.0 - r2 * (1.0 - cos_max);
     let sin_t = (1.0 - cos_t * cos_t).max(0.0).sqrt();
     let (cphi, sphi) = if r2 > 0.0 {

@@ -102,14 +102,18 @@ impl PatternFrame {
 
     /// The ray channels `$1..$27` at `sp` (index 0 is `$1`).
     pub fn channels(&self, sp: &ShadingPoint) -> [f64; CHANNELS] {
-        let (m, s) = self.to_pattern(sp);
-        let unit = |v: DVec3| m.transform_vector3(v) / s;
-        let d = unit(sp.dir);
-        let n = unit(sp.hit.normal);
-        let p = m.transform_point3(sp.world_point());
-        let a = match sp.transform {
-            None => self.axes,
-            Some(_) => axes(&m),
+        let (d, n, p, a, s) = if self.forward.is_none() && sp.transform.is_none() {
+            // No transform at all: the hit as it is.
+            (sp.dir, sp.hit.normal, sp.world_point(), self.axes, 1.0)
+        } else {
+            let (m, s) = self.to_pattern(sp);
+            let unit = |v: DVec3| m.transform_vector3(v) / s;
+            let a = match sp.transform {
+                None => self.axes,
+                Some(_) => axes(&m),
+            };
+            let p = m.transform_point3(sp.world_point());
+            (unit(sp.dir), unit(sp.hit.normal), p, a, s)
         };
         let rdot = (-sp.dir.dot(sp.hit.normal)).clamp(-1.0, 1.0);
         let (lu, lv) = sp.uv.map(|[u, v]| (u, v)).unwrap_or((0.0, 0.0));
