@@ -126,8 +126,13 @@ impl DataCall {
             Source::Picture(p) => p.lookup(x[0], x[1]),
             Source::Data(d) => {
                 let mut v = [0.0; 3];
-                for (vi, di) in v.iter_mut().zip(d) {
-                    *vi = di.interp(x);
+                for (i, di) in d.iter().enumerate() {
+                    // A file named again (one grey file for r, g and b) is read once per
+                    // scene: its value here is the one just computed.
+                    v[i] = match (0..i).find(|&k| Arc::ptr_eq(&d[k], di)) {
+                        Some(k) => v[k],
+                        None => di.interp(x),
+                    };
                 }
                 v
             }
