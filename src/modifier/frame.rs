@@ -94,7 +94,7 @@ impl PatternFrame {
         match sp.transform {
             None => (self.inverse, self.scale),
             Some(obj) => {
-                let local = obj.matrix().inverse();
+                let local = obj.inverse();
                 (self.inverse * local, self.scale / obj.scale())
             }
         }

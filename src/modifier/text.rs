@@ -117,7 +117,7 @@ impl Text {
     pub fn inside_at(&self, sp: &ShadingPoint) -> bool {
         let w = sp.world_point();
         let p = match sp.transform {
-            Some(t) => t.matrix().inverse().transform_point3(w),
+            Some(t) => t.inverse().transform_point3(w),
             None => w,
         };
         self.inside(p)

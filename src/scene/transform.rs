@@ -14,6 +14,8 @@ use super::primitive::Primitive;
 #[derive(Clone, Debug, PartialEq)]
 pub struct Transform {
     m: DMat4,
+    /// `m`'s inverse (patterns on instanced surfaces map every hit through it).
+    inv: DMat4,
     scale: f64,
     mirrors: bool,
     invert: bool,
@@ -181,6 +183,7 @@ impl TransformState {
     pub fn finish(&self, words: Vec<String>) -> Transform {
         Transform {
             m: self.m,
+            inv: self.m.inverse(),
             scale: self.scale,
             mirrors: self.mirrors,
             invert: false,
@@ -264,6 +267,7 @@ impl Transform {
     pub fn identity() -> Transform {
         Transform {
             m: DMat4::IDENTITY,
+            inv: DMat4::IDENTITY,
             scale: 1.0,
             mirrors: false,
             invert: false,
@@ -276,6 +280,7 @@ impl Transform {
     pub fn from_matrix(m: DMat4, scale: f64, mirrors: bool) -> Transform {
         Transform {
             m,
+            inv: m.inverse(),
             scale,
             mirrors,
             invert: false,
@@ -306,6 +311,11 @@ impl Transform {
     /// The 4x4 matrix mapping points (column vectors).
     pub fn matrix(&self) -> DMat4 {
         self.m
+    }
+
+    /// The inverse of [`Transform::matrix`] (computed once).
+    pub fn inverse(&self) -> DMat4 {
+        self.inv
     }
 
     /// The words as real xform appends them to arguments (`-i 1` prepended unless the words
