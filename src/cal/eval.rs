@@ -340,143 +340,221 @@ impl<'a> Machine<'a> {
     /// Parameter `i` of frame `f` (not cached yet): evaluated in the caller's frame.
     #[inline(never)]
     fn param(&mut self, f: &Frame, i: usize) -> R {
-        let v = match f.src {
-            ArgSrc::Nodes { list, caller } if i < list.len() => self.eval(list[i], caller)?,
-            ArgSrc::Values(v) if i < v.len() => v[i],
-            _ => return Err(self.fail(Fail::FewArgs(f.func, i))),
-        };
-        if i < NCACHE {
-            f.vals[i].set(v);
-            f.done.set(f.done.get() | 1 << i);
-        }
-        Ok(v)
+        param(self, f, i)
     }
 
     /// Call the definition of slot `s` (or its library fallback) at node `site`.
     pub fn call_slot(&mut self, s: SlotId, src: ArgSrc, site: NodeId) -> R {
-        let slot = &self.code.slots[s as usize];
-        match slot.def {
-            Def::Func { body, .. } => {
-                let frame = Frame::new(src, s);
-                self.eval(body, &frame)
-            }
-            Def::None => match slot.lib {
-                Some(l) => self.lib(l, src, site),
-                None => Err(self.fail(Fail::UndefFunc(s, site))),
-            },
-            _ => Err(self.fail(Fail::NotFunc(s, site))),
-        }
+        call_slot(self, s, src, site)
     }
 
     /// Call the function whose name the caller of frame `f` passed as parameter `i`.
     fn call_param(&mut self, f: &Frame, i: usize, src: ArgSrc, site: NodeId) -> R {
-        let mut frame = f;
-        let mut i = i;
-        loop {
-            let (list, caller) = match frame.src {
-                ArgSrc::Nodes { list, caller } if i < list.len() => (list, caller),
-                _ => return Err(self.fail(Fail::FewFuncArgs(frame.func, i, site))),
-            };
-            match self.code.nodes[list[i] as usize] {
-                Node::Var(s) => return self.call_slot(s, src, site),
-                Node::Param(j) => {
-                    frame = caller;
-                    i = j as usize;
-                }
-                _ => return Err(self.fail(Fail::NotFuncName(frame.func, i, site))),
-            }
-        }
-    }
-
-    /// Argument `i` of a library call.
-    #[inline]
-    fn arg(&mut self, src: &ArgSrc, i: usize, l: Lib, site: NodeId) -> R {
-        match *src {
-            ArgSrc::Nodes { list, caller } if i < list.len() => self.operand(list[i], caller),
-            ArgSrc::Values(v) if i < v.len() => Ok(v[i]),
-            _ => Err(self.fail(Fail::FewLibArgs(l, site))),
-        }
+        call_param(self, f, i, src, site)
     }
 
     /// Call library function `l`.
     pub fn lib(&mut self, l: Lib, src: ArgSrc, site: NodeId) -> R {
-        if let Some(f) = l.unary() {
-            let x = self.arg(&src, 0, l, site)?;
-            return check(f(x));
-        }
-        match l {
-            Lib::If => {
-                let c = self.arg(&src, 0, l, site)?;
-                self.arg(&src, if c > 0.0 { 1 } else { 2 }, l, site)
-            }
-            _ => self.lib_other(l, src, site),
-        }
+        lib(self, l, &src, site)
+    }
+}
+
+impl Host for Machine<'_> {
+    fn code(&self) -> &Code {
+        self.code
     }
 
-    #[inline(never)]
-    fn lib_other(&mut self, l: Lib, src: ArgSrc, site: NodeId) -> R {
-        match l {
-            Lib::Select => {
-                let d = self.arg(&src, 0, l, site)? + 0.5;
-                if d.is_nan() || d < 0.0 {
-                    return Err(Trap::Domain);
-                }
-                let count = src.len().saturating_sub(1);
-                let k = d.trunc();
-                if k == 0.0 {
-                    Ok(count as f64)
-                } else if k > count as f64 {
-                    Err(Trap::Domain)
-                } else {
-                    self.arg(&src, k as usize, l, site)
-                }
-            }
-            Lib::Min | Lib::Max => {
-                // From the last argument backwards, as Radiance (a NaN last argument wins).
-                let n = src.len();
-                let mut best = self.arg(&src, n.max(1) - 1, l, site)?;
-                for i in (0..n.saturating_sub(1)).rev() {
-                    let a = self.arg(&src, i, l, site)?;
-                    if (l == Lib::Min && a < best) || (l == Lib::Max && a > best) {
-                        best = a;
-                    }
-                }
-                check(best)
-            }
-            Lib::Atan2 => {
-                let y = self.arg(&src, 0, l, site)?;
-                let x = self.arg(&src, 1, l, site)?;
-                check(y.atan2(x))
-            }
-            Lib::Arg => self.arg_fn(&src, site),
-            _ => {
-                let x = self.arg(&src, 0, l, site)?;
-                let y = self.arg(&src, 1, l, site)?;
-                let z = self.arg(&src, 2, l, site)?;
-                check(noise_fn(l, x, y, z))
-            }
-        }
+    fn fail(&mut self, f: Fail) -> Trap {
+        Machine::fail(self, f)
     }
 
-    /// `arg(n)`: the primitive's real arguments.
-    fn arg_fn(&mut self, src: &ArgSrc, site: NodeId) -> R {
-        let x = self.arg(src, 0, Lib::Arg, site)?;
-        let Some(env) = self.env else {
-            return Err(self.fail(Fail::ConstArg(site)));
-        };
-        let k = (x + 0.5) as i64;
-        if k < 1 {
-            return Ok(env.args.len() as f64);
-        }
-        match env.args.get(k as usize - 1) {
-            Some(v) => Ok(*v),
-            None => Err(self.fail(Fail::MissingArg(k, env.args.len(), site))),
+    #[inline]
+    fn eval_arg(&mut self, node: NodeId, caller: &Frame) -> R {
+        self.operand(node, caller)
+    }
+
+    fn run_body(&mut self, _s: SlotId, body: NodeId, frame: &Frame) -> R {
+        self.eval(body, frame)
+    }
+
+    fn real_args(&mut self, site: NodeId) -> Result<&[f64], Trap> {
+        match self.env {
+            Some(env) => Ok(env.args),
+            None => Err(self.fail(Fail::ConstArg(site))),
         }
     }
 }
 
+/// What the evaluators (the tree walker and the run-time machine) differ in; the rules of
+/// parameters, calls, function-name arguments and library calls by name are shared.
+pub(crate) trait Host {
+    fn code(&self) -> &Code;
+    /// Record a fatal error.
+    fn fail(&mut self, f: Fail) -> Trap;
+    /// The value of argument expression `node` in its caller's frame.
+    fn eval_arg(&mut self, node: NodeId, caller: &Frame) -> R;
+    /// The body `body` of function `s`, in `frame`.
+    fn run_body(&mut self, s: SlotId, body: NodeId, frame: &Frame) -> R;
+    /// The primitive's real arguments (a fatal error in a constant expression).
+    fn real_args(&mut self, site: NodeId) -> Result<&[f64], Trap>;
+}
+
+/// Parameter `i` of frame `f` (not cached yet): evaluated in the caller's frame, and
+/// cached when it is one of the first [`NCACHE`].
+pub(crate) fn param<H: Host>(h: &mut H, f: &Frame, i: usize) -> R {
+    let v = match f.src {
+        ArgSrc::Nodes { list, caller } if i < list.len() => h.eval_arg(list[i], caller)?,
+        ArgSrc::Values(v) if i < v.len() => v[i],
+        _ => return Err(h.fail(Fail::FewArgs(f.func, i))),
+    };
+    if i < NCACHE {
+        f.vals[i].set(v);
+        f.done.set(f.done.get() | 1 << i);
+    }
+    Ok(v)
+}
+
+/// Call the definition of slot `s` (or its library fallback) at node `site`.
+pub(crate) fn call_slot<H: Host>(h: &mut H, s: SlotId, src: ArgSrc, site: NodeId) -> R {
+    let slot = &h.code().slots[s as usize];
+    match (slot.def, slot.lib) {
+        (Def::Func { body, .. }, _) => {
+            let frame = Frame::new(src, s);
+            h.run_body(s, body, &frame)
+        }
+        (Def::None, Some(l)) => lib(h, l, &src, site),
+        (Def::None, None) => Err(h.fail(Fail::UndefFunc(s, site))),
+        _ => Err(h.fail(Fail::NotFunc(s, site))),
+    }
+}
+
+/// Argument `i` of a call of library function `l` (a fatal error when missing).
+#[inline]
+fn lib_arg<H: Host>(h: &mut H, src: &ArgSrc, i: usize, l: Lib, site: NodeId) -> R {
+    match *src {
+        ArgSrc::Nodes { list, caller } if i < list.len() => h.eval_arg(list[i], caller),
+        ArgSrc::Values(v) if i < v.len() => Ok(v[i]),
+        _ => Err(h.fail(Fail::FewLibArgs(l, site))),
+    }
+}
+
+/// Call the function whose name the caller of frame `f` passed as parameter `i` (the name
+/// may be passed on through several calls).
+pub(crate) fn call_param<H: Host>(h: &mut H, f: &Frame, i: usize, src: ArgSrc, site: NodeId) -> R {
+    let mut frame = f;
+    let mut i = i;
+    loop {
+        let (list, caller) = match frame.src {
+            ArgSrc::Nodes { list, caller } if i < list.len() => (list, caller),
+            _ => return Err(h.fail(Fail::FewFuncArgs(frame.func, i, site))),
+        };
+        match h.code().nodes[list[i] as usize] {
+            Node::Var(s) => return call_slot(h, s, src, site),
+            Node::Param(j) => {
+                frame = caller;
+                i = j as usize;
+            }
+            _ => return Err(h.fail(Fail::NotFuncName(frame.func, i, site))),
+        }
+    }
+}
+
+/// Call library function `l` with (lazy) arguments `src`.
+pub(crate) fn lib<H: Host>(h: &mut H, l: Lib, src: &ArgSrc, site: NodeId) -> R {
+    if let Some(f) = l.unary() {
+        let x = lib_arg(h, src, 0, l, site)?;
+        return check(f(x));
+    }
+    match l {
+        Lib::If => {
+            let c = lib_arg(h, src, 0, l, site)?;
+            lib_arg(h, src, if c > 0.0 { 1 } else { 2 }, l, site)
+        }
+        _ => lib_other(h, l, src, site),
+    }
+}
+
 #[inline(never)]
-fn noise_fn(l: Lib, x: f64, y: f64, z: f64) -> f64 {
+fn lib_other<H: Host>(h: &mut H, l: Lib, src: &ArgSrc, site: NodeId) -> R {
+    match l {
+        Lib::Select => {
+            let d = lib_arg(h, src, 0, l, site)? + 0.5;
+            let count = src.len().saturating_sub(1);
+            match select_index(d, count)? {
+                0 => Ok(count as f64),
+                k => lib_arg(h, src, k, l, site),
+            }
+        }
+        Lib::Min | Lib::Max => {
+            // From the last argument backwards, as Radiance (a NaN last argument wins).
+            let n = src.len();
+            let mut best = lib_arg(h, src, n.max(1) - 1, l, site)?;
+            for i in (0..n.saturating_sub(1)).rev() {
+                let a = lib_arg(h, src, i, l, site)?;
+                best = better(l == Lib::Max, best, a);
+            }
+            check(best)
+        }
+        Lib::Atan2 => {
+            let y = lib_arg(h, src, 0, l, site)?;
+            let x = lib_arg(h, src, 1, l, site)?;
+            check(y.atan2(x))
+        }
+        Lib::Arg => {
+            let x = lib_arg(h, src, 0, l, site)?;
+            real_arg(h, x, site)
+        }
+        _ => {
+            let x = lib_arg(h, src, 0, l, site)?;
+            let y = lib_arg(h, src, 1, l, site)?;
+            let z = lib_arg(h, src, 2, l, site)?;
+            check(noise_fn(l, x, y, z))
+        }
+    }
+}
+
+/// `arg(x)`: the primitive's real argument `x` (rounded), or their count for `x < 1`.
+pub(crate) fn real_arg<H: Host>(h: &mut H, x: f64, site: NodeId) -> R {
+    let k = (x + 0.5) as i64;
+    let args = h.real_args(site)?;
+    let n = args.len();
+    if k < 1 {
+        return Ok(n as f64);
+    }
+    match args.get(k as usize - 1) {
+        Some(v) => Ok(*v),
+        None => Err(h.fail(Fail::MissingArg(k, n, site))),
+    }
+}
+
+/// `select`'s argument number from `d` = first argument + 0.5: 0 asks for the count;
+/// NaN, below 0 or past the count is a domain error.
+#[inline]
+pub(crate) fn select_index(d: f64, count: usize) -> Result<usize, Trap> {
+    if d.is_nan() || d < 0.0 {
+        return Err(Trap::Domain);
+    }
+    let k = d.trunc();
+    if k > count as f64 {
+        Err(Trap::Domain)
+    } else {
+        Ok(k as usize)
+    }
+}
+
+/// `min`/`max`, taking the arguments from the last one backwards: `a` replaces `best`
+/// only when strictly better.
+#[inline]
+pub(crate) fn better(max: bool, best: f64, a: f64) -> f64 {
+    if (!max && a < best) || (max && a > best) {
+        a
+    } else {
+        best
+    }
+}
+
+#[inline(never)]
+pub(crate) fn noise_fn(l: Lib, x: f64, y: f64, z: f64) -> f64 {
     match l {
         Lib::Noise3 => noise::noise3(x, y, z),
         Lib::Noise3x => noise::noise3_d(0, x, y, z),

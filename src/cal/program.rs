@@ -2,7 +2,7 @@
 //! evaluation clock, with this thread's variable cache).
 
 use super::code::{Code, NodeId};
-use super::eval::{ArgSrc, Entry, Frame, Trap};
+use super::eval::{call_slot, ArgSrc, Entry, Frame, Trap};
 use super::vm::{Compiled, Vm};
 use super::{Env, EvalError, ExprId, FuncRef};
 use std::cell::{Cell, RefCell};
@@ -158,7 +158,7 @@ impl Evaluation<'_> {
 
     /// Call a function with values.
     pub fn call(&mut self, f: FuncRef, args: &[f64]) -> Result<f64, EvalError> {
-        self.run(|m| m.call_slot(f.0, ArgSrc::Values(args), u32::MAX))
+        self.run(|m| call_slot(m, f.0, ArgSrc::Values(args), u32::MAX))
     }
 }
 

@@ -11,11 +11,10 @@
 
 use super::code::{Callee, Code, Def, Node, NodeId, Op, SlotId};
 use super::eval::{
-    binop, check, describe, stack_here, ArgSrc, Entry, Fail, Frame, Trap, MAX_DEPTH, MAX_STACK,
-    NCACHE, R,
+    better, binop, call_param, check, describe, noise_fn, param, real_arg, select_index,
+    stack_here, ArgSrc, Entry, Fail, Frame, Host, Trap, MAX_DEPTH, MAX_STACK, NCACHE, R,
 };
 use super::library::Lib;
-use super::noise;
 use super::Env;
 
 /// "No block" in [`Compiled::block_of`] and in jump fix-ups.
@@ -538,7 +537,7 @@ impl Vm<'_> {
         if i < NCACHE && f.done.get() >> i & 1 == 1 {
             Ok(f.vals[i].get())
         } else {
-            self.param(f, i)
+            param(self, f, i)
         }
     }
 
@@ -595,7 +594,7 @@ impl Vm<'_> {
                     self.stack.truncate(at);
                     acc = check(best)?;
                 }
-                Ins::ArgFn(site) => acc = self.arg_fn(acc, site)?,
+                Ins::ArgFn(site) => acc = real_arg(self, acc, site)?,
                 Ins::JumpUnlessPos(t) => {
                     // NaN is not positive.
                     if acc.partial_cmp(&0.0) != Some(std::cmp::Ordering::Greater) {
@@ -628,7 +627,7 @@ impl Vm<'_> {
                 Ins::CallParam { i, first, n, site } => {
                     let list = self.code.args(first, n);
                     let src = ArgSrc::Nodes { list, caller: f };
-                    acc = self.call_param(f, i as usize, src, site)?;
+                    acc = call_param(self, f, i as usize, src, site)?;
                 }
                 Ins::Fail(k) => return Err(self.fail(prog.fails[k as usize])),
                 Ins::Ret => return Ok(acc),
@@ -636,161 +635,37 @@ impl Vm<'_> {
             pc += 1;
         }
     }
+}
 
-    /// Parameter `i` of frame `f` (not cached yet): evaluated in the caller's frame.
-    #[inline(never)]
-    fn param(&mut self, f: &Frame, i: usize) -> R {
-        let v = match f.src {
-            ArgSrc::Nodes { list, caller } if i < list.len() => {
-                let b = self.prog.block_of[list[i] as usize];
-                self.run(b, caller)?
-            }
-            ArgSrc::Values(v) if i < v.len() => v[i],
-            _ => return Err(self.fail(Fail::FewArgs(f.func, i))),
-        };
-        if i < NCACHE {
-            f.vals[i].set(v);
-            f.done.set(f.done.get() | 1 << i);
-        }
-        Ok(v)
+impl Host for Vm<'_> {
+    fn code(&self) -> &Code {
+        self.code
     }
 
-    /// `arg(x)`: the primitive's real arguments.
-    fn arg_fn(&mut self, x: f64, site: NodeId) -> R {
-        let k = (x + 0.5) as i64;
-        if k < 1 {
-            return Ok(self.env.args.len() as f64);
-        }
-        match self.env.args.get(k as usize - 1) {
-            Some(v) => Ok(*v),
-            None => Err(self.fail(Fail::MissingArg(k, self.env.args.len(), site))),
-        }
+    fn fail(&mut self, f: Fail) -> Trap {
+        Vm::fail(self, f)
     }
 
-    /// Call the definition of slot `s` (or its library fallback) with arguments `src`.
-    pub fn call_slot(&mut self, s: SlotId, src: ArgSrc, site: NodeId) -> R {
-        let slot = &self.code.slots[s as usize];
-        match slot.def {
-            Def::Func { .. } => {
-                let frame = Frame::new(src, s);
-                self.run(self.prog.slot_block[s as usize], &frame)
-            }
-            Def::None => match slot.lib {
-                Some(l) => self.lib(l, &src, site),
-                None => Err(self.fail(Fail::UndefFunc(s, site))),
-            },
-            _ => Err(self.fail(Fail::NotFunc(s, site))),
-        }
+    /// An argument's own block, run in its caller's frame.
+    fn eval_arg(&mut self, node: NodeId, caller: &Frame) -> R {
+        let b = self.prog.block_of[node as usize];
+        self.run(b, caller)
     }
 
-    /// Call the function whose name the caller of frame `f` passed as parameter `i`.
-    #[inline(never)]
-    fn call_param(&mut self, f: &Frame, i: usize, src: ArgSrc, site: NodeId) -> R {
-        let mut frame = f;
-        let mut i = i;
-        loop {
-            let (list, caller) = match frame.src {
-                ArgSrc::Nodes { list, caller } if i < list.len() => (list, caller),
-                _ => return Err(self.fail(Fail::FewFuncArgs(frame.func, i, site))),
-            };
-            match self.code.nodes[list[i] as usize] {
-                Node::Var(s) => return self.call_slot(s, src, site),
-                Node::Param(j) => {
-                    frame = caller;
-                    i = j as usize;
-                }
-                _ => return Err(self.fail(Fail::NotFuncName(frame.func, i, site))),
-            }
-        }
+    fn run_body(&mut self, s: SlotId, _body: NodeId, frame: &Frame) -> R {
+        self.run(self.prog.slot_block[s as usize], frame)
     }
 
-    /// Argument `i` of a library function called by name (not compiled inline).
-    fn arg(&mut self, src: &ArgSrc, i: usize, l: Lib, site: NodeId) -> R {
-        match *src {
-            ArgSrc::Nodes { list, caller } if i < list.len() => {
-                let b = self.prog.block_of[list[i] as usize];
-                self.run(b, caller)
-            }
-            ArgSrc::Values(v) if i < v.len() => Ok(v[i]),
-            _ => Err(self.fail(Fail::FewLibArgs(l, site))),
-        }
-    }
-
-    /// A library function called by name: through a function-name parameter, or by the
-    /// host program.
-    #[inline(never)]
-    fn lib(&mut self, l: Lib, src: &ArgSrc, site: NodeId) -> R {
-        if let Some(g) = l.unary() {
-            let x = self.arg(src, 0, l, site)?;
-            return check(g(x));
-        }
-        match l {
-            Lib::If => {
-                let c = self.arg(src, 0, l, site)?;
-                self.arg(src, if c > 0.0 { 1 } else { 2 }, l, site)
-            }
-            Lib::Select => {
-                let d = self.arg(src, 0, l, site)? + 0.5;
-                let count = src.len().saturating_sub(1);
-                match select_index(d, count)? {
-                    0 => Ok(count as f64),
-                    k => self.arg(src, k, l, site),
-                }
-            }
-            Lib::Min | Lib::Max => {
-                let n = src.len();
-                let mut vals = Vec::with_capacity(n.max(1));
-                for i in (0..n.max(1)).rev() {
-                    vals.push(self.arg(src, i, l, site)?);
-                }
-                check(min_max(l == Lib::Max, &vals))
-            }
-            Lib::Atan2 => {
-                let y = self.arg(src, 0, l, site)?;
-                let x = self.arg(src, 1, l, site)?;
-                check(y.atan2(x))
-            }
-            Lib::Arg => {
-                let x = self.arg(src, 0, l, site)?;
-                self.arg_fn(x, site)
-            }
-            _ => {
-                let x = self.arg(src, 0, l, site)?;
-                let y = self.arg(src, 1, l, site)?;
-                let z = self.arg(src, 2, l, site)?;
-                check(noise_fn(l, x, y, z))
-            }
-        }
+    fn real_args(&mut self, _site: NodeId) -> Result<&[f64], Trap> {
+        Ok(self.env.args)
     }
 }
 
-/// `select`'s argument number from `d` = first argument + 0.5: 0 asks for the count;
-/// NaN, below 0 or past the count is a domain error.
-#[inline]
-fn select_index(d: f64, count: usize) -> Result<usize, Trap> {
-    if d.is_nan() || d < 0.0 {
-        return Err(Trap::Domain);
-    }
-    let k = d.trunc();
-    if k > count as f64 {
-        Err(Trap::Domain)
-    } else {
-        Ok(k as usize)
-    }
-}
-
-/// `min`/`max` of values listed from the last argument to the first: the last argument
-/// is the start, an earlier one replaces it only when strictly better (so a NaN last
-/// argument wins, as in Radiance).
+/// `min`/`max` of values listed from the last argument to the first.
 fn min_max(max: bool, from_last: &[f64]) -> f64 {
     let mut it = from_last.iter().copied();
-    let mut best = it.next().unwrap_or(0.0);
-    for a in it {
-        if (!max && a < best) || (max && a > best) {
-            best = a;
-        }
-    }
-    best
+    let first = it.next().unwrap_or(0.0);
+    it.fold(first, |best, a| better(max, best, a))
 }
 
 /// A binary operator (the tree walker's rules).
@@ -801,16 +676,5 @@ fn apply(op: Op, x: f64, y: f64) -> R {
         Op::Sub => Ok(x - y),
         Op::Mul => Ok(x * y),
         _ => binop(op, x, y),
-    }
-}
-
-#[inline(never)]
-fn noise_fn(l: Lib, x: f64, y: f64, z: f64) -> f64 {
-    match l {
-        Lib::Noise3 => noise::noise3(x, y, z),
-        Lib::Noise3x => noise::noise3_d(0, x, y, z),
-        Lib::Noise3y => noise::noise3_d(1, x, y, z),
-        Lib::Noise3z => noise::noise3_d(2, x, y, z),
-        _ => noise::fnoise3(x, y, z),
     }
 }
