@@ -74,10 +74,7 @@ NAME=ambient
 source "$ROOT/bench/common.sh"
 [[ -x /usr/bin/time ]] || { echo "ambient: /usr/bin/time (GNU time) needed" >&2; exit 1; }
 
-TMP=$(mktemp -d "${TMPDIR:-/tmp}/tessera-ambient.XXXXXX")
-cleanup() { rm -rf "$TMP"; }
-trap cleanup EXIT
-trap 'exit 130' INT TERM
+work_dir
 
 # cpu_run OUT cmd... : run cmd (stdout to OUT); prints CPU seconds (user+sys).
 cpu_run() {
@@ -92,21 +89,6 @@ cpu_run() {
     awk '{ printf "%.2f\n", $1 + $2 }' "$TMP/time"
 }
 
-# bright PIC OUT : reduce PIC to RED x RED and write one brightness value per pixel.
-bright() {
-    pfilt -1 -r 1 -x "$RED" -y "$RED" "$1" | pvalue -h -H -o -b -d >"$2"
-}
-
-# relrms TEST REF : relative RMS error of brightness files.
-relrms() {
-    paste "$1" "$2" | awk -v f="$FLOOR" '
-        { t[NR] = $1; r[NR] = $2; s += $2 }
-        END {
-            fl = f * s / NR
-            for (i = 1; i <= NR; i++) { d = r[i] > fl ? r[i] : fl; e += ((t[i] - r[i]) / d) ^ 2 }
-            printf "%.5f\n", sqrt(e / NR)
-        }'
-}
 mean_of() { awk '{ s += $1 } END { printf "%.6g\n", s / NR }' "$1"; }
 
 printf 'ambient: %s; %sx%s -> %sx%s; Radiance in %s; %s cores\n' \

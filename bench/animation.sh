@@ -30,8 +30,7 @@ source "$ROOT/bench/common.sh"
 (cd "$ROOT" && cargo build --release --quiet --bins)
 B=$ROOT/target/release
 mkdir -p "$OUT"
-TMP=$(mktemp -d)
-trap 'rm -rf "$TMP"' EXIT
+work_dir
 cat > "$TMP/keys.vf" <<'KEYS'
 -vtv -vp 7.6 .35 2.1 -vd -5.2 4.6 -1.5 -vu 0 0 1 -vh 80 -vv 60
 -vp 6.2 2.4 1.7 -vd -1 .25 -.25

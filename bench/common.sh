@@ -34,6 +34,31 @@ TPICT=${TPICT:-"$ROOT/target/release/tpict"}
 [[ $TPICT == /* ]] || TPICT="$PWD/$TPICT"
 [[ -x "$TPICT" ]] || { echo "$NAME: $TPICT missing" >&2; exit 1; }
 
+# work_dir: a private work directory in $TMP, removed when the script exits (an
+# interrupt exits with 130).
+work_dir() {
+    TMP=$(mktemp -d "${TMPDIR:-/tmp}/tessera-$NAME.XXXXXX")
+    trap 'rm -rf "$TMP"' EXIT
+    trap 'exit 130' INT TERM
+}
+
+# bright PIC OUT: reduce PIC to $RED x $RED pixels and write one brightness per pixel.
+bright() {
+    pfilt -1 -r 1 -x "$RED" -y "$RED" "$1" | pvalue -h -H -o -b -d >"$2"
+}
+
+# relrms TEST REF: relative RMS error of two brightness files; reference values below
+# $FLOOR times their mean count as that floor.
+relrms() {
+    paste "$1" "$2" | awk -v f="$FLOOR" '
+        { t[NR] = $1; r[NR] = $2; s += $2 }
+        END {
+            fl = f * s / NR
+            for (i = 1; i <= NR; i++) { d = r[i] > fl ? r[i] : fl; e += ((t[i] - r[i]) / d) ^ 2 }
+            printf "%.5f\n", sqrt(e / NR)
+        }'
+}
+
 # The direct-light benchmark scenes (bench/run.sh, bench/direct_error.sh):
 # scene_def NAME prints "folder (under tests/scenes) | files | view file | -av".
 scene_def() {

@@ -47,10 +47,7 @@ NAME=direct_error
 # shellcheck source=bench/common.sh
 source "$ROOT/bench/common.sh"
 
-TMP=$(mktemp -d "${TMPDIR:-/tmp}/tessera-direct-error.XXXXXX")
-cleanup() { rm -rf "$TMP"; }
-trap cleanup EXIT
-trap 'exit 130' INT TERM
+work_dir
 
 # Scenes: scene_def in bench/common.sh.
 
@@ -71,17 +68,6 @@ cpu_of() {
     echo "$best"
 }
 
-bright() { pfilt -1 -r 1 -x "$RED" -y "$RED" "$1" | pvalue -h -H -o -b -d >"$2"; }
-
-relrms() {
-    paste "$1" "$2" | awk -v f="$FLOOR" '
-        { t[NR] = $1; r[NR] = $2; s += $2 }
-        END {
-            fl = f * s / NR
-            for (i = 1; i <= NR; i++) { d = r[i] > fl ? r[i] : fl; e += ((t[i] - r[i]) / d) ^ 2 }
-            printf "%.5f\n", sqrt(e / NR)
-        }'
-}
 
 printf '%s: %s; %sx%s -> %sx%s, -ab 0; references -ps 1 -ss %s -ds %s; Radiance in %s\n' \
     "$NAME" "$("$TPICT" -version 2>/dev/null | head -1)" "$RES" "$RES" "$RED" "$RED" \

@@ -13,8 +13,7 @@ RES=${RES:-1024}
 REPEAT=${REPEAT:-3}
 AB=${AB:-"0 1"}
 PS=${PS:-"4 1"}
-TMP=$(mktemp -d)
-trap 'rm -rf "$TMP"' EXIT
+work_dir
 cd "$ROOT/tests/scenes/patterns"
 best() { # best CMD...: smallest user+sys of REPEAT runs (stdout to $TMP/out.hdr)
     local b=""

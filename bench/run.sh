@@ -30,10 +30,7 @@ NAME=bench
 # shellcheck source=bench/common.sh
 source "$ROOT/bench/common.sh"
 
-TMP=$(mktemp -d "${TMPDIR:-/tmp}/tessera-bench.XXXXXX")
-cleanup() { rm -rf "$TMP"; }
-trap cleanup EXIT
-trap 'exit 130' INT TERM
+work_dir
 
 # Scenes: scene_def in bench/common.sh.
 
