@@ -37,7 +37,7 @@ pub struct Program {
     /// The block of each expression.
     exprs: Vec<u32>,
     /// The node of each expression (for the tree walker's cross-check in tests).
-    #[cfg_attr(not(test), allow(dead_code))]
+    #[cfg(test)]
     roots: Vec<NodeId>,
     outputs: Vec<(u32, ExprId)>,
     id: u64,
@@ -50,6 +50,7 @@ impl Program {
             code,
             vm,
             exprs: blocks,
+            #[cfg(test)]
             roots: exprs,
             outputs,
             id: NEXT_ID.fetch_add(1, Ordering::Relaxed),
