@@ -111,6 +111,30 @@ pub fn process_cpu_seconds() -> Option<f64> {
     (rc == 0).then_some(ts.tv_sec as f64 + ts.tv_nsec as f64 * 1e-9)
 }
 
+/// CPU nanoseconds the calling thread has used (`CLOCK_THREAD_CPUTIME_ID`), or 0 where
+/// unknown: time spent descheduled (more threads than cores) does not count.
+#[cfg(unix)]
+pub fn thread_cpu_nanos() -> u64 {
+    let mut ts = libc::timespec {
+        tv_sec: 0,
+        tv_nsec: 0,
+    };
+    // SAFETY: `ts` is a valid, writable timespec for the duration of the call.
+    let rc = unsafe { libc::clock_gettime(libc::CLOCK_THREAD_CPUTIME_ID, &mut ts) };
+    if rc != 0 {
+        return 0;
+    }
+    (ts.tv_sec as u64)
+        .saturating_mul(1_000_000_000)
+        .saturating_add(ts.tv_nsec as u64)
+}
+
+/// CPU nanoseconds of the calling thread: unknown on this platform.
+#[cfg(not(unix))]
+pub fn thread_cpu_nanos() -> u64 {
+    0
+}
+
 /// User + system CPU seconds of this process: unknown on this platform.
 #[cfg(not(unix))]
 pub fn process_cpu_seconds() -> Option<f64> {

@@ -419,6 +419,34 @@ fn killed_workers_lose_nothing() {
     );
 }
 
+/// `tpiece -q` prints nothing, also while it waits for a tile another worker holds; its
+/// tile loops (`--threads 2`) share the job like separate workers.
+#[test]
+fn quiet_workers_say_nothing() {
+    let d = tempfile::tempdir().unwrap();
+    let job = d.path().join("job");
+    plan(
+        &job,
+        &["--tiles", "6", "--lease", "0.5"],
+        &view_args(48, 36, &["-ab", "0"]),
+    );
+    let tasks = job.join("tasks");
+    std::fs::rename(
+        tasks.join("f00000-t00000.todo"),
+        tasks.join("f00000-t00000.claim.ghost.0000dead"),
+    )
+    .unwrap();
+    let out = cmd("tpiece")
+        .arg(&job)
+        .args(["--worker-id", "quiet", "--threads", "2", "-q"])
+        .output()
+        .unwrap();
+    assert!(out.status.success());
+    assert!(tasks.join("f00000-t00000.done").exists());
+    assert_eq!(String::from_utf8_lossy(&out.stderr), "");
+    assemble(&job);
+}
+
 #[test]
 fn stale_claims_are_reclaimed_after_the_lease() {
     let d = tempfile::tempdir().unwrap();
@@ -455,7 +483,10 @@ fn stale_claims_are_reclaimed_after_the_lease() {
     assert_eq!(st["aggregate"]["live"], 1, "{st}");
     assert_eq!(st["frames"][0]["claimed"], 1, "{st}");
     let t = Instant::now();
-    let mut live = worker(&job, "live", &[])
+    // Not quiet (`-q` silences the waiting lines too: quiet_workers_say_nothing).
+    let mut live = cmd("tpiece")
+        .arg(&job)
+        .args(["--worker-id", "live", "--threads", "1"])
         .stderr(Stdio::piped())
         .spawn()
         .unwrap();

@@ -30,8 +30,9 @@ pub struct AmbientStats {
     pub hits: AtomicU64,
     /// New values computed, by ambient level (index clamped to 7).
     pub new_values: [AtomicU64; 8],
-    /// Nanoseconds spent computing new level-0 values (including their child rays and the
-    /// deeper values made inside them, so nothing is counted twice).
+    /// CPU nanoseconds (of the threads that made them) spent computing new level-0 values,
+    /// including their child rays and the deeper values made inside them, so nothing is
+    /// counted twice.
     pub amb_nanos: AtomicU64,
     /// Hemisphere sample rays traced.
     pub sample_rays: AtomicU64,
@@ -58,6 +59,14 @@ impl AmbientStats {
 
 /// Identities of calculations ([`Ambient::owner`]).
 static NEXT_OWNER: AtomicU64 = AtomicU64::new(1);
+
+thread_local! {
+    /// New values this thread made and the CPU nanoseconds of its level-0 values
+    /// ([`thread_work`]).
+    static THREAD_WORK: std::cell::Cell<(u64, u64)> = const { std::cell::Cell::new((0, 0)) };
+    /// This thread's `-aa` and the calculation it applies to ([`Ambient::with_accuracy`]).
+    static THREAD_AA: std::cell::Cell<Option<(u64, f64)>> = const { std::cell::Cell::new(None) };
+}
 
 /// The ambient calculation with its shared cache.
 pub struct Ambient {
@@ -86,6 +95,20 @@ pub struct Ambient {
     pub(super) log_sum: std::sync::Mutex<(f64, u64)>,
     exclude: HashSet<String>,
     include: Option<HashSet<String>>,
+}
+
+/// New ambient values the calling thread has made so far (every calculation, all levels)
+/// and the CPU nanoseconds of its level-0 values: what a render on this thread alone made.
+pub fn thread_work() -> (u64, u64) {
+    THREAD_WORK.with(|c| c.get())
+}
+
+/// Count a new value made on this thread and the CPU nanoseconds it took (0 below level 0).
+pub(super) fn count_thread_work(nanos: u64) {
+    THREAD_WORK.with(|c| {
+        let (n, t) = c.get();
+        c.set((n + 1, t.saturating_add(nanos)));
+    });
 }
 
 /// What a lookup or computation returned.
@@ -155,10 +178,35 @@ impl Ambient {
         self.aa() > CACHE_MIN_AA
     }
 
-    /// `-aa` now.
+    /// `-aa` now: this thread's, while it renders under [`Ambient::with_accuracy`], else
+    /// the calculation's.
     #[inline]
     pub fn aa(&self) -> f64 {
-        f64::from_bits(self.aa_bits.load(Ordering::Relaxed))
+        match THREAD_AA.with(|c| c.get()) {
+            Some((owner, aa)) if owner == self.owner => aa,
+            _ => f64::from_bits(self.aa_bits.load(Ordering::Relaxed)),
+        }
+    }
+
+    /// Run `f` with `-aa` `aa` on this thread only (clamped as [`Ambient::set_accuracy`]
+    /// clamps it), for renders on several threads at once that each need their own
+    /// accuracy (the tile loops of one worker: tiles of frames with different `-aa` run
+    /// side by side). Everything `f` computes must run on the calling thread.
+    pub fn with_accuracy<T>(&self, aa: Option<f64>, f: impl FnOnce() -> T) -> T {
+        let Some(aa) = aa.filter(|a| a.is_finite() && self.cached()) else {
+            return f();
+        };
+        let aa = aa.clamp(CACHE_MIN_AA * 2.0, self.aa_max.max(CACHE_MIN_AA * 2.0));
+        let before = THREAD_AA.with(|c| c.replace(Some((self.owner, aa))));
+        // Restored on unwinding too.
+        struct Restore(Option<(u64, f64)>);
+        impl Drop for Restore {
+            fn drop(&mut self) {
+                THREAD_AA.with(|c| c.set(self.0));
+            }
+        }
+        let _restore = Restore(before);
+        f()
     }
 
     /// Set `-aa` for the next frame (an `-ax` schedule), between renders: within the

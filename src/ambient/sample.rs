@@ -16,7 +16,6 @@ use crate::render::trace::Tracer;
 use glam::DVec3;
 use std::f64::consts::PI;
 use std::sync::atomic::Ordering;
-use std::time::Instant;
 
 /// The hemisphere of a new value being sampled: its frame, its cells and what its sample
 /// rays carry.
@@ -229,8 +228,14 @@ impl Ambient {
         share: Share,
         rng: &mut Sampler,
     ) -> Option<CachedValue> {
-        let start = Instant::now();
         let lvl = ray.amb_level;
+        // CPU time of this thread, not wall time: with more threads than cores a value's
+        // wall time includes time spent descheduled.
+        let start = if lvl == 0 {
+            crate::runinfo::thread_cpu_nanos()
+        } else {
+            0
+        };
         let cached = self.cached();
         let (wt, m, nphi) = self.divisions(lvl, ray.weight, cached, tr.params.lw);
         let mut h = self.hemisphere(tr, ray, hit, n, (m, nphi));
@@ -254,11 +259,13 @@ impl Ambient {
         self.stats.new_values[lvl_idx].fetch_add(1, Ordering::Relaxed);
         // Deeper values are made inside a level-0 value's sampling: counting level 0 only
         // counts each nanosecond once.
-        if lvl == 0 {
-            self.stats
-                .amb_nanos
-                .fetch_add(start.elapsed().as_nanos() as u64, Ordering::Relaxed);
-        }
+        let nanos = if lvl == 0 {
+            crate::runinfo::thread_cpu_nanos().saturating_sub(start)
+        } else {
+            0
+        };
+        self.stats.amb_nanos.fetch_add(nanos, Ordering::Relaxed);
+        super::compute::count_thread_work(nanos);
         Some(v)
     }
 

@@ -186,17 +186,11 @@ fn tplan(a: TplanArgs) -> Result<i32> {
         m.primitives,
         m.lease_seconds
     );
-    // The default count assumes the cheapest pixels measured (plan::pixel_cost_floor): with
-    // indirect light a real scene's pixels often cost far more, and a few tiles per worker
-    // then balance poorly.
-    let per_worker = f0.tiles.len() as f64 / a.workers.max(1) as f64;
-    if a.tiles.is_none() && a.tile_size.is_none() && m.params.ab > 0 && per_worker < 20.0 {
+    if let Some(c) = m.frame_cost_estimate {
         eprintln!(
-            "tplan: note - {per_worker:.1} tiles per worker, planned for frames of at least \
-             {:.1} CPU-s (docs/batch.md, \"The tile plan\"); if a frame costs much more, \
-             --tiles {} (40 per worker) balances the workers better",
-            (f0.xres * f0.yres) as f64 * crate::job::plan::pixel_cost_floor(m.params.ab),
-            40 * a.workers.max(1)
+            "tplan: the default plan: {:.1} tiles per worker for a frame estimated at {c:.2} \
+             CPU-s by the cost probe (docs/batch.md, \"The tile plan\")",
+            f0.tiles.len() as f64 / a.workers.max(1) as f64
         );
     }
     Ok(0)

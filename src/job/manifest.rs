@@ -69,6 +69,10 @@ pub struct Manifest {
     pub lease_seconds: f64,
     /// Workers the plan was made for.
     pub workers_expected: usize,
+    /// The default plan's estimate of the first frame's CPU seconds ([`super::probe`]), when
+    /// it was planned that way (informational).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub frame_cost_estimate: Option<f64>,
     /// The frames.
     pub frames: Vec<FramePlan>,
 }
@@ -91,6 +95,8 @@ struct ManifestFile {
     fingerprint: String,
     lease_seconds: f64,
     workers_expected: usize,
+    #[serde(default)]
+    frame_cost_estimate: Option<f64>,
     frames: Vec<FramePlan>,
 }
 
@@ -123,6 +129,7 @@ impl TryFrom<ManifestFile> for Manifest {
             fingerprint: f.fingerprint,
             lease_seconds: f.lease_seconds,
             workers_expected: f.workers_expected,
+            frame_cost_estimate: f.frame_cost_estimate,
             frames: f.frames,
         })
     }
@@ -375,6 +382,9 @@ pub fn create_job(dir: &Path, req: &PlanRequest) -> Result<Manifest> {
     }
     let workers = req.workers.unwrap_or(4).max(1);
     let mut frames = Vec::new();
+    // The default plan: every frame's tiles from the first frame's measured cost per pixel.
+    let mut per_pixel: Option<f64> = None;
+    let mut frame_cost_estimate = None;
     for (i, v) in views.into_iter().enumerate() {
         let vfr = v.frame().map_err(|e| anyhow!("bad view: {e}"))?;
         let mut pa = opts.picture.pa;
@@ -390,7 +400,23 @@ pub fn create_job(dir: &Path, req: &PlanRequest) -> Result<Manifest> {
             (Some((tw, th)), _) => plan_fixed(x, y, tw, th),
             (None, Some(n)) => plan_tiles(x, y, n, grid),
             (None, None) => {
-                let n = default_tiles(x, y, workers, pixel_cost_floor(opts.params.ab));
+                let floor = pixel_cost_floor(opts.params.ab);
+                let cost = match per_pixel {
+                    Some(c) => c,
+                    None => {
+                        let fs = opts
+                            .picture
+                            .frame_setup(&opts.params, &vfr, (x, y), i as u32);
+                        let p =
+                            super::probe::probe(&scene, &opts.params, &fs, super::probe::BUDGET)
+                                .context("the cost probe of the default plan failed")?;
+                        let c = (p.frame_seconds / (x * y) as f64).max(floor);
+                        frame_cost_estimate = Some(c * (x * y) as f64);
+                        per_pixel = Some(c);
+                        c
+                    }
+                };
+                let n = default_tiles(x, y, workers, cost);
                 plan_tiles(x, y, n, grid)
             }
         };
@@ -434,6 +460,7 @@ pub fn create_job(dir: &Path, req: &PlanRequest) -> Result<Manifest> {
         fingerprint: hex32(&fingerprint),
         lease_seconds: lease,
         workers_expected: workers,
+        frame_cost_estimate,
         frames,
     };
     m.validate()?;
@@ -554,6 +581,7 @@ mod tests {
             fingerprint: "00".repeat(32),
             lease_seconds: 180.0,
             workers_expected: 2,
+            frame_cost_estimate: None,
             frames: Vec::new(),
         };
         let now = serde_json::to_value(&m).unwrap();

@@ -27,11 +27,13 @@
 pub mod assemble;
 pub mod budget;
 pub mod cli;
+pub mod commit;
 pub mod heartbeat;
 pub mod manifest;
 pub mod merge;
 pub mod path;
 pub mod plan;
+pub mod probe;
 pub mod share;
 pub mod sheet;
 pub mod status;

@@ -109,6 +109,10 @@ pub struct JobStatus {
     pub lease_seconds: f64,
     /// Per worker.
     pub workers: Vec<WorkerRecord>,
+    /// Per worker (same order): the state `tstat` shows: the worker's own (`finished`,
+    /// `failed`) or, for a worker that says it is `running` or `idle`, that state when its
+    /// heartbeat is fresh, `suspect` when it missed three beats, `stale` after the lease.
+    pub shown_state: Vec<String>,
     /// Sums.
     pub aggregate: Aggregate,
     /// With a baseline job: its wall time, and this job's speed-up and efficiency.
@@ -199,17 +203,21 @@ pub fn status(job: &JobDir) -> Result<JobStatus> {
             continue;
         };
         a.workers += 1;
+        let mut shown = r.state.clone();
         if r.state == "running" || r.state == "idle" {
             let silent = now - r.updated_unix;
             if silent >= m.lease_seconds {
                 a.stale += 1;
+                shown = "stale".into();
             } else if silent > 3.0 * super::heartbeat::beat_interval(m.lease_seconds).as_secs_f64()
             {
                 a.suspect += 1;
+                shown = "suspect".into();
             } else {
                 a.live += 1;
             }
         }
+        st.shown_state.push(shown);
         a.tiles_done += r.tiles_done;
         a.reclaimed += r.reclaimed;
         a.t_spec += r.t_spec;
@@ -315,7 +323,7 @@ pub fn render_text(st: &JobStatus) -> String {
             f.aa.map(|aa| format!(", -aa {aa:.4}")).unwrap_or_default(),
             if f.done > 0 {
                 format!(
-                    ": CPU {:.2} s, {} new ambient values in {:.2} s",
+                    ": {:.2} CPU-s, {} new ambient values in {:.2} CPU-s",
                     f.cpu_seconds, f.new_values, f.ambient_seconds
                 )
             } else {
@@ -336,7 +344,7 @@ pub fn render_text(st: &JobStatus) -> String {
     let a = &st.aggregate;
     let _ = writeln!(
         s,
-        "workers: {} seen, {} live, {} suspect, {} stale; {} tiles re-claimed; wall {:.2} s",
+        "workers: {} seen, {} live, {} suspect, {} stale; {} tiles re-claimed; {:.2} wall-s",
         a.workers, a.live, a.suspect, a.stale, a.reclaimed, a.wall_seconds
     );
     if a.suspect > 0 {
@@ -349,15 +357,19 @@ pub fn render_text(st: &JobStatus) -> String {
     }
     let _ = writeln!(
         s,
+        "  times per render thread: T_spec, T_idle, T_sync in wall-s, T_amb in CPU-s"
+    );
+    let _ = writeln!(
+        s,
         "  {:<28} {:>8} {:>5} {:>8} {:>8} {:>8} {:>8} {:>7} {:>7} {:>7}",
         "owner", "state", "tiles", "T_spec", "T_amb", "T_idle", "T_sync", "new", "in", "out"
     );
-    for w in &st.workers {
+    for (i, w) in st.workers.iter().enumerate() {
         let _ = writeln!(
             s,
             "  {:<28} {:>8} {:>5} {:>8.2} {:>8.2} {:>8.2} {:>8.3} {:>7} {:>7} {:>7}",
             w.owner,
-            w.state,
+            st.shown_state.get(i).unwrap_or(&w.state),
             w.tiles_done,
             w.t_spec,
             w.t_amb,
@@ -389,7 +401,7 @@ pub fn render_text(st: &JobStatus) -> String {
             "unreported", "", a.unreported_tiles
         );
     }
-    let _ = writeln!(s, "  CPU {:.2} s, {} rays", a.cpu_seconds, a.rays);
+    let _ = writeln!(s, "  {:.2} CPU-s, {} rays", a.cpu_seconds, a.rays);
     if a.rejected > 0 {
         let _ = writeln!(
             s,

@@ -143,8 +143,36 @@ impl ResultDir {
     /// Write the result `name` (`<task>.tile`) atomically: the temporary
     /// `.<name>.<tag>.tmp` (`tag`: the writer's owner name, unique among live processes) is
     /// written, fsynced, closed and renamed over `name`, then the directory is fsynced so that
-    /// the name is durable before the task is marked done.
+    /// the name is durable before the task is marked done ([`ResultDir::stage`] and
+    /// [`ResultDir::commit`] for one result).
     pub fn write(&self, name: &str, tag: &str, meta: &TileMeta, pixels: &[[f32; 3]]) -> Result<()> {
+        let staged = self.stage(name, tag, meta, pixels)?;
+        self.commit(vec![staged])
+            .pop()
+            .unwrap_or_else(|| Err(anyhow!("tile result {name}: nothing committed")))
+    }
+}
+
+/// A tile result written to its temporary but not yet durable or visible
+/// ([`ResultDir::stage`]).
+#[derive(Debug)]
+pub struct Staged {
+    tmp: PathBuf,
+    path: PathBuf,
+    file: File,
+}
+
+impl ResultDir {
+    /// Write the result `name` to its temporary `.<name>.<tag>.tmp` without syncing it: the
+    /// first step of a group commit ([`ResultDir::commit`]), which makes a batch of results
+    /// durable and visible with one directory sync.
+    pub fn stage(
+        &self,
+        name: &str,
+        tag: &str,
+        meta: &TileMeta,
+        pixels: &[[f32; 3]],
+    ) -> Result<Staged> {
         let path = self.dir.join(name);
         let err = |e: std::io::Error| anyhow!("cannot write tile result {}: {e}", path.display());
         let bytes = encode(meta, pixels)?;
@@ -166,18 +194,42 @@ impl ResultDir {
             }
             let mut f = o.open(&tmp)?;
             f.write_all(&bytes)?;
-            f.sync_all()?;
-            drop(f);
-            std::fs::rename(&tmp, &path)
+            Ok(f)
         })();
-        if let Err(e) = written {
-            let _ = std::fs::remove_file(&tmp);
-            return Err(err(e));
+        match written {
+            Ok(file) => Ok(Staged { tmp, path, file }),
+            Err(e) => {
+                let _ = std::fs::remove_file(&tmp);
+                Err(err(e))
+            }
         }
-        if let Some(h) = &self.handle {
-            let _ = h.sync_all();
+    }
+
+    /// Make staged results durable and visible: each file's data is synced and the file
+    /// closed, then renamed to its name, then the directory is synced once for all of
+    /// them. Returns, per staged result in order, whether it is now in place (or the
+    /// error; its temporary is removed).
+    pub fn commit(&self, staged: Vec<Staged>) -> Vec<Result<()>> {
+        let out: Vec<Result<()>> = staged
+            .into_iter()
+            .map(|st| {
+                let Staged { tmp, path, file } = st;
+                let r = file.sync_all().and_then(|()| {
+                    drop(file);
+                    std::fs::rename(&tmp, &path)
+                });
+                r.map_err(|e| {
+                    let _ = std::fs::remove_file(&tmp);
+                    anyhow!("cannot write tile result {}: {e}", path.display())
+                })
+            })
+            .collect();
+        if out.iter().any(|r| r.is_ok()) {
+            if let Some(h) = &self.handle {
+                let _ = h.sync_all();
+            }
         }
-        Ok(())
+        out
     }
 }
 

@@ -13,6 +13,7 @@
 //!    renamed to `done`. If the result cannot be written (disk full) the tile is released
 //!    back to `todo` and the worker exits with the error.
 
+use super::commit::{commit_loop, CommitTarget, Finished};
 use super::heartbeat::{
     add_time, beat_interval, read_record, Counters, StaleWatcher, WorkerRecord,
 };
@@ -29,7 +30,7 @@ use crate::scene::ReadOptions;
 use crate::session::store::{AmbientStore, FlushPolicy};
 use crate::session::{Region, SceneSource, Session};
 use anyhow::{anyhow, bail, Context, Result};
-use std::collections::HashMap;
+use std::collections::{HashMap, HashSet};
 use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::{Arc, Mutex};
@@ -43,7 +44,8 @@ pub struct WorkerOptions {
     pub worker_id: Option<String>,
     /// `--amb-flush N|auto`.
     pub amb_flush: FlushPolicy,
-    /// `--threads N` (default: `SLURM_CPUS_PER_TASK`, else every core).
+    /// `--threads N`: tile loops, each rendering its own tile on one thread, all sharing
+    /// one scene and one ambient cache (default: `SLURM_CPUS_PER_TASK`, else every core).
     pub threads: Option<usize>,
     /// Wait for tiles other workers hold (and re-claim them if they die) instead of
     /// exiting when nothing is claimable (`--no-wait` turns it off).
@@ -88,7 +90,7 @@ struct Beat {
 }
 
 impl Beat {
-    fn new(job: &JobDir, worker_id: &str, owner: &str, session: &Session) -> Beat {
+    fn new(job: &JobDir, worker_id: &str, owner: &str, session: &Session, loops: usize) -> Beat {
         Beat {
             job: job.clone(),
             record: Mutex::new(WorkerRecord {
@@ -98,13 +100,13 @@ impl Beat {
                 pid: std::process::id(),
                 state: "running".into(),
                 started_unix: super::unix_now(),
-                threads: session.threads,
+                threads: loops,
                 ..WorkerRecord::default()
             }),
             counters: Arc::new(Counters::default()),
             ambient: session.ambient.clone(),
             store: session.store().cloned(),
-            threads: session.threads,
+            threads: loops,
             start_cpu: process_cpu_seconds().unwrap_or(0.0),
         }
     }
@@ -128,8 +130,10 @@ impl Beat {
         r.beat += 1;
         r.updated_unix = super::unix_now();
         r.tiles_done = c.tiles_done.load(Ordering::Relaxed);
-        r.t_render = secs(&c.render_ns);
-        r.t_idle = secs(&c.idle_ns);
+        // Times are summed over the tile loops: per loop, as for a one-thread worker.
+        let loops = self.threads.max(1) as f64;
+        r.t_render = secs(&c.render_ns) / loops;
+        r.t_idle = secs(&c.idle_ns) / loops;
         if let Some(s) = &self.store {
             let sc = s.counters();
             r.t_sync = secs(&sc.sync_ns);
@@ -142,7 +146,8 @@ impl Beat {
         if let Some(a) = &self.ambient {
             r.new_values = a.stats.made();
             r.rejected = self.store.as_ref().map_or(0, |s| s.rejected()) + a.cache.refused();
-            r.t_amb = secs(&a.stats.amb_nanos) / self.threads as f64;
+            // CPU of the threads that made the values: at most the process's CPU.
+            r.t_amb = secs(&a.stats.amb_nanos) / loops;
         }
         r.t_spec = (r.t_render - r.t_amb).max(0.0);
         r.cpu_seconds = process_cpu_seconds()
@@ -212,7 +217,8 @@ fn start_session(job: &JobDir, m: &Manifest, owner: &str, wo: &WorkerOptions) ->
     };
     let source = SceneSource::read(&[scene_path.display().to_string()], &ro, &m.params)?;
     // The fingerprint covers the files the scene reads (JOB/files/), known once it is built.
-    let mut session = Session::start(m.params.clone(), source, wo.threads)?;
+    // The tile loops render on threads of their own: the session's pool is not used.
+    let mut session = Session::start(m.params.clone(), source, Some(1))?;
     if session.fingerprint != m.fingerprint_bytes() {
         bail!(
             "{}: the scene or the manifest's options changed since the job was planned \
@@ -233,39 +239,100 @@ fn start_session(job: &JobDir, m: &Manifest, owner: &str, wo: &WorkerOptions) ->
 const MIN_POLL: f64 = 0.02;
 
 /// Run a worker on a job until every tile is done (or, without `wait`, until nothing is
-/// claimable).
+/// claimable): `--threads` tile loops on threads of their own, each claiming and rendering
+/// its own tiles on one thread, sharing the scene, the ambient cache and the store.
 pub fn run_worker(job: &JobDir, wo: &WorkerOptions) -> Result<WorkerSummary> {
     let m = Manifest::load(job)?;
     let worker_id = wo.worker_id.clone().unwrap_or_else(default_worker_id);
     check_worker_id(&worker_id)?;
     let owner = format!("{worker_id}.{:08x}", super::merge::rand_u32());
+    let (loops, cut) = crate::runinfo::thread_count(wo.threads);
+    if let Some(w) = cut {
+        eprintln!("tpiece: warning: {w}");
+    }
     let session = start_session(job, &m, &owner, wo)?;
-    let beat = Arc::new(Beat::new(job, &worker_id, &owner, &session));
+    let beat = Arc::new(Beat::new(job, &worker_id, &owner, &session, loops));
     beat.write(None, None);
     let beater = beat.spawn(beat_interval(m.lease_seconds));
-    let mut worker = Worker {
-        job,
-        m: &m,
-        tasks_dir: job.tasks(),
-        owner: &owner,
-        worker_id: &worker_id,
-        session: &session,
-        wo,
-        beat: &beat,
-        all: m.tasks(),
-        cursor: 0,
-        first_scan: true,
-        idle_since: None,
-        watcher: StaleWatcher::new(m.lease_seconds),
-        summary: WorkerSummary {
+    let all = m.tasks();
+    let stop = AtomicBool::new(false);
+    let taken = Mutex::new(HashSet::new());
+    let results = ResultDir::open(&job.tiles())?;
+    let tasks_dir = job.tasks();
+    let outcomes: Vec<Result<()>> = std::thread::scope(|scope| {
+        let (tx, rx) = std::sync::mpsc::channel();
+        let target = CommitTarget {
+            tasks_dir: &tasks_dir,
+            owner: &owner,
+            counters: &beat.counters,
+            verbose: wo.verbose,
+            stop: &stop,
+        };
+        let committer = scope.spawn(move || commit_loop(rx, results, target));
+        let handles: Vec<_> = (0..loops)
+            .map(|index| {
+                let (m, owner, worker_id, session, beat, all, stop, taken) =
+                    (&m, &owner, &worker_id, &session, &beat, &all, &stop, &taken);
+                let commit = tx.clone();
+                scope.spawn(move || -> Result<()> {
+                    let here = Session::here_pool()?;
+                    let mut worker = Worker {
+                        job,
+                        m,
+                        tasks_dir: job.tasks(),
+                        owner,
+                        worker_id,
+                        session,
+                        wo,
+                        beat,
+                        here,
+                        index,
+                        stop,
+                        taken,
+                        all,
+                        cursor: 0,
+                        first_scan: true,
+                        idle_since: None,
+                        watcher: StaleWatcher::new(m.lease_seconds),
+                        done_count: 0,
+                        commit,
+                        budget_aa: Default::default(),
+                    };
+                    let r = worker.work();
+                    if r.is_err() {
+                        // The other loops stop after their tile.
+                        stop.store(true, Ordering::Relaxed);
+                    }
+                    r
+                })
+            })
+            .collect();
+        drop(tx);
+        let mut out: Vec<Result<()>> = handles
+            .into_iter()
+            .map(|h| {
+                h.join()
+                    .unwrap_or_else(|_| Err(anyhow!("a tile loop of {owner} panicked")))
+            })
+            .collect();
+        // The committer ends when the loops (its senders) have ended; its error first: a
+        // loop that stopped on it has none of its own.
+        let committed = committer
+            .join()
+            .unwrap_or_else(|_| Err(anyhow!("the tile committer of {owner} panicked")));
+        out.insert(0, committed);
+        out
+    });
+    let result = outcomes
+        .into_iter()
+        .find(|r| r.is_err())
+        .unwrap_or(Ok(()))
+        .and_then(|()| session.finish())
+        .map(|()| WorkerSummary {
             owner: owner.clone(),
-            ..WorkerSummary::default()
-        },
-        done_count: 0,
-        results: ResultDir::open(&job.tiles())?,
-        budget_aa: Default::default(),
-    };
-    let result = worker.work().and_then(|s| session.finish().map(|()| s));
+            tiles: beat.counters.tiles_done.load(Ordering::Relaxed),
+            reclaimed: beat.counters.reclaimed.load(Ordering::Relaxed),
+        });
     beater.stop();
     match &result {
         Ok(_) => beat.write(Some("finished"), None),
@@ -295,7 +362,7 @@ enum Next {
     Wait,
 }
 
-/// One worker's state while it takes tiles.
+/// One tile loop's state while it takes tiles.
 struct Worker<'a> {
     job: &'a JobDir,
     m: &'a Manifest,
@@ -305,25 +372,33 @@ struct Worker<'a> {
     session: &'a Session,
     wo: &'a WorkerOptions,
     beat: &'a Beat,
+    /// This loop's one-thread pool (the loop's own thread).
+    here: rayon::ThreadPool,
+    /// This loop's number among the worker's loops (loop 0 speaks for the worker).
+    index: usize,
+    /// Set when a loop failed: the others stop after their tile.
+    stop: &'a AtomicBool,
+    /// Tasks the worker's loops have claimed (they share one owner name, so a loop must
+    /// not take a sibling's claim for its own: see [`Worker::take`]).
+    taken: &'a Mutex<HashSet<String>>,
     /// Every task in plan order.
-    all: Vec<(String, u32, usize)>,
+    all: &'a [(String, u32, usize)],
     /// The next task to try to claim (todo entries never come back unless released, so the
     /// cursor only moves forward until then).
     cursor: usize,
     first_scan: bool,
     idle_since: Option<Instant>,
     watcher: StaleWatcher,
-    summary: WorkerSummary,
     /// Tasks done at the last scan of `tasks/`.
     done_count: usize,
-    /// `tiles/`, kept open for the results.
-    results: ResultDir,
+    /// The worker's committer of finished tiles ([`super::commit`]).
+    commit: std::sync::mpsc::Sender<Finished>,
     /// `-axt`: the frames' accuracies read or decided so far ([`super::budget`]).
     budget_aa: std::cell::RefCell<HashMap<u32, f64>>,
 }
 
 impl Worker<'_> {
-    fn work(&mut self) -> Result<WorkerSummary> {
+    fn work(&mut self) -> Result<()> {
         // While waiting, look again after 20 ms, then 1.5× longer each time nothing changed
         // (up to a tenth of the lease, at most 0.25 s), and after 20 ms again whenever another
         // tile got done: a worker notices the last tile's end within a fraction of the time
@@ -332,6 +407,9 @@ impl Worker<'_> {
         let mut poll = MIN_POLL;
         let mut done_seen = 0;
         loop {
+            if self.stop.load(Ordering::Relaxed) {
+                break;
+            }
             let claim = match self.next()? {
                 Next::Tile(c) => c,
                 Next::Done => break,
@@ -341,7 +419,9 @@ impl Worker<'_> {
                         break;
                     }
                     if self.idle_since.is_none() {
-                        self.say_waiting();
+                        if self.wo.verbose && self.index == 0 {
+                            self.say_waiting();
+                        }
                         poll = MIN_POLL;
                     } else if self.done_count > done_seen {
                         poll = MIN_POLL;
@@ -361,7 +441,7 @@ impl Worker<'_> {
             self.do_tile(&claim)?;
         }
         self.end_idle();
-        Ok(std::mem::take(&mut self.summary))
+        Ok(())
     }
 
     /// Say (once per wait) which tiles this worker waits for and when it may take them over.
@@ -387,6 +467,24 @@ impl Worker<'_> {
         );
     }
 
+    /// Claim `name` with `rename` (a claim or a re-claim) unless a sibling loop already
+    /// did. The loops share the owner name, and a rename that fails with `ENOENT` counts as
+    /// won when its target exists (a retransmitted NFS rename, [`task::claim`]): a sibling's
+    /// claim would look like this loop's own. So claims go one at a time through the
+    /// worker's list of tasks its loops have taken, and a task on it is never tried again
+    /// (a tile this worker released is not claimed by it again: it exits with the error).
+    fn take(&self, name: &str, rename: impl FnOnce() -> Result<bool>) -> Result<bool> {
+        let mut taken = self.taken.lock().unwrap_or_else(|e| e.into_inner());
+        if taken.contains(name) {
+            return Ok(false);
+        }
+        let won = rename()?;
+        if won {
+            taken.insert(name.to_string());
+        }
+        Ok(won)
+    }
+
     /// Count the idle time that ends now; whether the worker was idle.
     fn end_idle(&mut self) -> bool {
         match self.idle_since.take() {
@@ -404,9 +502,11 @@ impl Worker<'_> {
         while self.cursor < self.all.len() {
             let (name, f, t) = &self.all[self.cursor];
             self.cursor += 1;
-            if task::claim(&self.tasks_dir, name, self.owner)
-                .with_context(|| format!("cannot claim {name} in {}", self.tasks_dir.display()))?
-            {
+            let claimed = self.take(name, || {
+                task::claim(&self.tasks_dir, name, self.owner)
+                    .with_context(|| format!("cannot claim {name} in {}", self.tasks_dir.display()))
+            })?;
+            if claimed {
                 return Ok(Next::Tile(Claim {
                     name: name.clone(),
                     frame: *f,
@@ -474,7 +574,7 @@ impl Worker<'_> {
     /// Re-claim a tile whose owner is stale (or an earlier incarnation of this worker id,
     /// at the first scan).
     fn reclaim_stale(&mut self, states: &HashMap<String, TaskState>) -> Result<Option<Claim>> {
-        for (name, f, t) in &self.all {
+        for (name, f, t) in self.all {
             let Some(TaskState::Claimed(o)) = states.get(name) else {
                 continue;
             };
@@ -486,8 +586,11 @@ impl Worker<'_> {
                 || self
                     .watcher
                     .is_stale(o, read_record(&self.job.worker_file(o)).as_ref());
-            if stale && task::reclaim(&self.tasks_dir, name, o, self.owner)? {
-                self.summary.reclaimed += 1;
+            if stale
+                && self.take(name, || {
+                    Ok(task::reclaim(&self.tasks_dir, name, o, self.owner)?)
+                })?
+            {
                 self.beat.counters.reclaimed.fetch_add(1, Ordering::Relaxed);
                 if self.wo.verbose {
                     eprintln!("tpiece {}: re-claimed {name} from {o}", self.owner);
@@ -515,7 +618,6 @@ impl Worker<'_> {
             .get(c.tile)
             .ok_or_else(|| anyhow!("task {name}: no tile {}", c.tile))?;
         let out = self.job.tile_file(name);
-        let file_name = format!("{name}.tile");
         // A re-claimed tile whose result was written before its owner died needs no render.
         if c.reclaimed && self.result_exists(&out, &rect) {
             task::complete(&self.tasks_dir, name, self.owner)?;
@@ -531,19 +633,14 @@ impl Worker<'_> {
                 bail!("ambient log: {e} (tile {name} released)");
             }
         }
-        if let Err(e) = self.results.write(&file_name, self.owner, &meta, &pixels) {
-            let _ = task::release(&self.tasks_dir, name, self.owner);
-            return Err(e.context(format!("tile {name} released for another worker")));
-        }
-        let completed = task::complete(&self.tasks_dir, name, self.owner)?;
-        self.beat
-            .counters
-            .tiles_done
-            .fetch_add(1, Ordering::Relaxed);
-        self.summary.tiles += 1;
-        if self.wo.verbose {
-            self.report(&meta, completed);
-        }
+        // The committer writes it and marks it done; this loop renders on.
+        self.commit
+            .send(Finished {
+                name: name.clone(),
+                meta,
+                pixels,
+            })
+            .map_err(|_| anyhow!("tile {name}: the worker's committer has stopped"))?;
         Ok(())
     }
 
@@ -612,8 +709,8 @@ impl Worker<'_> {
             }
             fs.aa = Some(aa);
         }
-        let (made0, nanos0) = self.session.ambient_work();
-        let cpu0 = process_cpu_seconds().unwrap_or(0.0);
+        let (made0, nanos0) = crate::ambient::compute::thread_work();
+        let cpu0 = crate::runinfo::thread_cpu_nanos();
         let t0 = Instant::now();
         let progress = RenderProgress::default();
         let region = Region {
@@ -622,13 +719,15 @@ impl Worker<'_> {
             x1: rect.x0 + rect.w,
             y1: rect.y0 + rect.h,
         };
-        let pixels = self.session.render(&fs, region, &progress)?;
+        let pixels = self
+            .session
+            .render_here(&self.here, &fs, region, &progress)?;
         let wall = t0.elapsed();
         let counters = &self.beat.counters;
         add_time(&counters.render_ns, wall);
         let rays = progress.rays.load(Ordering::Relaxed);
         counters.rays.fetch_add(rays, Ordering::Relaxed);
-        let (made1, nanos1) = self.session.ambient_work();
+        let (made1, nanos1) = crate::ambient::compute::thread_work();
         let meta = TileMeta {
             task: c.name.clone(),
             frame: c.frame,
@@ -640,35 +739,11 @@ impl Worker<'_> {
             fingerprint: self.m.fingerprint.clone(),
             owner: self.owner.to_string(),
             wall_seconds: wall.as_secs_f64(),
-            cpu_seconds: (process_cpu_seconds().unwrap_or(0.0) - cpu0).max(0.0),
+            cpu_seconds: crate::runinfo::thread_cpu_nanos().saturating_sub(cpu0) as f64 * 1e-9,
             rays,
             new_values: made1 - made0,
             ambient_seconds: (nanos1 - nanos0) as f64 * 1e-9,
         };
         Ok((meta, pixels))
-    }
-
-    /// One line about a finished tile.
-    fn report(&self, meta: &TileMeta, completed: bool) {
-        eprintln!(
-            "tpiece {}: {} {}x{} at {},{} in {:.2}s{}{}",
-            self.owner,
-            meta.task,
-            meta.w,
-            meta.h,
-            meta.x0,
-            meta.y0,
-            meta.wall_seconds,
-            if meta.new_values > 0 {
-                format!(", {} new ambient values", meta.new_values)
-            } else {
-                String::new()
-            },
-            if completed {
-                ""
-            } else {
-                " (re-claimed meanwhile by another worker; result kept)"
-            }
-        );
     }
 }

@@ -231,6 +231,39 @@ impl Session {
         Ok(pixels)
     }
 
+    /// A pool of one thread, the calling one, for [`Session::render_here`]: each of a
+    /// worker's tile loops makes one on its own thread.
+    pub fn here_pool() -> Result<rayon::ThreadPool> {
+        rayon::ThreadPoolBuilder::new()
+            .num_threads(1)
+            .use_current_thread()
+            .build()
+            .context("cannot start a render thread")
+    }
+
+    /// Render a region of a frame on the calling thread alone, through `here` (a pool made
+    /// by [`Session::here_pool`] on this thread), at the frame's `-aa` for this thread only:
+    /// several threads may render regions of one session at once, each at its own accuracy
+    /// (a worker's tile loops, which share the scene and the ambient cache).
+    pub fn render_here(
+        &self,
+        here: &rayon::ThreadPool,
+        fs: &FrameSetup,
+        r: Region,
+        progress: &RenderProgress,
+    ) -> Result<Vec<[f32; 3]>> {
+        let tracer = self.tracer();
+        let run = || render_region(&tracer, fs, r.x0, r.y0, r.x1, r.y1, progress);
+        let pixels = here.install(|| match &self.ambient {
+            Some(a) => a.with_accuracy(fs.aa, run),
+            None => run(),
+        });
+        if let Some(e) = self.scene.fatal_error() {
+            anyhow::bail!("{e}");
+        }
+        Ok(pixels)
+    }
+
     /// New ambient values made so far and the nanoseconds spent making them.
     pub fn ambient_work(&self) -> (u64, u64) {
         self.ambient
