@@ -211,7 +211,11 @@ impl Ambient {
                         continue;
                     }
                     let t = tr.shadow((p, smp.dir, smp.dist), si, am, rng);
-                    sum += smp.radiance * t * (c * smp.omega);
+                    if t != Color::ZERO {
+                        // The glow's patterns toward p (the shadow ray brings none).
+                        let emitted = smp.radiance * tr.sample_pattern(p, smp);
+                        sum += emitted * t * (c * smp.omega);
+                    }
                 }
             }
         }

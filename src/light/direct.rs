@@ -75,6 +75,12 @@ fn direct_with(
         };
         lights.sample(tr.scene, (si, p), how, rng, samples);
     }
+    // The potentials carry the light each sample's source sends toward p (its patterns: an
+    // ies2rad luminaire's distribution), so the tests are ordered, stopped and the untested
+    // samples estimated by it; the shadow rays give the transmission only.
+    for s in samples.iter_mut() {
+        s.radiance *= tr.sample_pattern(p, s);
+    }
     // Potentials.
     let cands = &mut scratch.cands;
     cands.clear();

@@ -4,16 +4,18 @@
 //! its chains and blends them. Shadow rays crossing a surface walk the same chain for the
 //! transmission they keep.
 
-use super::ray::{Hit, Ray};
+use super::ray::{Hit, HitRef, Ray, NO_INST};
 use super::sampler::Sampler;
 use super::shading::ShadingPoint;
 use super::trace::Tracer;
 use crate::color::{sanitize, Color};
-use crate::material::MatId;
+use crate::light::SourceSample;
+use crate::material::{reflect, MatId};
 use crate::modifier::{MixCoefficient, ModRef, ModifierKind};
 use crate::scene::build::DistantObject;
 use crate::scene::transform::Transform;
 use crate::{FHUGE, FTINY};
+use glam::DVec3;
 
 /// Where a walk over patterns and textures stopped.
 enum End<'s> {
@@ -73,12 +75,10 @@ impl Tracer<'_> {
     /// ray's hit on a source like any hit, so `brightfunc` skies and `brightdata`
     /// luminaires shape the emitted light). One for sources without patterns.
     pub fn emission_pattern(&self, ray: &Ray, hit: &Hit, chain: ModRef) -> Color {
-        let own = |m: MatId| self.scene.materials[m].chain;
-        match chain {
-            ModRef::Material(m) if own(m) == ModRef::Void => return Color::ONE,
-            ModRef::Void => return Color::ONE,
-            _ => {}
+        if !self.patterned(chain) {
+            return Color::ONE;
         }
+        let own = |m: MatId| self.scene.materials[m].chain;
         let mut sp = ShadingPoint::new(ray, hit, self.scene.origin);
         if let End::Material(m) = self.walk(&mut sp, chain) {
             let c = own(m);
@@ -87,6 +87,71 @@ impl Tracer<'_> {
             }
         }
         sp.pcol
+    }
+
+    /// Whether the chain from `chain` holds patterns or textures (its own or its material's).
+    fn patterned(&self, chain: ModRef) -> bool {
+        match chain {
+            ModRef::Void => false,
+            ModRef::Material(m) => self.scene.materials[m].chain != ModRef::Void,
+            ModRef::Modifier(_) => true,
+        }
+    }
+
+    /// The pattern colour of sample `s`'s source toward the shading point `p` (relative
+    /// frame): [`Tracer::emission_pattern`] where a shadow ray along the sample reaches the
+    /// source (from the mirror, for a virtual source). It belongs in the sample's unoccluded
+    /// potential, as Radiance's `srcvalue` ray puts it there, so that the adaptive shadow
+    /// test (`-dt`) orders, stops and estimates by the light a patterned source (an ies2rad
+    /// `brightdata` luminaire) really sends toward `p`; the shadow ray then brings only the
+    /// transmission. One for sources without patterns.
+    pub fn sample_pattern(&self, p: DVec3, s: &SourceSample) -> Color {
+        let src = &self.lights.sources[s.src];
+        let chain = match (src.obj, src.distant) {
+            (Some(o), _) => self.scene.hit_info(HitRef::top(o)).chain,
+            (None, Some(d)) => self.scene.distant[d].chain,
+            (None, None) => return Color::ONE,
+        };
+        if !self.patterned(chain) {
+            return Color::ONE;
+        }
+        // The leg of the path that reaches the source.
+        let (org, dir, reach) = match &src.relay {
+            Some(r) => {
+                let (h, cos) = (r.normal.dot(p) - r.offset, -s.dir.dot(r.normal));
+                let tm = if h > 0.0 && cos > 0.0 { h / cos } else { 0.0 };
+                (p + s.dir * tm, reflect(s.dir, r.normal), s.dist - tm)
+            }
+            None => (p, s.dir, s.dist),
+        };
+        let ray = Ray::shadow(org, dir);
+        match (src.obj, src.distant) {
+            (Some(o), _) => {
+                let limit = if reach.is_finite() {
+                    reach * (1.0 + 1e-6) + 16.0 * self.scene.eps
+                } else {
+                    FHUGE
+                };
+                let surface = &self.scene.objects[o].surface;
+                let t = surface.intersect(org, dir, limit).unwrap_or(reach);
+                let r = HitRef::top(o);
+                let (point, normal, flat) = self.scene.hit_geom(r, org, dir, t);
+                let hit = Hit {
+                    obj: o,
+                    inst: NO_INST,
+                    t,
+                    point,
+                    normal,
+                    back: normal.dot(dir) > 0.0,
+                    flat,
+                    material: self.scene.ref_material(r),
+                    antimatter: ray.antimatter,
+                };
+                self.emission_pattern(&ray, &hit, chain)
+            }
+            (None, Some(d)) => self.distant_pattern(&ray, &self.scene.distant[d]),
+            (None, None) => Color::ONE,
+        }
     }
 
     /// [`Tracer::emission_pattern`] of distant source `d` seen along `ray`'s direction: the

@@ -555,7 +555,8 @@ impl<'a> Tracer<'a> {
     }
 
     /// Transmission of a shadow ray from `org` in direction `dir` toward source `si` at
-    /// distance `dist` (infinite for distant sources).
+    /// distance `dist` (infinite for distant sources). The source's patterns are not in it:
+    /// they belong to the sample's radiance ([`Tracer::sample_pattern`]).
     pub fn shadow(
         &self,
         (org, dir, dist): (DVec3, DVec3, f64),
@@ -603,23 +604,15 @@ impl<'a> Tracer<'a> {
         let (t, hit) = self.shadow_walk(org, dir, dist, am, rng, |h| {
             h.is_top() && src.obj == Some(h.obj)
         });
-        if t == Color::ZERO {
-            return t;
-        }
-        // The source's patterns at the point the shadow ray reaches.
-        let mut ray = Ray::shadow(org, dir);
+        // The transmission only: the source's patterns toward the shading point are in the
+        // sample's potential ([`Tracer::sample_pattern`]).
         match hit {
             // Flat sources emit from their front only.
             Some(h) if h.back && h.flat => Color::ZERO,
-            Some(h) => {
-                ray.prior = ((h.point - org).length() - h.t).max(0.0);
-                t * self.emission_pattern(&ray, &h, self.scene.hit_info(h.href()).chain)
-            }
+            Some(_) => t,
             // Left the scene: reached a distant source, missed a local one.
-            None => match src.distant {
-                Some(d) => t * self.distant_pattern(&ray, &self.scene.distant[d]),
-                None => Color::ZERO,
-            },
+            None if src.distant.is_some() => t,
+            None => Color::ZERO,
         }
     }
 
