@@ -63,9 +63,6 @@ pub const TILES_PER_WORKER: usize = 80;
 /// against one tile at `-ab 0`, docs/benchmarks.md "Job cost").
 pub const TILE_OVERHEAD: f64 = 0.8e-3;
 
-/// The share of a tile's cost its overhead may take in the default plan.
-pub const OVERHEAD_SHARE: f64 = 0.02;
-
 /// A lower bound of the CPU seconds one pixel costs at `-ab` `ab`, from the cheapest
 /// benchmark scene (`tests/scenes/daffodil` at `-ps 4`, rpict's defaults otherwise: 0.75,
 /// 1.6 and 7.6 µs at `-ab` 0, 1 and 2; docs/benchmarks.md "Job cost"). Scenes cost more
@@ -80,24 +77,36 @@ pub fn pixel_cost_floor(ab: i32) -> f64 {
 }
 
 /// The default `tiles` for a `width × height` frame and `workers` expected workers, when a
-/// pixel costs at least `pixel_cost` CPU seconds: [`tiles_for_cost`] with the frame's cost
-/// and [`TILE_OVERHEAD`].
+/// pixel costs `pixel_cost` CPU seconds: [`tiles_for_cost`] with the frame's cost and
+/// [`TILE_OVERHEAD`].
 pub fn default_tiles(width: usize, height: usize, workers: usize, pixel_cost: f64) -> usize {
     let frame = (width * height) as f64 * pixel_cost;
     tiles_for_cost(width * height, workers, frame, TILE_OVERHEAD)
 }
 
+/// The share of a frame's cost its last tile costs, times the requested tile count (the
+/// tail a worker may still render after the others finished): `TAIL · cost / tiles`. The
+/// plan's last band holds tiles of a sixteenth of the mean, but a tile's cost varies with
+/// what it sees (mirrors, glass, the cache's warm-up: 20× the mean in the demo at `-ab 2`),
+/// so this is larger than 1/16 (`bench/tilesim --sweep`, docs/benchmarks.md).
+pub const TAIL: f64 = 0.5;
+
 /// `tiles` for a frame of `area` pixels costing `frame_cost` CPU seconds, `workers` expected
-/// workers and `overhead` seconds per tile: as many as keep the overhead of all the plan's
-/// tiles (about 1.4 × `tiles`) within [`OVERHEAD_SHARE`] of the frame's cost, and at most
-/// [`TILES_PER_WORKER`] × `workers` (at least 1).
+/// workers and `overhead` seconds per tile: the count that minimises a worker's wall time
+/// `cost/P + overhead · 1.4 · tiles / P + TAIL · cost / tiles` (the overhead of its share
+/// of the plan's tiles against the tail at the end), `sqrt(TAIL · cost · P / (1.4 ·
+/// overhead))`, within 1 and [`TILES_PER_WORKER`] × `workers` and no more than tiles of
+/// [`MIN_TILE_AREA`] pixels give. Cheap frames get few tiles (a tile's overhead would cost
+/// more than the balance gains), expensive frames many.
 pub fn tiles_for_cost(area: usize, workers: usize, frame_cost: f64, overhead: f64) -> usize {
-    let most = TILES_PER_WORKER.saturating_mul(workers.max(1));
-    let cheap_enough = (frame_cost * OVERHEAD_SHARE / overhead / PLANNED_PER_TILE).floor();
-    if cheap_enough.is_nan() || area == 0 {
-        return most;
+    let workers = workers.max(1);
+    let most = TILES_PER_WORKER.saturating_mul(workers);
+    let by_area = ((area as f64 / MIN_TILE_AREA / PLANNED_PER_TILE).floor() as usize).max(1);
+    let best = (TAIL * frame_cost * workers as f64 / (PLANNED_PER_TILE * overhead)).sqrt();
+    if !best.is_finite() || area == 0 {
+        return most.min(by_area);
     }
-    (cheap_enough.min(most as f64) as usize).max(1)
+    (best.round() as usize).clamp(1, most.min(by_area))
 }
 
 /// Tiles [`plan_tiles`] makes per requested tile (where the 64-pixel floor does not apply).
@@ -359,24 +368,36 @@ mod tests {
     }
 
     #[test]
-    fn default_tile_counts_keep_the_overhead_small() {
-        // A cheap frame gets few tiles, an expensive one the most per worker.
+    fn default_tile_counts_minimise_the_modelled_wall_time() {
+        // Few tiles for a cheap frame, more for an expensive one, more for more workers.
         let cheap = default_tiles(1024, 1024, 16, pixel_cost_floor(0));
-        assert!((10..=200).contains(&cheap), "{cheap}");
+        let dear = default_tiles(1024, 1024, 16, 50e-6);
+        assert!((16..=200).contains(&cheap), "{cheap}");
+        assert!(dear > 4 * cheap, "{dear} vs {cheap}");
+        assert!(default_tiles(1024, 1024, 64, 50e-6) > dear);
+        // A frame whose workers each get 14 CPU-s or more: the most per worker.
         assert_eq!(default_tiles(1024, 1024, 16, 1e-3), 16 * TILES_PER_WORKER);
         assert_eq!(default_tiles(4, 4, 16, pixel_cost_floor(0)), 1);
-        assert_eq!(default_tiles(4, 4, 16, f64::NAN), 16 * TILES_PER_WORKER);
-        // The overhead of all tiles stays within about 2% of the frame's cost (the plan has
-        // about 1.4 tiles per requested tile; a few more when there are few).
-        for ab in 0..3 {
-            let c = pixel_cost_floor(ab);
-            let n = default_tiles(1024, 768, 16, c);
-            let p = plan_tiles(1024, 768, n, 4);
-            let frame = (1024 * 768) as f64 * c;
+        assert_eq!(default_tiles(4, 4, 16, f64::NAN), 1);
+        assert_eq!(default_tiles(1, 1, 1, 0.0), 1);
+        // The count is the model's optimum: within 1% of the best count's wall time.
+        let wall = |n: f64, cost: f64, p: f64| {
+            cost / p + TILE_OVERHEAD * PLANNED_PER_TILE * n / p + TAIL * cost / n
+        };
+        for (cost, p) in [
+            (0.1, 2usize),
+            (3.0, 16),
+            (55.0, 16),
+            (1000.0, 64),
+            (0.1, 64),
+        ] {
+            let n = tiles_for_cost(1 << 20, p, cost, TILE_OVERHEAD) as f64;
+            let best = (1..=TILES_PER_WORKER * p)
+                .map(|k| wall(k as f64, cost, p as f64))
+                .fold(f64::INFINITY, f64::min);
             assert!(
-                p.len() as f64 * TILE_OVERHEAD <= OVERHEAD_SHARE * frame * 1.25,
-                "-ab {ab}: {n} -> {} tiles",
-                p.len()
+                wall(n, cost, p as f64) <= best * 1.01,
+                "{cost} s, {p} workers: {n}"
             );
         }
     }

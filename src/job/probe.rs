@@ -29,7 +29,7 @@ use std::time::Instant;
 pub const BLOCK: usize = 8;
 
 /// Wall seconds the probe may take (it stops after the block that passes it).
-pub const BUDGET: f64 = 0.25;
+pub const BUDGET: f64 = 0.1;
 
 /// What the probe measured.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
