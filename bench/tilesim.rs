@@ -47,6 +47,9 @@
 //! - claiming a tile and writing its result cost nothing beyond `--sync-cost` per tile
 //!   (no claim latency, no contention).
 
+#[path = "tilesim_sweep.rs"]
+mod sweep;
+
 use serde::Deserialize;
 use std::cmp::Ordering;
 use std::collections::BinaryHeap;
@@ -54,7 +57,7 @@ use std::process::ExitCode;
 use tessera::job::plan::{check_cover, plan_tiles, tiles_for_cost, TileRect, TILE_OVERHEAD};
 
 /// The sample grid of the plans (`-ps 4`, rpict's default).
-const GRID: usize = 4;
+pub(crate) const GRID: usize = 4;
 
 const ASSUMPTIONS: [&str; 4] = [
     "identical workers, all available from time 0",
@@ -86,9 +89,9 @@ struct Costs {
 }
 
 /// Per-pixel cost map of a `width × height` picture, stored as a summed-area table.
-struct CostMap {
-    width: usize,
-    height: usize,
+pub(crate) struct CostMap {
+    pub(crate) width: usize,
+    pub(crate) height: usize,
     /// `sat[y·(width+1) + x]` = cost of the pixels `[0, x) × [0, y)`.
     sat: Vec<f64>,
 }
@@ -139,7 +142,7 @@ impl CostMap {
     }
 
     /// Cost of the pixels of `t`.
-    fn cost(&self, t: &TileRect) -> f64 {
+    pub(crate) fn cost(&self, t: &TileRect) -> f64 {
         let s = self.width + 1;
         let (x0, y0, x1, y1) = (t.x0, t.y0, t.x0 + t.w, t.y0 + t.h);
         let v = self.sat[y1 * s + x1] - self.sat[y0 * s + x1] - self.sat[y1 * s + x0]
@@ -148,7 +151,7 @@ impl CostMap {
     }
 
     /// Cost of the whole picture.
-    fn total(&self) -> f64 {
+    pub(crate) fn total(&self) -> f64 {
         self.sat[self.height * (self.width + 1) + self.width]
     }
 }
@@ -284,7 +287,7 @@ impl PartialOrd for Free {
 
 /// Replay `costs` (in claim order) on `workers` identical workers; returns the makespan and
 /// each tile's start time.
-fn simulate(costs: &[f64], workers: usize) -> (f64, Vec<f64>) {
+pub(crate) fn simulate(costs: &[f64], workers: usize) -> (f64, Vec<f64>) {
     let mut heap: BinaryHeap<Free> = (0..workers.max(1)).map(|i| Free(0.0, i)).collect();
     let mut starts = Vec::with_capacity(costs.len());
     let mut makespan = 0.0f64;
@@ -701,10 +704,18 @@ struct Args {
     self_test: bool,
     synthetic: Option<String>,
     hot: Synthetic,
+    /// `--sweep`: frame costs 0.1–1000 CPU-s, default plan against the best.
+    sweep: bool,
+    /// `--startup SECONDS` added to every makespan of the sweep.
+    startup: f64,
+    /// `--estimate-factor F`: the default plan sees F × the frame's cost.
+    estimate: f64,
 }
 
 const USAGE: &str = "usage: cargo bench --bench tilesim -- COSTS.json [--workers 1,2,4,...] \
 [--tiles-per-worker N] [--sync-cost SECONDS] [--json OUT] [--lpt] [--bands SHARE:SIZE,...]
+       cargo bench --bench tilesim -- COSTS.json --sweep [--workers ...] [--sync-cost S]
+         [--startup S] [--estimate-factor F]
        cargo bench --bench tilesim -- --self-test
        cargo bench --bench tilesim -- --write-synthetic OUT.json [--size WxH]
          [--hot-corner tl|tr|bl|br | --hot-at U,V] [--hot-radius FRACTION_OF_HEIGHT]";
@@ -720,6 +731,9 @@ fn parse_args() -> Result<Args, String> {
         bands: None,
         self_test: false,
         synthetic: None,
+        sweep: false,
+        startup: 0.0,
+        estimate: 1.0,
         hot: Synthetic {
             width: 640,
             height: 480,
@@ -736,6 +750,18 @@ fn parse_args() -> Result<Args, String> {
             "-h" | "--help" => return Err(String::new()),
             "--self-test" => a.self_test = true,
             "--lpt" => a.lpt = true,
+            "--sweep" => a.sweep = true,
+            "--startup" | "--estimate-factor" => {
+                let v = match value(&arg)?.parse::<f64>() {
+                    Ok(s) if s.is_finite() && s >= 0.0 => s,
+                    _ => return Err(format!("{arg}: expected a number >= 0")),
+                };
+                if arg == "--startup" {
+                    a.startup = v;
+                } else {
+                    a.estimate = v.max(1e-9);
+                }
+            }
             "--workers" => {
                 a.workers = value("--workers")?
                     .split(',')
@@ -832,6 +858,16 @@ fn run() -> Result<(), String> {
     let text = std::fs::read_to_string(path).map_err(|e| format!("{path}: {e}"))?;
     let costs: Costs = serde_json::from_str(&text).map_err(|e| format!("{path}: {e}"))?;
     let map = CostMap::new(&costs).map_err(|e| format!("{path}: {e}"))?;
+    if args.sweep {
+        let sync = if args.sync > 0.0 {
+            args.sync
+        } else {
+            TILE_OVERHEAD
+        };
+        let rows = sweep::sweep(&map, &args.workers, sync, args.startup, args.estimate);
+        sweep::print(&rows, sync, args.startup, args.estimate);
+        return Ok(());
+    }
     let results = evaluate(&map, &args);
 
     println!(

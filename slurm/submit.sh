@@ -16,7 +16,11 @@
 #                            use a %04d pattern for every frame of a multi-frame job)
 #   TESSERA_BIN              folder holding tpiece, tmerge, tassemble, tstat (else PATH)
 #   TESSERA_WORKERS          default for N
-#   TESSERA_CPUS_PER_TASK    CPUs per render task = tpiece --threads (default 1)
+#   TESSERA_CPUS_PER_TASK    CPUs per render task = tpiece --threads. Unset (the default):
+#                            each render task takes a whole node (--exclusive) and runs
+#                            one tpiece with a tile loop per CPU, so N = nodes and each
+#                            node holds the scene once (docs/batch.md, "Workers, threads
+#                            and nodes"); set it (e.g. 1) to pack several workers per node
 #   TESSERA_ARRAY_LIMIT      at most this many render tasks at once (sbatch --array=...%M)
 #   TESSERA_AMB_FLUSH        passed to tpiece --amb-flush
 #   TESSERA_PARTIAL=1        tassemble --partial
@@ -95,8 +99,13 @@ submit() {
   printf '%s\n' "$out"
 }
 
+if [ -n "${TESSERA_CPUS_PER_TASK:-}" ]; then
+  PLACEMENT=(--cpus-per-task="$TESSERA_CPUS_PER_TASK")
+else
+  PLACEMENT=(--exclusive)
+fi
 RENDER_JOB="$(submit --array="$ARRAY" \
-  --cpus-per-task="${TESSERA_CPUS_PER_TASK:-1}" \
+  "${PLACEMENT[@]}" \
   --output="$LOGS/render-%A_%a.log" \
   "$@" "$RENDER" "$JOBDIR")" || die "sbatch of the render array failed"
 

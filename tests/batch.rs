@@ -189,6 +189,27 @@ fn ab0_jobs_are_pixel_identical_to_tpict_at_any_worker_count() {
                 );
             }
         }
+        // One worker whose three tile loops share the scene: the same picture.
+        let job = d.path().join("job-loops");
+        plan(&job, &["--workers", "3", "--tiles", "60"], &args);
+        let out = cmd("tpiece")
+            .arg(&job)
+            .args(["--worker-id", "loops", "--threads", "3", "-q"])
+            .output()
+            .unwrap();
+        assert!(
+            out.status.success(),
+            "{}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+        let img = assemble(&job);
+        assert!(
+            img.pixels == reference.pixels,
+            "-ps {ps}, 3 tile loops: picture differs"
+        );
+        let st = stat(&job);
+        assert_eq!(st["done"], st["tiles"]);
+        assert_eq!(st["workers"][0]["tiles_done"], st["tiles"], "{st}");
     }
 }
 
@@ -482,6 +503,21 @@ fn stale_claims_are_reclaimed_after_the_lease() {
     assert_eq!(st["aggregate"]["stale"], 1, "{st}");
     assert_eq!(st["aggregate"]["live"], 1, "{st}");
     assert_eq!(st["frames"][0]["claimed"], 1, "{st}");
+    // The dead worker is shown stale, not as the `running` its last record says.
+    assert_eq!(
+        st["shown_state"],
+        serde_json::json!(["running", "stale"]),
+        "{st}"
+    );
+    let text = cmd("tstat").arg(&job).output().unwrap();
+    let text = String::from_utf8_lossy(&text.stdout);
+    assert!(text.ends_with('\n'), "{text}");
+    assert!(text.contains("wall-s") && text.contains("CPU-s"), "{text}");
+    assert!(
+        text.lines()
+            .any(|l| l.contains("old.00000001") && l.contains("stale")),
+        "{text}"
+    );
     let t = Instant::now();
     // Not quiet (`-q` silences the waiting lines too: quiet_workers_say_nothing).
     let mut live = cmd("tpiece")

@@ -53,7 +53,7 @@ struct TplanArgs {
     /// Fixed tile size WxH (in reading order instead of largest first).
     #[arg(long, value_name = "WxH")]
     tile_size: Option<String>,
-    /// Workers the plan is made for.
+    /// Cores the plan is made for: the tile loops of all the job's workers (default plan).
     #[arg(long, default_value_t = 4)]
     workers: usize,
     /// View file with one view per line: one frame per view (each on top of the previous).
@@ -280,14 +280,15 @@ struct TpieceArgs {
     /// Ambient values per log write (N_A), or `auto` to adapt it at run time.
     #[arg(long, default_value = "auto", value_name = "N|auto")]
     amb_flush: String,
-    /// Render threads (default: $SLURM_CPUS_PER_TASK, else every core).
+    /// Tile loops, each rendering its own tiles on one thread over one shared scene and
+    /// ambient cache (default: $SLURM_CPUS_PER_TASK, else every core).
     #[arg(long)]
     threads: Option<usize>,
     /// Exit when nothing is claimable instead of waiting for (and, if they die, re-claiming)
     /// tiles other workers hold.
     #[arg(long)]
     no_wait: bool,
-    /// No per-tile lines.
+    /// Print nothing but errors (no per-tile or waiting lines).
     #[arg(long, short)]
     quiet: bool,
 }

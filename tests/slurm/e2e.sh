@@ -129,7 +129,9 @@ timing "tplan" "$(secs "$t")"
 
 echo "== submit"
 t_submit="$(now_ms)"
-ids="$(TESSERA_OUTPUT="$PICTURE" bash slurm/submit.sh "$JOB" "$WORKERS")" || die "slurm/submit.sh failed"
+# Four single-CPU workers on the two-CPU node, so that task 0 can be requeued while the
+# others render (the default, one exclusive node per task, would run them one by one).
+ids="$(TESSERA_CPUS_PER_TASK=1 TESSERA_OUTPUT="$PICTURE" bash slurm/submit.sh "$JOB" "$WORKERS")" || die "slurm/submit.sh failed"
 echo "$ids"
 re='render_job=([0-9]+) assemble_job=([0-9]+)'
 [[ "$ids" =~ $re ]] || die "cannot parse submit.sh output: $ids"

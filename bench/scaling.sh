@@ -1,0 +1,125 @@
+#!/usr/bin/env bash
+# Scaling of one frame on one node (docs/benchmarks.md, "Scaling"): for P = 1, 2, 4, 8, 16
+# (up to this machine's cores), the same frame rendered by
+#   tpict -n 1, tpict -n P,
+#   a job on tplan's default plan for P workers, run by P single-thread workers
+#     (tpiece --threads 1, P processes: P copies of the scene),
+#   the same job run by one worker with P tile loops (tpiece --threads P: one copy),
+# with wall seconds, CPU seconds, speed-up and efficiency against tpict -n 1, the job's
+# T_idle and T_sync (tstat, summed over workers, wall-s per thread) and the node's peak
+# memory (the sum of the processes' peak resident sizes, MB).
+# Then the tile-plan simulation (bench/tilesim --sweep) for 2 to 256 workers on the tile
+# costs of a one-worker run of the same frame (--tile-size 16x16), frame costs scaled to
+# 0.1-1000 CPU-s.
+#
+# Usage: bash bench/scaling.sh [OUTDIR (default: a temporary directory)]
+# Environment: WORKERS="1 2 4 8 16" (cut to the cores), SCENE (files, default the demo),
+#   VIEW (default -vf demo/demo.vf), RES="-x 320 -y 240",
+#   OPTS="-ab 2 -aa .15 -ad 512 -as 128 -ar 64 -av .02 .02 .02 -ps 1",
+#   SIM_WORKERS="2,4,8,16,32,64,128,256", SYNC (per-tile seconds for the simulation,
+#   default tplan's 0.8 ms), STARTUP (seconds added to every simulated worker, default the
+#   measured start-up of a worker: a job of one tile minus its tile's CPU).
+set -euo pipefail
+ROOT=$(cd "$(dirname "$0")/.." && pwd)
+CORES=$(nproc)
+WORKERS=${WORKERS:-"1 2 4 8 16"}
+SCENE=${SCENE:-"$ROOT/demo/demo.rad"}
+VIEW=${VIEW:-"-vf $ROOT/demo/demo.vf"}
+RES=${RES:-"-x 320 -y 240"}
+OPTS=${OPTS:-"-ab 2 -aa .15 -ad 512 -as 128 -ar 64 -av .02 .02 .02 -ps 1"}
+SIM_WORKERS=${SIM_WORKERS:-"2,4,8,16,32,64,128,256"}
+(cd "$ROOT" && cargo build --release --quiet --bins)
+B=$ROOT/target/release
+export RAYPATH="$ROOT/demo:${RAYPATH:-.}"
+TMP=$(mktemp -d)
+trap 'rm -rf "$TMP"' EXIT
+OUT=${1:-$TMP/out}
+mkdir -p "$OUT"
+# shellcheck disable=SC2206
+RARGS=($VIEW $RES $OPTS)
+# shellcheck disable=SC2206
+SFILES=($SCENE)
+
+# timed NAME cmd...: run cmd, append "wall user sys maxrss_kb" of it to $TMP/NAME.t
+timed() {
+    local name=$1
+    shift
+    /usr/bin/time -a -o "$TMP/$name.t" -f "%e %U %S %M" "$@"
+}
+
+# sums NAME: "wall(max) cpu(sum) mem_mb(sum)" of the processes timed under NAME
+sums() {
+    awk '{ if ($1 > w) w = $1; c += $2 + $3; m += $4 } END { printf "%.2f %.2f %.0f\n", w, c, m / 1024 }' "$TMP/$1.t"
+}
+
+row() { # label P wall cpu mem idle sync
+    awk -v l="$1" -v p="$2" -v w="$3" -v c="$4" -v m="$5" -v i="$6" -v s="$7" -v b="$BASE" \
+        'BEGIN { printf "%-28s %3d %8.2f %8.2f %7.2f %5.0f%% %7s %7s %7.0f\n", l, p, w, c, b / w, 100 * b / w / p, i, s, m }'
+}
+
+job_stats() { # JOB -> "t_idle t_sync"
+    "$B/tstat" "$1" --json | python3 -c 'import json,sys; a=json.load(sys.stdin)["aggregate"]; print("%.2f %.3f" % (a["t_idle"], a["t_sync"]))'
+}
+
+echo "bench/scaling.sh: $CORES cores; scene ${SFILES[*]}; ${RARGS[*]}"
+rm -f "$TMP"/*.t
+timed one "$B/tpict" -n 1 "${RARGS[@]}" "${SFILES[@]}" > "$TMP/one.hdr"
+read -r BASE BASE_CPU BASE_MEM < <(sums one)
+printf '%-28s %3s %8s %8s %7s %6s %7s %7s %7s\n' run P wall-s CPU-s speedup eff T_idle T_sync MB
+row "tpict -n 1" 1 "$BASE" "$BASE_CPU" "$BASE_MEM" - -
+for P in $WORKERS; do
+    if [ "$P" -gt "$CORES" ]; then
+        echo "(P = $P skipped: $CORES cores)"
+        continue
+    fi
+    rm -f "$TMP"/*.t
+    timed tp "$B/tpict" -n "$P" "${RARGS[@]}" "${SFILES[@]}" > /dev/null
+    read -r w c m < <(sums tp)
+    row "tpict -n $P" "$P" "$w" "$c" "$m" - -
+    for mode in processes threads; do
+        job="$TMP/job-$P-$mode"
+        rm -rf "$job"
+        "$B/tplan" --workers "$P" -o "$job" -- "${RARGS[@]}" "${SFILES[@]}" 2> "$TMP/plan.err"
+        tiles=$(grep -o '[0-9]* tiles,' "$TMP/plan.err" | grep -o '[0-9]*')
+        pids=()
+        if [ "$mode" = processes ]; then
+            for i in $(seq 1 "$P"); do
+                timed "$mode" "$B/tpiece" "$job" --worker-id "w$i" --threads 1 -q &
+                pids+=("$!")
+            done
+        else
+            timed "$mode" "$B/tpiece" "$job" --worker-id w1 --threads "$P" -q &
+            pids+=("$!")
+        fi
+        for p in "${pids[@]}"; do wait "$p"; done
+        read -r w c m < <(sums "$mode")
+        read -r idle sync < <(job_stats "$job")
+        if [ "$mode" = processes ]; then label="$P x tpiece --threads 1"; else label="tpiece --threads $P"; fi
+        row "$label ($tiles tiles)" "$P" "$w" "$c" "$m" "$idle" "$sync"
+        "$B/tassemble" "$job" -o "$OUT/job-$P-$mode.hdr" 2> /dev/null
+        rm -rf "$job"
+    done
+done
+
+# The tile plan simulation on measured costs.
+job="$TMP/costs"
+"$B/tplan" --tile-size 16x16 -o "$job" -- "${RARGS[@]}" "${SFILES[@]}" 2> /dev/null
+rm -f "$TMP"/*.t
+timed costs "$B/tpiece" "$job" --threads 1 -q
+"$B/tstat" "$job" --costs 0 > "$OUT/costs.json"
+# A worker's start-up: a one-tile job of a 1x1 picture of the same scene.
+one="$TMP/startup"
+"$B/tplan" --tiles 1 -o "$one" -- "${RARGS[@]/$RES/}" -x 1 -y 1 "${SFILES[@]}" 2> /dev/null || true
+STARTUP=${STARTUP:-}
+if [ -z "$STARTUP" ] && [ -d "$one" ]; then
+    rm -f "$TMP"/*.t
+    timed startup "$B/tpiece" "$one" --threads 1 -q
+    STARTUP=$(awk '{ print $1 }' "$TMP/startup.t")
+fi
+STARTUP=${STARTUP:-0}
+SYNCARG=()
+if [ -n "${SYNC:-}" ]; then SYNCARG=(--sync-cost "$SYNC"); fi
+echo
+echo "tilesim --sweep on $OUT/costs.json (start-up $STARTUP s)"
+(cd "$ROOT" && cargo bench --quiet --bench tilesim -- "$OUT/costs.json" --sweep \
+    --workers "$SIM_WORKERS" --startup "$STARTUP" "${SYNCARG[@]}")
