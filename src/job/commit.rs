@@ -21,7 +21,7 @@ use super::task;
 use super::tile::{ResultDir, TileMeta};
 use anyhow::{anyhow, Result};
 use std::path::Path;
-use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
 use std::sync::mpsc::Receiver;
 
 /// A rendered tile on its way to the job directory.
@@ -46,6 +46,8 @@ pub struct CommitTarget<'a> {
     pub verbose: bool,
     /// Set when a result could not be written: the tile loops stop after their tile.
     pub stop: &'a AtomicBool,
+    /// Tiles handed over and not yet committed: lowered as each is done or failed.
+    pub pending: &'a AtomicUsize,
 }
 
 /// Commit tiles from `rx` in batches until every sender is gone; the first error.
@@ -61,6 +63,7 @@ pub fn commit_loop(rx: Receiver<Finished>, results: ResultDir, t: CommitTarget) 
     while let Ok(one) = rx.recv() {
         let mut batch = vec![one];
         batch.extend(rx.try_iter());
+        let batch_len = batch.len();
         let mut staged = Vec::with_capacity(batch.len());
         let mut kept = Vec::with_capacity(batch.len());
         for f in batch {
@@ -72,9 +75,12 @@ pub fn commit_loop(rx: Receiver<Finished>, results: ResultDir, t: CommitTarget) 
                 Err(e) => fail(&f.name, e, &mut first_error),
             }
         }
+        t.pending
+            .fetch_sub(batch_len - kept.len(), Ordering::SeqCst);
         for (f, r) in kept.into_iter().zip(results.commit(staged)) {
             if let Err(e) = r {
                 fail(&f.name, e, &mut first_error);
+                t.pending.fetch_sub(1, Ordering::SeqCst);
                 continue;
             }
             match task::complete(t.tasks_dir, &f.name, t.owner) {
@@ -95,6 +101,7 @@ pub fn commit_loop(rx: Receiver<Finished>, results: ResultDir, t: CommitTarget) 
                     });
                 }
             }
+            t.pending.fetch_sub(1, Ordering::SeqCst);
         }
     }
     first_error.map_or(Ok(()), Err)

@@ -32,7 +32,7 @@ use crate::session::{Region, SceneSource, Session};
 use anyhow::{anyhow, bail, Context, Result};
 use std::collections::{HashMap, HashSet};
 use std::path::{Path, PathBuf};
-use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
 use std::sync::{Arc, Mutex};
 use std::thread::JoinHandle;
 use std::time::{Duration, Instant};
@@ -257,6 +257,7 @@ pub fn run_worker(job: &JobDir, wo: &WorkerOptions) -> Result<WorkerSummary> {
     let all = m.tasks();
     let stop = AtomicBool::new(false);
     let taken = Mutex::new(HashSet::new());
+    let pending = AtomicUsize::new(0);
     let results = ResultDir::open(&job.tiles())?;
     let tasks_dir = job.tasks();
     let outcomes: Vec<Result<()>> = std::thread::scope(|scope| {
@@ -267,12 +268,14 @@ pub fn run_worker(job: &JobDir, wo: &WorkerOptions) -> Result<WorkerSummary> {
             counters: &beat.counters,
             verbose: wo.verbose,
             stop: &stop,
+            pending: &pending,
         };
         let committer = scope.spawn(move || commit_loop(rx, results, target));
         let handles: Vec<_> = (0..loops)
             .map(|index| {
-                let (m, owner, worker_id, session, beat, all, stop, taken) =
-                    (&m, &owner, &worker_id, &session, &beat, &all, &stop, &taken);
+                let (m, owner, worker_id, session, beat, all, stop, taken, pending) = (
+                    &m, &owner, &worker_id, &session, &beat, &all, &stop, &taken, &pending,
+                );
                 let commit = tx.clone();
                 scope.spawn(move || -> Result<()> {
                     let here = Session::here_pool()?;
@@ -296,6 +299,7 @@ pub fn run_worker(job: &JobDir, wo: &WorkerOptions) -> Result<WorkerSummary> {
                         watcher: StaleWatcher::new(m.lease_seconds),
                         done_count: 0,
                         commit,
+                        pending,
                         budget_aa: Default::default(),
                     };
                     let r = worker.work();
@@ -393,6 +397,8 @@ struct Worker<'a> {
     done_count: usize,
     /// The worker's committer of finished tiles ([`super::commit`]).
     commit: std::sync::mpsc::Sender<Finished>,
+    /// Tiles handed to the committer and not yet committed (or failed).
+    pending: &'a AtomicUsize,
     /// `-axt`: the frames' accuracies read or decided so far ([`super::budget`]).
     budget_aa: std::cell::RefCell<HashMap<u32, f64>>,
 }
@@ -634,6 +640,7 @@ impl Worker<'_> {
             }
         }
         // The committer writes it and marks it done; this loop renders on.
+        self.pending.fetch_add(1, Ordering::SeqCst);
         self.commit
             .send(Finished {
                 name: name.clone(),
@@ -659,6 +666,11 @@ impl Worker<'_> {
     fn budget_accuracy(&self, frame: u32) -> Result<f64> {
         if let Some(&aa) = self.budget_aa.borrow().get(&frame) {
             return Ok(aa);
+        }
+        // The decision reads which earlier frames are done: first let the committer mark
+        // this worker's finished tiles done.
+        while self.pending.load(Ordering::SeqCst) > 0 && !self.stop.load(Ordering::Relaxed) {
+            std::thread::sleep(Duration::from_millis(1));
         }
         let aa = super::budget::frame_accuracy(self.job, self.m, frame)?;
         self.budget_aa.borrow_mut().insert(frame, aa);
