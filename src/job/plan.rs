@@ -89,19 +89,19 @@ pub fn default_tiles(width: usize, height: usize, workers: usize, pixel_cost: f6
 /// plan's last band holds tiles of a sixteenth of the mean, but a tile's cost varies with
 /// what it sees (mirrors, glass, the cache's warm-up: 20× the mean in the demo at `-ab 2`),
 /// so this is larger than 1/16 (`bench/tilesim --sweep`, docs/benchmarks.md).
-pub const TAIL: f64 = 0.5;
+pub const TAIL: f64 = 2.0;
 
 /// `tiles` for a frame of `area` pixels costing `frame_cost` CPU seconds, `workers` expected
 /// workers and `overhead` seconds per tile: the count that minimises a worker's wall time
 /// `cost/P + overhead · 1.4 · tiles / P + TAIL · cost / tiles` (the overhead of its share
 /// of the plan's tiles against the tail at the end), `sqrt(TAIL · cost · P / (1.4 ·
-/// overhead))`, within 1 and [`TILES_PER_WORKER`] × `workers` and no more than tiles of
-/// [`MIN_TILE_AREA`] pixels give. Cheap frames get few tiles (a tile's overhead would cost
+/// overhead))`, within 1 and [`TILES_PER_WORKER`] × `workers` and at most twice the area
+/// over [`MIN_TILE_AREA`] (the bands keep tiles of at least that many pixels). Cheap frames get few tiles (a tile's overhead would cost
 /// more than the balance gains), expensive frames many.
 pub fn tiles_for_cost(area: usize, workers: usize, frame_cost: f64, overhead: f64) -> usize {
     let workers = workers.max(1);
     let most = TILES_PER_WORKER.saturating_mul(workers);
-    let by_area = ((area as f64 / MIN_TILE_AREA / PLANNED_PER_TILE).floor() as usize).max(1);
+    let by_area = ((2.0 * area as f64 / MIN_TILE_AREA).floor() as usize).max(1);
     let best = (TAIL * frame_cost * workers as f64 / (PLANNED_PER_TILE * overhead)).sqrt();
     if !best.is_finite() || area == 0 {
         return most.min(by_area);
