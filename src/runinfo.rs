@@ -96,37 +96,36 @@ pub fn process_origin_id() -> u64 {
     h
 }
 
+/// The clock `id` in nanoseconds (`clock_gettime`), or None.
+#[cfg(unix)]
+fn clock_nanos(id: libc::clockid_t) -> Option<u64> {
+    let mut ts = libc::timespec {
+        tv_sec: 0,
+        tv_nsec: 0,
+    };
+    // SAFETY: `ts` is a valid, writable timespec for the duration of the call.
+    let rc = unsafe { libc::clock_gettime(id, &mut ts) };
+    (rc == 0).then(|| {
+        (ts.tv_sec.max(0) as u64)
+            .saturating_mul(1_000_000_000)
+            .saturating_add(ts.tv_nsec.max(0) as u64)
+    })
+}
+
 /// User + system CPU seconds of this process (all threads), or None. The process CPU-time
 /// clock (`clock_gettime(CLOCK_PROCESS_CPUTIME_ID)`): nanosecond resolution and no file to
 /// open, so a worker can read it twice per tile (`/proc/self/stat` counts in 10 ms ticks and
 /// costs an open, a read and a close each time).
 #[cfg(unix)]
 pub fn process_cpu_seconds() -> Option<f64> {
-    let mut ts = libc::timespec {
-        tv_sec: 0,
-        tv_nsec: 0,
-    };
-    // SAFETY: `ts` is a valid, writable timespec for the duration of the call.
-    let rc = unsafe { libc::clock_gettime(libc::CLOCK_PROCESS_CPUTIME_ID, &mut ts) };
-    (rc == 0).then_some(ts.tv_sec as f64 + ts.tv_nsec as f64 * 1e-9)
+    clock_nanos(libc::CLOCK_PROCESS_CPUTIME_ID).map(|n| n as f64 * 1e-9)
 }
 
 /// CPU nanoseconds the calling thread has used (`CLOCK_THREAD_CPUTIME_ID`), or 0 where
 /// unknown: time spent descheduled (more threads than cores) does not count.
 #[cfg(unix)]
 pub fn thread_cpu_nanos() -> u64 {
-    let mut ts = libc::timespec {
-        tv_sec: 0,
-        tv_nsec: 0,
-    };
-    // SAFETY: `ts` is a valid, writable timespec for the duration of the call.
-    let rc = unsafe { libc::clock_gettime(libc::CLOCK_THREAD_CPUTIME_ID, &mut ts) };
-    if rc != 0 {
-        return 0;
-    }
-    (ts.tv_sec as u64)
-        .saturating_mul(1_000_000_000)
-        .saturating_add(ts.tv_nsec as u64)
+    clock_nanos(libc::CLOCK_THREAD_CPUTIME_ID).unwrap_or(0)
 }
 
 /// CPU nanoseconds of the calling thread: unknown on this platform.

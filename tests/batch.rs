@@ -440,15 +440,12 @@ fn killed_workers_lose_nothing() {
     );
 }
 
-/// `tpiece -q` prints nothing, also while it waits for a tile another worker holds; its
-/// tile loops (`--threads 2`) share the job like separate workers.
-#[test]
-fn quiet_workers_say_nothing() {
-    let d = tempfile::tempdir().unwrap();
-    let job = d.path().join("job");
+/// Plan a 48×36 `-ab 0` job of about `tiles` tiles with a lease of 0.5 s whose first tile
+/// is claimed by the ghost owner `ghost.0000dead`; its `tasks/`.
+fn ghost_job(job: &Path, tiles: &str) -> PathBuf {
     plan(
-        &job,
-        &["--tiles", "6", "--lease", "0.5"],
+        job,
+        &["--tiles", tiles, "--lease", "0.5"],
         &view_args(48, 36, &["-ab", "0"]),
     );
     let tasks = job.join("tasks");
@@ -457,6 +454,16 @@ fn quiet_workers_say_nothing() {
         tasks.join("f00000-t00000.claim.ghost.0000dead"),
     )
     .unwrap();
+    tasks
+}
+
+/// `tpiece -q` prints nothing, also while it waits for a tile another worker holds; its
+/// tile loops (`--threads 2`) share the job like separate workers.
+#[test]
+fn quiet_workers_say_nothing() {
+    let d = tempfile::tempdir().unwrap();
+    let job = d.path().join("job");
+    let tasks = ghost_job(&job, "6");
     let out = cmd("tpiece")
         .arg(&job)
         .args(["--worker-id", "quiet", "--threads", "2", "-q"])
@@ -472,18 +479,8 @@ fn quiet_workers_say_nothing() {
 fn stale_claims_are_reclaimed_after_the_lease() {
     let d = tempfile::tempdir().unwrap();
     let job = d.path().join("job");
-    plan(
-        &job,
-        &["--tiles", "3", "--lease", "0.5"],
-        &view_args(48, 36, &["-ab", "0"]),
-    );
-    // A ghost worker holds a tile and its heartbeat never changes.
-    let tasks = job.join("tasks");
-    std::fs::rename(
-        tasks.join("f00000-t00000.todo"),
-        tasks.join("f00000-t00000.claim.ghost.0000dead"),
-    )
-    .unwrap();
+    let tasks = ghost_job(&job, "3");
+    // Its heartbeat never changes.
     std::fs::write(
         job.join("workers/ghost.0000dead.json"),
         r#"{"worker_id":"ghost","owner":"ghost.0000dead","host":"x","pid":1,"state":"running","beat":7,"started_unix":0,"updated_unix":4102444800,"threads":1,"tiles_done":0,"t_render":0,"t_spec":0,"t_amb":0,"t_idle":0,"t_sync":0,"new_values":0,"shared_in":0,"shared_out":0,"amb_flush":0,"rays":0,"cpu_seconds":0,"error":null}"#,

@@ -22,7 +22,8 @@ use crate::options::RenderParams;
 use crate::render::{render_region, FrameSetup, RenderProgress, Tracer};
 use crate::runinfo::{process_origin_id, thread_cpu_nanos};
 use crate::scene::Scene;
-use anyhow::{Context, Result};
+use crate::session::Session;
+use anyhow::Result;
 use std::time::Instant;
 
 /// Side of a probe block in pixels (rounded up to the `-ps` cell).
@@ -56,12 +57,7 @@ pub fn probe(scene: &Scene, params: &RenderParams, fs: &FrameSetup, budget: f64)
     let lights = LightSet::collect(scene, params.dr);
     let ambient = Ambient::new(params, scene.size, process_origin_id());
     let tracer = Tracer::new(scene, params, &lights).with_ambient(ambient.as_ref());
-    let here = rayon::ThreadPoolBuilder::new()
-        .num_threads(1)
-        .use_current_thread()
-        .build()
-        .or_else(|_| rayon::ThreadPoolBuilder::new().num_threads(1).build())
-        .context("cannot start the probe's thread")?;
+    let here = Session::here_pool()?;
     let cell = crate::render::cell_size(fs.ps.max(1));
     let side = BLOCK.div_ceil(cell) * cell;
     let start = Instant::now();

@@ -122,9 +122,9 @@ pub fn decode(bytes: &[u8]) -> Result<(TileMeta, Vec<[f32; 3]>)> {
     Ok((meta, pixels))
 }
 
-/// The `tiles/` directory of a job as one worker writes into it: kept open, so that each
-/// result costs one `open` (its temporary), two `fsync`s (the data, then the directory entry)
-/// and one `rename`, whatever the number of tiles.
+/// The `tiles/` directory of a job as one worker writes into it: kept open, so that a batch
+/// of results costs one `open`, one `fsync` and one `rename` each and one `fsync` of the
+/// directory ([`ResultDir::stage`], [`ResultDir::commit`]).
 pub struct ResultDir {
     dir: PathBuf,
     handle: Option<File>,
@@ -138,18 +138,6 @@ impl ResultDir {
             dir: dir.to_path_buf(),
             handle: File::open(dir).ok(),
         })
-    }
-
-    /// Write the result `name` (`<task>.tile`) atomically: the temporary
-    /// `.<name>.<tag>.tmp` (`tag`: the writer's owner name, unique among live processes) is
-    /// written, fsynced, closed and renamed over `name`, then the directory is fsynced so that
-    /// the name is durable before the task is marked done ([`ResultDir::stage`] and
-    /// [`ResultDir::commit`] for one result).
-    pub fn write(&self, name: &str, tag: &str, meta: &TileMeta, pixels: &[[f32; 3]]) -> Result<()> {
-        let staged = self.stage(name, tag, meta, pixels)?;
-        self.commit(vec![staged])
-            .pop()
-            .unwrap_or_else(|| Err(anyhow!("tile result {name}: nothing committed")))
     }
 }
 
