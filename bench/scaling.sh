@@ -54,7 +54,7 @@ sums() {
 
 row() { # label P wall cpu mem idle sync
     awk -v l="$1" -v p="$2" -v w="$3" -v c="$4" -v m="$5" -v i="$6" -v s="$7" -v b="$BASE" \
-        'BEGIN { printf "%-28s %3d %8.2f %8.2f %7.2f %5.0f%% %7s %7s %7.0f\n", l, p, w, c, b / w, 100 * b / w / p, i, s, m }'
+        'BEGIN { printf "%-36s %3d %8.2f %8.2f %7.2f %5.0f%% %7s %7s %7.0f\n", l, p, w, c, b / w, 100 * b / w / p, i, s, m }'
 }
 
 job_stats() { # JOB -> "t_idle t_sync"
@@ -65,7 +65,7 @@ echo "bench/scaling.sh: $CORES cores; scene ${SFILES[*]}; ${RARGS[*]}"
 rm -f "$TMP"/*.t
 timed one "$B/tpict" -n 1 "${RARGS[@]}" "${SFILES[@]}" > "$TMP/one.hdr"
 read -r BASE BASE_CPU BASE_MEM < <(sums one)
-printf '%-28s %3s %8s %8s %7s %6s %7s %7s %7s\n' run P wall-s CPU-s speedup eff T_idle T_sync MB
+printf '%-36s %3s %8s %8s %7s %6s %7s %7s %7s\n' run P wall-s CPU-s speedup eff T_idle T_sync MB
 row "tpict -n 1" 1 "$BASE" "$BASE_CPU" "$BASE_MEM" - -
 for P in $WORKERS; do
     if [ "$P" -gt "$CORES" ]; then

@@ -84,29 +84,34 @@ pub fn default_tiles(width: usize, height: usize, workers: usize, pixel_cost: f6
     tiles_for_cost(width * height, workers, frame, TILE_OVERHEAD)
 }
 
-/// The share of a frame's cost its last tile costs, times the requested tile count (the
-/// tail a worker may still render after the others finished): `TAIL · cost / tiles`. The
-/// plan's last band holds tiles of a sixteenth of the mean, but a tile's cost varies with
-/// what it sees (mirrors, glass, the cache's warm-up: 20× the mean in the demo at `-ab 2`),
-/// so this is larger than 1/16 (`bench/tilesim --sweep`, docs/benchmarks.md).
-pub const TAIL: f64 = 2.0;
+/// The tail of a frame, the time the last worker still renders after the others are done,
+/// modelled as `TAIL · P · cost / tiles`: P times a mean tile's cost, scaled. With more
+/// workers the end waits for the slowest of more last tiles, and a tile's cost varies with
+/// what it sees (mirrors, glass, the cache's warm-up: 20× the mean in the demo at `-ab 2`).
+/// Fitted by `bench/tilesim --sweep` on four measured and synthetic cost maps
+/// (docs/benchmarks.md, "Scaling and the default plan").
+pub const TAIL: f64 = 0.35;
 
 /// `tiles` for a frame of `area` pixels costing `frame_cost` CPU seconds, `workers` expected
-/// workers and `overhead` seconds per tile: the count that minimises a worker's wall time
-/// `cost/P + overhead · 1.4 · tiles / P + TAIL · cost / tiles` (the overhead of its share
-/// of the plan's tiles against the tail at the end), `sqrt(TAIL · cost · P / (1.4 ·
-/// overhead))`, within 1 and [`TILES_PER_WORKER`] × `workers` and at most twice the area
-/// over [`MIN_TILE_AREA`] (the bands keep tiles of at least that many pixels). Cheap frames get few tiles (a tile's overhead would cost
-/// more than the balance gains), expensive frames many.
+/// workers and `overhead` seconds per tile: the count that minimises a worker's modelled
+/// wall time `cost/P + overhead · 1.4 · tiles / P + TAIL · P · cost / tiles` (its share of
+/// the work and of the plan's tile overhead, and the tail), that is
+/// `P · sqrt(TAIL · cost / (1.4 · overhead))` tiles: a number of tiles per worker that grows
+/// as the square root of the frame's cost. Kept within 1, [`TILES_PER_WORKER`] × `workers`
+/// and a sixteenth of the area (the plan's bands keep tiles of at least [`MIN_TILE_AREA`]
+/// pixels, so asking for more only makes every band's tiles the smallest). Cheap frames get
+/// few tiles (a tile's overhead would cost more than the balance gains), expensive frames
+/// many.
 pub fn tiles_for_cost(area: usize, workers: usize, frame_cost: f64, overhead: f64) -> usize {
     let workers = workers.max(1);
-    let most = TILES_PER_WORKER.saturating_mul(workers);
-    let by_area = ((2.0 * area as f64 / MIN_TILE_AREA).floor() as usize).max(1);
-    let best = (TAIL * frame_cost * workers as f64 / (PLANNED_PER_TILE * overhead)).sqrt();
+    let most = TILES_PER_WORKER
+        .saturating_mul(workers)
+        .min((area / 16).max(1));
+    let best = workers as f64 * (TAIL * frame_cost / (PLANNED_PER_TILE * overhead)).sqrt();
     if !best.is_finite() || area == 0 {
-        return most.min(by_area);
+        return most;
     }
-    (best.round() as usize).clamp(1, most.min(by_area))
+    (best.round() as usize).clamp(1, most)
 }
 
 /// Tiles [`plan_tiles`] makes per requested tile (where the 64-pixel floor does not apply).
@@ -372,17 +377,18 @@ mod tests {
         // Few tiles for a cheap frame, more for an expensive one, more for more workers.
         let cheap = default_tiles(1024, 1024, 16, pixel_cost_floor(0));
         let dear = default_tiles(1024, 1024, 16, 50e-6);
-        assert!((16..=200).contains(&cheap), "{cheap}");
+        // 0.79 CPU-s over 16 workers: about 16 tiles each.
+        assert!((16..=400).contains(&cheap), "{cheap}");
         assert!(dear > 4 * cheap, "{dear} vs {cheap}");
         assert!(default_tiles(1024, 1024, 64, 50e-6) > dear);
-        // A frame whose workers each get 14 CPU-s or more: the most per worker.
+        // A frame of 21 CPU-s or more: the most per worker.
         assert_eq!(default_tiles(1024, 1024, 16, 1e-3), 16 * TILES_PER_WORKER);
         assert_eq!(default_tiles(4, 4, 16, pixel_cost_floor(0)), 1);
         assert_eq!(default_tiles(4, 4, 16, f64::NAN), 1);
         assert_eq!(default_tiles(1, 1, 1, 0.0), 1);
         // The count is the model's optimum: within 1% of the best count's wall time.
         let wall = |n: f64, cost: f64, p: f64| {
-            cost / p + TILE_OVERHEAD * PLANNED_PER_TILE * n / p + TAIL * cost / n
+            cost / p + TILE_OVERHEAD * PLANNED_PER_TILE * n / p + TAIL * p * cost / n
         };
         for (cost, p) in [
             (0.1, 2usize),
