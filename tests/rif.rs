@@ -297,3 +297,93 @@ fn illum_files_render_as_surfaces() {
         "the illum file is not in the job's scene"
     );
 }
+
+/// `view= NAME -vf FILE`: the job renders the file's view at the resolution rpict gives it
+/// (real `vwrays -d` for the same options), as `--print` says; a name that is no standard
+/// view and has no options, a missing view file and an invalid view are errors naming the
+/// view (rad renders nothing for them); a blank `view=` leaves rad's default X.
+#[test]
+fn rif_views_from_files_and_bad_views() {
+    let t = tempfile::tempdir().unwrap();
+    let d = t.path();
+    std::fs::write(d.join("room.rad"), ROOM).unwrap();
+    std::fs::write(
+        d.join("desk.vf"),
+        "rview -vtv -vp 3.5 4.2 1.6 -vd -.55 -1 -.25 -vu 0 0 1 -vh 70 -vv 55\n",
+    )
+    .unwrap();
+    std::fs::write(
+        d.join("v.rif"),
+        "scene= room.rad\nUP= Z\nRESOLUTION= 64 64\nview= desk -vf desk.vf\nview= X\n",
+    )
+    .unwrap();
+    let job = d.join("job");
+    run_ok(
+        tplan(d)
+            .args(["--rif", "v.rif", "--view", "desk", "--workers", "1", "-o"])
+            .arg(&job),
+    );
+    let m: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(job.join("manifest.json")).unwrap()).unwrap();
+    let f = &m["frames"][0];
+    assert_eq!(f["view"]["vp"], serde_json::json!([3.5, 4.2, 1.6]), "{f}");
+    assert_eq!(f["view"]["vh"], 70.0, "{f}");
+    assert_eq!(f["view"]["vv"], 55.0, "{f}");
+    let printed = String::from_utf8_lossy(&run_ok(
+        tplan(d).args(["--rif", "v.rif", "--view", "desk", "--print"]),
+    ))
+    .to_string();
+    assert!(printed.contains("-vf desk.vf"), "{printed}");
+    if let Some(bin) = radiance_bin() {
+        // rpict's resolution for the printed options: what vwrays -d reports.
+        let words: Vec<&str> = printed.split_whitespace().collect();
+        let opt = |o: &str| words[words.iter().position(|w| *w == o).unwrap() + 1];
+        let out = run_ok(radiance(&bin, "vwrays").current_dir(d).args([
+            "-vf",
+            "desk.vf",
+            "-x",
+            opt("-x"),
+            "-y",
+            opt("-y"),
+            "-d",
+        ]));
+        let want: Vec<String> = String::from_utf8_lossy(&out)
+            .split_whitespace()
+            .take(4)
+            .map(str::to_string)
+            .collect();
+        let got = format!("-x {} -y {}", f["xres"], f["yres"]);
+        assert_eq!(got, want.join(" "));
+        // A blank view= leaves rad's default, X.
+        std::fs::write(d.join("blank.rif"), "scene= room.rad\nview=\n").unwrap();
+        assert_eq!(ours(d, "blank.rif"), rad_lines(&bin, d, "blank.rif"));
+    }
+    for (view, want) in [
+        ("Q", "view 'Q' is neither a standard view id"),
+        ("far -vf nosuch.vf", "view 'far': cannot read nosuch.vf"),
+        (
+            "flat -vd 0 0 0",
+            "view 'flat': invalid view: zero view direction",
+        ),
+    ] {
+        std::fs::write(
+            d.join("bad.rif"),
+            format!("scene= room.rad\nview= {view}\n"),
+        )
+        .unwrap();
+        for extra in [&["--print"][..], &["-o", "badjob"][..]] {
+            let out = tplan(d)
+                .args(["--rif", "bad.rif"])
+                .args(extra)
+                .output()
+                .unwrap();
+            let err = String::from_utf8_lossy(&out.stderr);
+            assert!(!out.status.success(), "view= {view} accepted");
+            assert!(
+                err.contains("bad.rif: ") && err.contains(want),
+                "{view}: {err}"
+            );
+            assert!(!d.join("badjob").exists());
+        }
+    }
+}

@@ -196,9 +196,15 @@ fn tplan(a: TplanArgs) -> Result<i32> {
     Ok(0)
 }
 
-fn rif_plan(
-    a: &TplanArgs,
-) -> Result<(crate::rif::derive::RadPlan, Vec<crate::rif::views::RadView>)> {
+/// The rif file's plan, its selected views and the view each gives rpict (checked: an
+/// unknown name, a missing view file or a view that is no view is an error).
+type RifViews = (
+    crate::rif::derive::RadPlan,
+    Vec<crate::rif::views::RadView>,
+    Vec<crate::view::View>,
+);
+
+fn rif_plan(a: &TplanArgs) -> Result<RifViews> {
     let path = a.rif.as_ref().expect("--rif");
     let mut ro = crate::scene::ReadOptions::from_env();
     ro.allow_commands |= a.allow_commands;
@@ -209,6 +215,11 @@ fn rif_plan(
     let views = plan
         .select(a.view.as_deref())
         .map_err(|e| anyhow!("{}: {e}", path.display()))?;
+    let resolved = views
+        .iter()
+        .map(|v| v.resolve())
+        .collect::<std::result::Result<Vec<_>, _>>()
+        .map_err(|e| anyhow!("{}: {e}", path.display()))?;
     // As rad, write OPTFILE (even for --print): the options refer to it as @file.
     if let Some((name, text)) = plan.optfile() {
         crate::image::output::write_atomic(std::path::Path::new(&name), |f| {
@@ -216,12 +227,12 @@ fn rif_plan(
         })
         .with_context(|| format!("cannot write OPTFILE {name}"))?;
     }
-    Ok((plan, views))
+    Ok((plan, views, resolved))
 }
 
 /// `tplan --rif FILE --print`: rad's rpict options, one line per view.
 fn rif_print(a: &TplanArgs) -> Result<i32> {
-    let (plan, views) = rif_plan(a)?;
+    let (plan, views, _) = rif_plan(a)?;
     for v in &views {
         println!("{}", plan.rpict_words(v).join(" "));
     }
@@ -231,7 +242,7 @@ fn rif_print(a: &TplanArgs) -> Result<i32> {
 /// The job's rpict arguments and frame views from a rif file. rad's `-af` (the job has its
 /// own store), `-t` and `-e` (rpict's progress reports) are left out.
 fn rif_job_args(a: &TplanArgs) -> Result<(Vec<String>, Option<Vec<crate::view::View>>)> {
-    let (plan, views) = rif_plan(a)?;
+    let (plan, views, resolved) = rif_plan(a)?;
     let mut args = Vec::new();
     let words = plan.rpict_words_inline(&views[0]);
     let mut i = 0;
@@ -249,19 +260,14 @@ fn rif_job_args(a: &TplanArgs) -> Result<(Vec<String>, Option<Vec<crate::view::V
         i += 1;
     }
     args.extend(plan.scene_files.iter().cloned());
-    let mut frames = Vec::new();
     for (n, v) in views.iter().enumerate() {
-        let mut view = crate::view::View::default();
-        view.apply_words(&v.words)
-            .map_err(|e| anyhow!("view {}: {e}", v.name))?;
         eprintln!(
             "tplan: frame {n}: view {} (rad reduces it with: {})",
             v.name,
             plan.pfilt_command(v, &format!("frame{n}.hdr"))
         );
-        frames.push(view);
     }
-    Ok((args, Some(frames)))
+    Ok((args, Some(resolved)))
 }
 
 /// `tpiece`: a worker.

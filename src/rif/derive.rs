@@ -337,11 +337,14 @@ impl RadPlan {
         pfilt.extend(rf.words("pfilt"));
         // Views.
         let mut views = Vec::new();
-        let given: Vec<&str> = if rf.views.is_empty() {
-            vec!["X"]
-        } else {
-            rf.views.iter().map(|(v, _)| v.as_str()).collect()
-        };
+        // A blank `view=` is no view: with no other, rad renders its default, X.
+        let given: Vec<&str> = rf
+            .views
+            .iter()
+            .map(|(v, _)| v.as_str())
+            .filter(|v| !v.trim().is_empty())
+            .collect();
+        let given = if given.is_empty() { vec!["X"] } else { given };
         for (i, v) in given.iter().enumerate() {
             if v.trim() == "0" || v.trim().is_empty() {
                 continue;

@@ -1,7 +1,8 @@
 //! rad's views: standard view ids (`X`, `xZ`, `XYZh`, ...) expanded from the zone, labelled
 //! views and unnamed views (`docs/rif.md`).
 
-use crate::view::fmt_g;
+use crate::view::{fmt_g, read_view_file, View};
+use std::path::Path;
 
 /// The zone of a rif file: interior or exterior, and its box.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -37,6 +38,42 @@ pub struct RadView {
     pub name: String,
     /// rpict view options.
     pub words: Vec<String>,
+}
+
+impl RadView {
+    /// The view rpict gets from these options: applied to rpict's default view, `-vf` files
+    /// read as rad's rpict reads them (relative to the current directory), and checked
+    /// (finite, a valid view). A name that is no standard view id and has no options is
+    /// refused: rad renders nothing for it.
+    pub fn resolve(&self) -> Result<View, String> {
+        if self.words.is_empty() {
+            return Err(format!(
+                "view '{}' is neither a standard view id (such as X, xyZ or Zl) nor followed \
+                 by view options",
+                self.name
+            ));
+        }
+        let named = |e: String| format!("view '{}': {e}", self.name);
+        let mut v = View::default();
+        let mut i = 0;
+        while i < self.words.len() {
+            let w = &self.words[i..];
+            if w[0] == "-vf" {
+                let f = w
+                    .get(1)
+                    .ok_or_else(|| named("-vf needs a view file name".into()))?;
+                v = read_view_file(Path::new(f), &v).map_err(|e| named(e.to_string()))?;
+                i += 2;
+                continue;
+            }
+            i += v
+                .apply_option(w)
+                .map_err(|e| named(e.to_string()))?
+                .unwrap_or(1);
+        }
+        v.frame().map_err(|e| named(e.to_string()))?;
+        Ok(v)
+    }
 }
 
 /// The axes of a standard view id with their signs, and its type letter, if `id` is one
@@ -94,6 +131,11 @@ pub fn expand(value: &str, ordinal: usize, zone: &Zone, up: Option<(usize, i32)>
     }
     let id = words.remove(0);
     let Some((axes, vt)) = standard_id(&id) else {
+        if words.is_empty() {
+            // Neither a standard view nor options: no view (rad renders nothing for it;
+            // [`RadView::resolve`] refuses it).
+            return RadView { name: id, words };
+        }
         let mut out = Vec::new();
         if let Some((axis, sign)) = up {
             let mut v = [0.0; 3];
