@@ -128,6 +128,60 @@ fn octree_instances_void_and_modified() {
     assert!(a.pixels == b.pixels, "inst.oct renders unlike inst.rad");
 }
 
+/// Octrees as older oconv wrote them: the header starts with the command line (no
+/// `#?RADIANCE`), and before 1991 had no FORMAT line either. rpict instances them; tpict
+/// reads them, as instances and as the scene, like the octree they were cut from.
+#[test]
+fn octrees_with_older_headers() {
+    let Some(bin) = radiance_bin() else { return };
+    let t = workdir(&bin);
+    let d = t.path();
+    let frozen = std::fs::read(d.join("objf.oct")).unwrap();
+    let no_magic = frozen
+        .strip_prefix(b"#?RADIANCE\n".as_slice())
+        .unwrap()
+        .to_vec();
+    assert!(
+        no_magic.starts_with(b"oconv"),
+        "oconv's header: {:?}",
+        &no_magic[..20]
+    );
+    std::fs::write(d.join("old.oct"), &no_magic).unwrap();
+    let text = String::from_utf8_lossy(&no_magic[..no_magic.len().min(4000)]).to_string();
+    let format_line = "FORMAT=Radiance_octree\n";
+    let at = text.find(format_line).expect("a FORMAT line");
+    let mut oldest = no_magic.clone();
+    oldest.drain(at..at + format_line.len());
+    std::fs::write(d.join("oldest.oct"), &oldest).unwrap();
+    for oct in ["old.oct", "oldest.oct"] {
+        let scene = format!(
+            "void light white 0 0 3 50 50 50\nwhite sphere lamp 0 0 4 0 0 6 0.5\n\
+             void plastic grey 0 0 5 .5 .5 .5 0 0\n\
+             grey polygon floor 0 0 12 -10 -10 0 10 -10 0 10 10 0 -10 10 0\n\
+             void instance i1 7 {oct} -rz 30 -t 1 0 0 0 0\n"
+        );
+        let rad = format!("use-{oct}.rad");
+        std::fs::write(d.join(&rad), scene).unwrap();
+        let top = run_ok(radiance(&bin, "oconv").current_dir(d).arg(&rad));
+        let top_name = format!("use-{oct}");
+        std::fs::write(d.join(&top_name), top).unwrap();
+        check_against_rpict(&bin, d, &[&rad], &top_name, &opts("inst.vf", "0"), &SUITE);
+        // As the scene itself: the same picture as the octree it was cut from.
+        let o = opts("inst.vf", "0");
+        let (a, b) = (format!("a-{oct}.hdr"), format!("b-{oct}.hdr"));
+        run_ok(tpict_in(d).args(&o).args(["-o", &a, "objf.oct"]));
+        // Named without `.oct`: recognised by its header.
+        let plain = format!("{oct}-scene");
+        std::fs::copy(d.join(oct), d.join(&plain)).unwrap();
+        run_ok(tpict_in(d).args(&o).args(["-o", &b, &plain]));
+        let (pa, pb) = (
+            read_picture(&d.join(&a)).unwrap(),
+            read_picture(&d.join(&b)).unwrap(),
+        );
+        assert!(pa.pixels == pb.pixels, "{oct} renders unlike objf.oct");
+    }
+}
+
 /// An octree holding instances (row.oct, frozen, one of them modified), instanced twice
 /// (once modified: the outermost modifier wins), with patterns in the octrees' own
 /// coordinates.

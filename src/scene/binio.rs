@@ -118,16 +118,16 @@ impl<'a> BinReader<'a> {
         }
     }
 
-    /// The text header: `#?RADIANCE` first, lines up to an empty one. Returns the lines
-    /// (without the first) and checks a `FORMAT=` line, when there is one, against
-    /// `format`.
+    /// The text header: lines up to an empty one, `#?RADIANCE` first (older writers, such
+    /// as oconv before 1991, start with their command line instead: Radiance reads those
+    /// too, and so does this). Returns the lines (without `#?RADIANCE`) and checks a
+    /// `FORMAT=` line, when there is one, against `format`. Without `#?RADIANCE`, every
+    /// header line must be text; what follows the header (a magic number) tells the rest.
     pub fn header(&mut self, format: &str) -> Result<Vec<String>, String> {
         let kind = self.kind;
         const MAGIC: &[u8] = b"#?RADIANCE\n";
-        if !self.buf.starts_with(MAGIC) {
-            return Err(format!("not a Radiance {kind} (no #?RADIANCE header)"));
-        }
-        self.pos = MAGIC.len();
+        let marked = self.buf.starts_with(MAGIC);
+        self.pos = if marked { MAGIC.len() } else { 0 };
         let mut lines = Vec::new();
         loop {
             let rest = &self.buf[self.pos..];
@@ -138,7 +138,11 @@ impl<'a> BinReader<'a> {
                     self.truncated("the header")
                 });
             };
-            let line = String::from_utf8_lossy(&rest[..end]).into_owned();
+            let raw = &rest[..end];
+            if !marked && raw.iter().any(|&b| b < b' ' && b != b'\t' && b != b'\r') {
+                return Err(format!("not a Radiance {kind} (no #?RADIANCE header)"));
+            }
+            let line = String::from_utf8_lossy(raw).into_owned();
             self.pos += end + 1;
             if self.pos > MAX_HEADER {
                 return Err(format!(

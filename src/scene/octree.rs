@@ -40,20 +40,31 @@ pub struct OctreeFile {
     pub prims: Vec<Primitive>,
 }
 
-/// Whether the bytes start like a Radiance octree (`#?RADIANCE` and a FORMAT line naming
-/// an octree before the header's end).
+/// Whether the bytes start like a Radiance octree: a text header (with or without
+/// `#?RADIANCE`: older oconv wrote none) naming the octree format, or, in headers older
+/// than the FORMAT line (1991), with no FORMAT at all and an octree's magic number
+/// (284–291) right after the header's blank line.
 pub fn looks_like_octree(bytes: &[u8]) -> bool {
-    if !bytes.starts_with(b"#?RADIANCE\n") {
+    let head = &bytes[..bytes.len().min(1 << 16)];
+    let Some(end) = head.windows(2).position(|w| w == b"\n\n") else {
+        return false;
+    };
+    let text = &head[..end];
+    if text
+        .iter()
+        .any(|&b| b < b' ' && !matches!(b, b'\n' | b'\t' | b'\r'))
+    {
         return false;
     }
-    let head = &bytes[..bytes.len().min(1 << 16)];
-    let end = head
-        .windows(2)
-        .position(|w| w == b"\n\n")
-        .unwrap_or(head.len());
-    head[..end]
+    let mut formats = text
         .split(|&b| b == b'\n')
-        .any(|l| l == b"FORMAT=Radiance_octree")
+        .filter_map(|l| l.strip_prefix(b"FORMAT="));
+    match formats.next() {
+        Some(f) => f == b"Radiance_octree",
+        None => head
+            .get(end + 2..end + 4)
+            .is_some_and(|m| (284..=291).contains(&i16::from_be_bytes([m[0], m[1]]))),
+    }
 }
 
 /// Skip a tree (pre-order: 0 empty, 1 leaf of `count` indices of `objsize` bytes, 2 eight
