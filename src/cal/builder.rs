@@ -21,6 +21,18 @@ pub const BUILTIN_LIBRARY: [(&str, &str); 5] = [
     ("surf.cal", include_str!("lib/surf.cal")),
 ];
 
+/// The path recorded for a built-in library file that was used (a scene's inputs list it,
+/// so that a job copies its text and workers fingerprint the same file).
+pub fn builtin_library_path(name: &str) -> PathBuf {
+    PathBuf::from(format!("<built-in {name}>"))
+}
+
+/// The text behind a path made by [`builtin_library_path`].
+pub fn builtin_library_text(path: &Path) -> Option<&'static str> {
+    let s = path.to_str()?;
+    builtin_library(s.strip_prefix("<built-in ")?.strip_suffix('>')?)
+}
+
 /// The built-in text of library file `name`, if Tessera has one.
 pub fn builtin_library(name: &str) -> Option<&'static str> {
     BUILTIN_LIBRARY
@@ -171,10 +183,11 @@ impl CalBuilder {
             // gendaylit's perezlum.cal, genrev's rev.cal, gensurf's surf.cal, ies2rad's
             // source.cal): Tessera's own versions when Radiance's are not found.
             None => match builtin_library(name) {
-                Some(t) => (
-                    t.as_bytes().to_vec(),
-                    PathBuf::from(format!("<built-in {name}>")),
-                ),
+                Some(t) => {
+                    let path = builtin_library_path(name);
+                    self.paths.push((name.to_string(), path.clone()));
+                    (t.as_bytes().to_vec(), path)
+                }
                 None => {
                     return Err(CalError::file(
                         name,

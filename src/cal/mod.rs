@@ -62,7 +62,8 @@ mod program;
 mod vm;
 
 pub use builder::{
-    builtin_library, CalBuilder, BRDF_VARS, BUILTIN_LIBRARY, BUILTIN_RAYINIT, CHANNELS,
+    builtin_library, builtin_library_path, builtin_library_text, CalBuilder, BRDF_VARS,
+    BUILTIN_LIBRARY, BUILTIN_RAYINIT, CHANNELS,
 };
 pub use error::{CalError, EvalError};
 pub use eval::{MAX_DEPTH, MAX_STACK};

@@ -527,8 +527,16 @@ fn copy_inputs(job: &JobDir, inputs: &[(String, std::path::PathBuf)]) -> Result<
         if let Some(p) = dest.parent() {
             std::fs::create_dir_all(p).with_context(|| format!("cannot create {}", p.display()))?;
         }
-        std::fs::copy(path, &dest)
-            .with_context(|| format!("cannot copy {} into the job", path.display()))?;
+        // A built-in library file (no RAYPATH held one) is written out: workers whose
+        // RAYPATH holds Radiance's version read the planner's.
+        match crate::cal::builtin_library_text(path) {
+            Some(text) => std::fs::write(&dest, text)
+                .with_context(|| format!("cannot write {} into the job", dest.display()))?,
+            None => {
+                std::fs::copy(path, &dest)
+                    .with_context(|| format!("cannot copy {} into the job", path.display()))?;
+            }
+        }
     }
     Ok(())
 }

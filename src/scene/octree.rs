@@ -301,6 +301,11 @@ pub fn read_scene_files(
 ) -> Result<Vec<Primitive>, SceneError> {
     let mut out = Vec::new();
     for p in paths {
+        if p.starts_with('!') {
+            // A command in place of a file (`'!xform ... chair.obj'` is no OBJ file).
+            out.extend(read_text_files(std::slice::from_ref(p), opts)?);
+            continue;
+        }
         if super::sets::is_obj_name(p) {
             if let Err(e) = std::fs::metadata(p) {
                 return Err(SceneError::Io {

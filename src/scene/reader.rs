@@ -162,6 +162,12 @@ pub fn read_text_files(paths: &[String], opts: &ReadOptions) -> Result<Vec<Primi
             parse_into(&text, Arc::from("<stdin>"), opts, 0, &mut out)?;
             continue;
         }
+        if p.starts_with('!') {
+            // A command given where a file goes (oconv's `'!cmd'` arguments, rad's
+            // `scene= '!xform ...'`): read as the one line of an inline command.
+            parse_into(p, Arc::from("<command argument>"), opts, 0, &mut out)?;
+            continue;
+        }
         let loc = Location::new(p.as_str(), 0);
         let text = read_file(Path::new(p), p, &loc)?;
         parse_into(&text, Arc::from(p.as_str()), opts, 0, &mut out)?;
