@@ -198,6 +198,29 @@ fn a_mixture_blends_its_two_chains() {
     assert!(close(all, red, 1e-12), "{all} vs {red}");
 }
 
+/// A mixture whose sides reach no material acts as a pattern (Radiance's raymixture): in a
+/// material's own chain, and on a surface with the material as the mixture's modifier.
+#[test]
+fn a_mixture_of_patterns_acts_as_a_pattern() {
+    let want = look(&floor_scene("void plastic floor 0 0 5 .8 .6 .6 0 0"));
+    let in_chain = look(&floor_scene(
+        "void colorfunc red 0 0 3 1 0 0
+\
+         void mixfunc mx 2 red void 0 1 .25
+\
+         mx plastic floor 0 0 5 .8 .8 .8 0 0",
+    ));
+    assert!(close(in_chain, want, 1e-9), "{in_chain} vs {want}");
+    let on_surface = look(&floor_scene(
+        "void colorfunc red 0 0 3 1 0 0
+\
+         void plastic white 0 0 5 .8 .8 .8 0 0
+\
+         white mixfunc floor 2 red void 0 1 .25",
+    ));
+    assert!(close(on_surface, want, 1e-9), "{on_surface} vs {want}");
+}
+
 #[test]
 fn wrong_chains_are_refused_with_file_and_line() {
     let err = |text: &str| scene(&floor_scene(text)).err().unwrap_or_default();

@@ -95,6 +95,10 @@ pub struct ModifierDef {
     pub next: ModRef,
     /// Identifier.
     pub name: String,
+    /// A mixture neither side of which reaches a material: it acts as a pattern and
+    /// texture (the sides' colours and perturbations blended) and the chain goes on to
+    /// its modifier, as Radiance's `raymixture` does. False for everything else.
+    pub pattern_like: bool,
 }
 
 /// What a modifier's parser may ask of the scene read so far.

@@ -61,7 +61,26 @@ impl Tracer<'_> {
                             coef,
                             foreground,
                             background,
-                        } => return End::Mixture(coef.as_ref(), *foreground, *background),
+                        } => {
+                            if !def.pattern_like {
+                                return End::Mixture(coef.as_ref(), *foreground, *background);
+                            }
+                            // Neither side reaches a material: blend what each side's
+                            // patterns and textures do, and go on (Radiance's raymixture).
+                            let c = mix_share(coef.as_ref(), sp);
+                            let (mut f, mut b) = (*sp, *sp);
+                            if c > FTINY {
+                                self.walk(&mut f, *foreground);
+                            }
+                            if c < 1.0 - FTINY {
+                                self.walk(&mut b, *background);
+                            }
+                            sp.pcol = f.pcol * c + b.pcol * (1.0 - c);
+                            let pert = f.pert * c + b.pert * (1.0 - c);
+                            if pert != sp.pert {
+                                sp.perturb(pert - sp.pert);
+                            }
+                        }
                     }
                     r = def.next;
                 }

@@ -180,25 +180,57 @@ impl Modifiers {
         self.current.insert(name.to_string(), r);
     }
 
-    /// The material a chain starting at `r` ends in: patterns and textures lead on to their
-    /// modifier; `void` and mixtures end in none.
+    /// The material a chain starting at `r` ends in: patterns, textures and mixtures that
+    /// act as patterns lead on to their modifier; `void` and other mixtures end in none.
     pub(super) fn terminal(&self, mut r: ModRef) -> Option<MatId> {
         // Names resolve to earlier definitions, so a chain never loops; bound it anyway.
         for _ in 0..=self.defs.len() {
             match r {
                 ModRef::Void => return None,
                 ModRef::Material(m) => return Some(m),
-                ModRef::Modifier(id) => match *self.defs[id].kind {
-                    ModifierKind::Mixture { .. } => return None,
-                    _ => r = self.defs[id].next,
-                },
+                ModRef::Modifier(id) => {
+                    let d = &self.defs[id];
+                    if matches!(*d.kind, ModifierKind::Mixture { .. }) && !d.pattern_like {
+                        return None;
+                    }
+                    r = d.next;
+                }
             }
         }
         None
     }
 
-    /// Check a material's own modifier chain: patterns and textures only (a material or a
-    /// mixture there is an error, as in Radiance).
+    /// Whether shading the chain from `r` reaches a material (a mixture that is not
+    /// pattern-like does, through its sides).
+    fn reaches_material(&self, r: ModRef) -> bool {
+        match r {
+            ModRef::Void => false,
+            ModRef::Material(_) => true,
+            ModRef::Modifier(id) => {
+                let d = &self.defs[id];
+                if matches!(*d.kind, ModifierKind::Mixture { .. }) && !d.pattern_like {
+                    return true;
+                }
+                self.terminal(r).is_some()
+            }
+        }
+    }
+
+    /// Whether a mixture of `kind` acts as a pattern: neither side reaches a material.
+    fn pattern_like(&self, kind: &ModifierKind) -> bool {
+        match kind {
+            ModifierKind::Mixture {
+                foreground,
+                background,
+                ..
+            } => !self.reaches_material(*foreground) && !self.reaches_material(*background),
+            _ => false,
+        }
+    }
+
+    /// Check a material's own modifier chain: patterns, textures and mixtures of them only
+    /// (a material there, or a mixture whose sides reach one, is an error, as in Radiance:
+    /// "conflicting material").
     fn material_chain(&self, name: &str) -> Result<ModRef, String> {
         let first = self.modref(name)?;
         let mut r = first;
@@ -211,16 +243,18 @@ impl Modifiers {
                          modified by patterns and textures only (conflicting material)"
                     ))
                 }
-                ModRef::Modifier(id) => match *self.defs[id].kind {
-                    ModifierKind::Mixture { .. } => {
+                ModRef::Modifier(id) => {
+                    let d = &self.defs[id];
+                    if matches!(*d.kind, ModifierKind::Mixture { .. }) && !d.pattern_like {
                         return Err(format!(
-                            "modifier chain '{name}' holds the mixture '{}': a material may \
-                             be modified by patterns and textures only",
-                            self.defs[id].name
-                        ))
+                            "modifier chain '{name}' holds the mixture '{}' of materials: a \
+                             material may be modified by patterns, textures and mixtures of \
+                             them only (conflicting material)",
+                            d.name
+                        ));
                     }
-                    _ => r = self.defs[id].next,
-                },
+                    r = d.next;
+                }
             }
         }
         Ok(first)
@@ -408,10 +442,17 @@ impl Builder<'_> {
             } else if let Some(parse) = self.types.get(t) {
                 let kind = parse(p, &*mods).map_err(|m| err(p, format!("{t} {}: {m}", p.name)))?;
                 let next = mods.modref(&p.modifier).map_err(|m| err(p, m))?;
-                if matches!(kind, ModifierKind::Mixture { .. }) && next != ModRef::Void {
+                let pattern_like = mods.pattern_like(&kind);
+                if matches!(kind, ModifierKind::Mixture { .. })
+                    && !pattern_like
+                    && next != ModRef::Void
+                {
                     return Err(err(
                         p,
-                        format!("{t} {}: a mixture's modifier must be void", p.name),
+                        format!(
+                            "{t} {}: the modifier of a mixture of materials must be void",
+                            p.name
+                        ),
                     ));
                 }
                 let id = mods.defs.len();
@@ -419,6 +460,7 @@ impl Builder<'_> {
                     kind: std::sync::Arc::new(kind),
                     next,
                     name: p.name.clone(),
+                    pattern_like,
                 });
                 mods.define(&p.name, ModRef::Modifier(id));
                 def = Some(ModRef::Modifier(id));
@@ -483,13 +525,17 @@ fn alias(
         ModRef::Modifier(id) => {
             let next = mods.modref(&p.modifier)?;
             let src = &mods.defs[id];
-            if matches!(*src.kind, ModifierKind::Mixture { .. }) && next != ModRef::Void {
-                return Err("a mixture's modifier must be void".into());
+            if matches!(*src.kind, ModifierKind::Mixture { .. })
+                && !src.pattern_like
+                && next != ModRef::Void
+            {
+                return Err("the modifier of a mixture of materials must be void".into());
             }
             let def = ModifierDef {
                 kind: src.kind.clone(),
                 next,
                 name: p.name.clone(),
+                pattern_like: src.pattern_like,
             };
             mods.defs.push(def);
             Ok(ModRef::Modifier(mods.defs.len() - 1))
