@@ -233,6 +233,7 @@ impl Run<'_> {
             if Path::new(o).exists() {
                 bail!("cannot open output file \"{o}\": File exists");
             }
+            crate::image::check_output_path(Path::new(o)).map_err(anyhow::Error::msg)?;
         }
         let mut img = self.render_view(&self.opts.picture.view, 0)?;
         img.header.commands.push(self.command_line.clone());

@@ -407,6 +407,25 @@ fn time_budget_in_jobs() {
         .unwrap();
     assert!(!out.status.success());
     assert!(String::from_utf8_lossy(&out.stderr).contains("-axt"));
+    // -ax and -axg together: refused too (a repeated -ax still replaces the earlier one).
+    let both = |a: &str, b: &str| {
+        tool("tplan")
+            .args(["-o"])
+            .arg(t.path().join(format!("both{a}{b}")))
+            .args([
+                "--", "-vf", "demo.vf", "-ab", "1", a, ".4", ".1", ".1", b, ".4", ".1", ".5",
+                "demo.rad",
+            ])
+            .output()
+            .unwrap()
+    };
+    let out = both("-ax", "-axg");
+    assert!(!out.status.success());
+    assert!(
+        String::from_utf8_lossy(&out.stderr).contains("-ax and -axg"),
+        "{out:?}"
+    );
+    assert!(both("-ax", "-ax").status.success());
 }
 
 /// Workers take tiles frame by frame: every tile of a frame before any of the next.

@@ -683,6 +683,26 @@ fn bad_input_and_full_disks_fail_cleanly() {
         .unwrap();
     assert!(!out.status.success());
     assert!(String::from_utf8_lossy(&out.stderr).contains("not empty"));
+    // A lease too long to be a duration (it made every worker panic): refused by tplan,
+    // and in a manifest edited by hand by every worker, with an error.
+    let out = cmd("tplan")
+        .args(["--lease", "1e20", "-o"])
+        .arg(d.path().join("long"))
+        .arg("--")
+        .args(&args)
+        .output()
+        .unwrap();
+    assert!(!out.status.success());
+    assert!(String::from_utf8_lossy(&out.stderr).contains("--lease"));
+    let long = d.path().join("long2");
+    plan(&long, &["--tiles", "2"], &args);
+    let m = std::fs::read_to_string(long.join("manifest.json")).unwrap();
+    let edited = m.replace("\"lease_seconds\": 180.0", "\"lease_seconds\": 1e300");
+    assert_ne!(m, edited, "the manifest's lease line");
+    std::fs::write(long.join("manifest.json"), edited).unwrap();
+    let out = worker(&long, "w", &[]).output().unwrap();
+    assert_eq!(out.status.code(), Some(1), "{out:?}");
+    assert!(String::from_utf8_lossy(&out.stderr).contains("lease_seconds"));
     // Bad worker ids are refused before anything is touched.
     for bad in ["../x", "a/b", "a.b", ""] {
         let out = cmd("tpiece")
@@ -1192,4 +1212,25 @@ fn damaged_jobs_are_reported_not_finished() {
         !out.status.success(),
         "a worker that lost its job reported success: {err}"
     );
+}
+
+/// `tmerge` on a job whose `merged/` was deleted makes it again and merges every log.
+#[test]
+fn tmerge_recreates_a_deleted_merged_directory() {
+    let d = tempfile::tempdir().unwrap();
+    let job = d.path().join("job");
+    plan(
+        &job,
+        &["--tiles", "4"],
+        &view_args(32, 24, &["-ab", "1", "-aa", ".2", "-ad", "64", "-as", "0"]),
+    );
+    run_workers(&job, 1, &[]);
+    std::fs::remove_dir_all(job.join("merged")).unwrap();
+    let out = cmd("tmerge").arg(&job).output().unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    assert!(job.join("merged/store.json").is_file());
 }

@@ -1172,3 +1172,32 @@ fn pictures_beyond_memory_are_refused() {
     assert!(err.contains("GiB") && err.contains("tplan"), "{err}");
     assert!(!t.path().join("big.hdr").exists());
 }
+
+/// An output named for a format Tessera does not write, or in a folder that does not
+/// exist, is refused before rendering, with one error line; nothing is written.
+#[test]
+fn bad_output_names_are_refused_before_rendering() {
+    let t = workdir();
+    let d = t.path();
+    for (name, want) in [
+        ("out.jpg", "not .jpg"),
+        ("out.TIFF", "not .TIFF"),
+        ("no/such/dir/out.hdr", "does not exist"),
+    ] {
+        let err = fails(
+            tpict_in(d)
+                .args(["-vf", "room.vf", "-x", "16", "-y", "16", "-o", name])
+                .arg("room.rad"),
+        );
+        assert!(one_line(&err).contains(want), "{name}: {err}");
+        assert!(!d.join(name).exists());
+    }
+    // Any other name is a Radiance picture.
+    let out = output(
+        tpict_in(d)
+            .args(["-vf", "room.vf", "-x", "16", "-y", "16", "-o", "out.pic"])
+            .arg("room.rad"),
+    );
+    assert!(out.status.success());
+    assert!(read_picture(&d.join("out.pic")).is_ok());
+}

@@ -199,6 +199,39 @@ impl PictureFormat {
     }
 }
 
+/// Extensions of picture formats Tessera does not write: naming one as the output would
+/// put RGBE data in a file that claims to be something else.
+const FOREIGN_PICTURES: [&str; 10] = [
+    "jpg", "jpeg", "tif", "tiff", "bmp", "gif", "webp", "ppm", "pgm", "tga",
+];
+
+/// Check an output picture's name before anything is rendered: an extension of a format
+/// Tessera does not write (`.jpg`, `.tif`, ...) and a folder that does not exist are
+/// refused, with what to do instead.
+pub fn check_output_path(p: &Path) -> Result<(), String> {
+    if let Some(e) = p.extension().and_then(|e| e.to_str()) {
+        if FOREIGN_PICTURES.contains(&e.to_ascii_lowercase().as_str()) {
+            return Err(format!(
+                "{}: Tessera writes Radiance pictures (.hdr, or any other name), .exr and \
+                 .png, not .{e}",
+                p.display()
+            ));
+        }
+    }
+    let dir = match p.parent() {
+        Some(d) if !d.as_os_str().is_empty() => d,
+        _ => Path::new("."),
+    };
+    if !dir.is_dir() {
+        return Err(format!(
+            "{}: the folder {} does not exist",
+            p.display(),
+            dir.display()
+        ));
+    }
+    Ok(())
+}
+
 /// Errors from reading or writing pictures. Messages name the file (when there is one) and the
 /// reason, e.g. `out.hdr: truncated picture: end of file in scanline 7 of 32`.
 #[derive(Debug, thiserror::Error)]

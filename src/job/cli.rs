@@ -480,6 +480,9 @@ fn tassemble(a: TassembleArgs) -> Result<i32> {
             _ => None,
         })
     };
+    if let Some(p) = &a.output {
+        crate::image::check_output_path(p).map_err(anyhow::Error::msg)?;
+    }
     let mut failed = false;
     let mut pictures = Vec::new();
     for f in frames {

@@ -16,6 +16,8 @@ pub const VERSION: u32 = 1;
 /// Default lease: a claimed tile whose worker's heartbeat has not changed for this long (as
 /// seen by another worker's own clock) may be re-claimed.
 pub const DEFAULT_LEASE: f64 = 180.0;
+/// Longest lease accepted (30 days): a worker's clocks and timers hold it as a duration.
+pub const MAX_LEASE: f64 = 30.0 * 86400.0;
 /// Largest picture side accepted.
 const MAX_RES: usize = 1 << 15;
 /// Most frames and tiles per frame (task names have five digits).
@@ -169,8 +171,10 @@ impl Manifest {
         if parse_hex32(&self.fingerprint).is_none() {
             bail!("fingerprint must be 64 hex digits");
         }
-        if !(self.lease_seconds.is_finite() && self.lease_seconds > 0.0) {
-            bail!("lease_seconds must be a positive number");
+        if !(self.lease_seconds.is_finite() && self.lease_seconds > 0.0)
+            || self.lease_seconds > MAX_LEASE
+        {
+            bail!("lease_seconds must be a positive number of seconds, at most {MAX_LEASE}");
         }
         if self.frames.is_empty() {
             bail!("no frames");
@@ -444,8 +448,8 @@ pub fn create_job(dir: &Path, req: &PlanRequest) -> Result<Manifest> {
     } = opts;
     picture.view = frames[0].view.clone();
     let lease = req.lease.unwrap_or(DEFAULT_LEASE);
-    if !(lease.is_finite() && lease > 0.0) {
-        bail!("--lease must be a positive number of seconds");
+    if !(lease.is_finite() && lease > 0.0) || lease > MAX_LEASE {
+        bail!("--lease must be a positive number of seconds, at most {MAX_LEASE} (30 days)");
     }
     let m = Manifest {
         format: FORMAT.into(),

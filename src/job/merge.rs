@@ -115,6 +115,9 @@ fn publish(
 ) -> Result<String> {
     let bytes = encode_log(header, records);
     let dir = job.merged();
+    // A job whose merged/ was deleted gets it back (its index is gone with it: the merge
+    // reads every log from the start).
+    std::fs::create_dir_all(&dir).with_context(|| format!("cannot create {}", dir.display()))?;
     let mut tmp = tempfile::Builder::new()
         .prefix(".store-")
         .suffix(".tmp")

@@ -237,6 +237,15 @@ impl RenderParams {
                         reason: e,
                     }
                 })?;
+                // A repeated option replaces the earlier one (rpict's rule), but -ax and
+                // -axg are two schedules: both given is a mistake, not an override.
+                if self.ax.is_some_and(|a| a.geometric != s.geometric) {
+                    return Err(OptError::BadValue {
+                        option: o.to_string(),
+                        reason: "-ax and -axg both set the accuracy schedule: give one of them"
+                            .into(),
+                    });
+                }
                 self.ax = Some(s);
                 4
             }
