@@ -554,9 +554,12 @@ fn a_thinned_hessian_mesh_errs_like_the_full_one_at_high_ad() {
 /// spheres' floor is lit directly; the mirrors scene's walls too, and there a glow's radius
 /// of influence is a seam the reach must not cross), values serve farther, so far fewer are
 /// made, for a small rise of the picture's error (the time saved buys more than that back:
-/// docs/ambient.md). Measured (3 frames, 64², 2×2 reduced): spheres 0.99% with 683 values
-/// and 0.99% with 353; mirrors 0.92% with 953 and 1.21% with 352 (1.86% with 271 values
-/// when the reach may cross the glow's radius).
+/// docs/ambient.md). Measured (3 frames, 64², 2×2 reduced): spheres 1.04% with 688 values
+/// and 1.07% with 362; mirrors 0.91% with 953 and 1.32% with 356 (1.86% with 271 values
+/// when the reach may cross the glow's radius, before the mirror relayed the spotlight).
+/// The mirrors scene's spotlight has lit the wall through the mirror (its virtual source, as
+/// in rpict) since its cone is tested from the real spotlight: a sharp-edged pool of direct
+/// light, across which the share reach errs more (1.21% before).
 #[test]
 fn the_share_reach_makes_fewer_values_where_direct_light_dominates() {
     for (rad, vf, ad) in [
@@ -588,7 +591,7 @@ fn the_share_reach_makes_fewer_values_where_direct_light_dominates() {
         );
         eprintln!("{rad}: Radiance's rule rms {radiance:.4} ({n1} values); share reach: rms {share:.4} ({n2} values)");
         assert!(n2 < 0.7 * n1, "{rad}: {n2} values vs {n1}");
-        assert!(share < 1.4 * radiance, "{rad}: {share} vs {radiance}");
+        assert!(share < 1.55 * radiance, "{rad}: {share} vs {radiance}");
     }
 }
 

@@ -1,10 +1,12 @@
 //! Virtual sources (a light's image in a flat mirror): only the samples whose path crosses
 //! the mirror itself are offered to the direct calculation, so the adaptive shadow test
-//! (`-dt`) never credits light a mirror cannot relay.
+//! (`-dt`) never credits light a mirror cannot relay. Later generations (`-dr` 2, 3): light
+//! relayed by two and three mirrors in turn, against real rpict on periscopes whose target
+//! is lit only through all their mirrors (means within 1% at `-ab 0`, 2% at `-ab 1`).
 
 mod common;
 
-use common::scene_from_text;
+use common::*;
 
 use glam::DVec3;
 use tessera::light::source::Partition;
@@ -113,4 +115,200 @@ fn sampled_glows_are_the_real_glows_with_a_radius() {
     assert!(s.dist > 2.7 && s.dist < 3.0, "distance {}", s.dist);
     let omega = 2.0 * std::f64::consts::PI * (1.0 - (1.0 - (0.2f64 / 3.0).powi(2)).sqrt());
     assert!((s.omega - omega).abs() < 1e-9 * omega);
+}
+
+/// Three mirrors of a periscope: a lamp facing up; mirror A above it sends its light along
+/// +x, mirror B turns it down, mirror C turns it along +y onto a wall under a plate. Shades
+/// keep the lamp's light from B and from the wall except through the mirrors: the wall is
+/// lit only through A, B and C in turn (`-dr 3`), the floor under B through A and B.
+const PERISCOPE: &str = "void light lamp 0 0 3 50 50 50
+void plastic grey 0 0 5 .5 .5 .5 0 0
+void mirror silver 0 0 3 .9 .9 .9
+grey polygon floor 0 0 12  -5 -4 0  5 -4 0  5 4 0  -5 4 0
+lamp polygon panel 0 0 12  -3.5 -.5 3  -2.5 -.5 3  -2.5 .5 3  -3.5 .5 3
+silver polygon mirA 0 0 12  -4 -1 3.5  -4 1 3.5  -2 1 5.5  -2 -1 5.5
+silver polygon mirB 0 0 12  2 -1 5.5  2 1 5.5  4 1 3.5  4 -1 3.5
+silver polygon mirC 0 0 12  2 -1 2  4 -1 2  4 1 0  2 1 0
+grey polygon baffle 0 0 12  -5 -4 2.9  1 -4 2.9  1 4 2.9  -5 4 2.9
+grey polygon shade 0 0 12  -2.3 -4 2.9  -2.3 -4 3.8  -2.3 4 3.8  -2.3 4 2.9
+grey polygon wall 0 0 12  1 4 0  5 4 0  5 4 3  1 4 3
+grey polygon plate 0 0 12  1 1.2 2.2  1 4 2.2  5 4 2.2  5 1.2 2.2
+";
+
+#[test]
+fn generations_follow_the_mirrors_that_see_each_other() {
+    let scene = scene_from_text(PERISCOPE);
+    let count = |dr: i32| {
+        let lights = LightSet::collect(&scene, dr);
+        let mut by_gen = [0usize; 5];
+        for s in &lights.sources {
+            by_gen[s.relay.as_ref().map_or(0, |r| r.generation as usize)] += 1;
+        }
+        assert!(lights.warnings.is_empty(), "{:?}", lights.warnings);
+        (lights, by_gen)
+    };
+    // The lamp is in front of all three mirrors: three images of the first generation.
+    let (_, g1) = count(1);
+    assert_eq!(g1, [1, 3, 0, 0, 0]);
+    // Second generation: the image in A is seen by B and (past the baffle, which the
+    // shadow rays find) by C, the image in B by C; the image in C lies behind A and B, and
+    // A sees nothing of B's.
+    let (l2, g2) = count(2);
+    let name = |o: usize| scene.objects.name(o).to_string();
+    let pairs = |l: &LightSet, g: u32| {
+        let mut v: Vec<Vec<String>> = l
+            .sources
+            .iter()
+            .enumerate()
+            .filter(|(_, s)| s.relay.as_ref().is_some_and(|r| r.generation == g))
+            .map(|(i, _)| {
+                let mut c: Vec<String> = l.relays(i).map(|r| name(r.obj)).collect();
+                c.reverse();
+                c
+            })
+            .collect();
+        v.sort();
+        v
+    };
+    assert_eq!(g2[..3], [1, 3, 3]);
+    assert_eq!(
+        pairs(&l2, 2),
+        [["mirA", "mirB"], ["mirA", "mirC"], ["mirB", "mirC"]]
+    );
+    // Third generation: A, B, C in turn only; nothing more at -dr 4.
+    let (l3, g3) = count(3);
+    assert_eq!(g3[..4], [1, 3, 3, 1]);
+    assert_eq!(pairs(&l3, 3), [["mirA", "mirB", "mirC"]]);
+    let (_, g4) = count(4);
+    assert_eq!(g4, [1, 3, 3, 1, 0]);
+    // The third-generation image is the lamp reflected in A, then B, then C, with the three
+    // mirrors' reflectance; a point on the wall folds back to the lamp's side of A.
+    let (si, s) = l3
+        .sources
+        .iter()
+        .enumerate()
+        .find(|(_, s)| s.relay.as_ref().is_some_and(|r| r.generation == 3))
+        .unwrap();
+    let chain: Vec<String> = l3.relays(si).map(|r| name(r.obj)).collect();
+    assert_eq!(chain, ["mirC", "mirB", "mirA"]);
+    assert!((s.emitter.radiance.x - 50.0 * 0.9f64.powi(3)).abs() < 1e-9);
+    let p = DVec3::new(3.0, 3.9, 1.0) - scene.origin;
+    let mut rng = Sampler::for_pixel(0, 0, 0, 0);
+    let mut out = Vec::new();
+    let how = Partition {
+        weight: 1.0,
+        ds: 0.1,
+        dj: 0.0,
+    };
+    l3.sample(&scene, (si, p), how, &mut rng, &mut out);
+    assert!(!out.is_empty(), "the wall sees the lamp through C, B and A");
+    for smp in &out {
+        // Each sample's path crosses C, B and A in turn and its last leg reaches the lamp.
+        let (org, dir, rest) = l3.relay_path(&scene, si, p, smp.dir, smp.dist).unwrap();
+        let end = org + dir * rest + scene.origin;
+        assert!((end.z - 3.0).abs() < 1e-6, "{end}");
+        assert!(end.x >= -3.5 - 1e-6 && end.x <= -2.5 + 1e-6, "{end}");
+    }
+}
+
+fn mean(p: &std::path::Path) -> f64 {
+    let img = tessera::image::read_picture(p).unwrap();
+    img.pixels.iter().map(|c| c[1] as f64).sum::<f64>() / img.pixels.len() as f64
+}
+
+#[test]
+fn later_generations_match_rpict() {
+    let Some(bin) = radiance_bin() else { return };
+    let t = tempfile::tempdir().unwrap();
+    let d = t.path();
+    // Without C, the wall and the plate: the floor under B is lit through A and B.
+    let two: String = PERISCOPE
+        .lines()
+        .filter(|l| !["mirC", "wall", "plate"].iter().any(|w| l.contains(w)))
+        .map(|l| format!("{l}\n"))
+        .collect();
+    for (name, text) in [("peri2", two.as_str()), ("peri3", PERISCOPE)] {
+        std::fs::write(d.join(format!("{name}.rad")), text).unwrap();
+        let oct = run_ok(
+            radiance(&bin, "oconv")
+                .current_dir(d)
+                .arg(format!("{name}.rad")),
+        );
+        std::fs::write(d.join(format!("{name}.oct")), oct).unwrap();
+    }
+    // The floor under B (lit through A and B) and the wall (through A, B and C).
+    let floor = "-vp 3 -9 2.5 -vd 0 1 -.35 -vu 0 0 1 -vh 60 -vv 45";
+    let wall = "-vp 3 2.5 1 -vd 0 1 0 -vu 0 0 1 -vh 60 -vv 45";
+    for (scene, view, dr, dark) in [("peri2", floor, "2", "1"), ("peri3", wall, "3", "2")] {
+        let (rad, oct) = (format!("{scene}.rad"), format!("{scene}.oct"));
+        let mut means = Vec::new();
+        for (ab, tol, bound) in [("0", &SUITE, 0.01), ("1", &AMBIENT, 0.02)] {
+            let mut opts: Vec<&str> = view.split_whitespace().collect();
+            opts.extend([
+                "-x", "128", "-y", "96", "-ps", "1", "-pj", "0", "-dj", "0", "-ds", ".1", "-dt",
+                "0", "-ab", ab, "-ad", "256", "-aa", ".15", "-dr", dr,
+            ]);
+            check_against_rpict(&bin, d, &[&rad], &oct, &opts, tol);
+            let name = format!("{rad}{}", opts.join(""));
+            let (ours, reference) = (
+                mean(&d.join(format!("ours-{name}.hdr"))),
+                mean(&d.join(format!("ref-{name}.hdr"))),
+            );
+            assert!(
+                (ours / reference - 1.0).abs() < bound,
+                "-dr {dr} -ab {ab}: mean {ours} against rpict's {reference}"
+            );
+            means.push(ours);
+        }
+        // One generation fewer leaves the target dark: its light comes through the last
+        // generation.
+        let mut opts: Vec<&str> = view.split_whitespace().collect();
+        opts.extend([
+            "-x", "32", "-y", "24", "-ps", "1", "-pj", "0", "-dj", "0", "-ds", ".1", "-dt", "0",
+            "-ab", "0", "-dr", dark,
+        ]);
+        let out = d.join(format!("dark-{dr}.hdr"));
+        run_ok(tpict_in(d).args(&opts).arg("-o").arg(&out).arg(&rad));
+        assert!(means[0] > 1e-3);
+        assert_eq!(mean(&out), 0.0, "-dr {dark}");
+    }
+}
+
+/// A spotlight aimed at a mirror lights the floor only through it: the cone is tested from
+/// the real spotlight toward the point folded through the mirror (it was tested from the
+/// image, and the floor stayed black). Against rpict at `-ab 0`.
+#[test]
+fn a_spotlights_image_keeps_its_cone() {
+    let Some(bin) = radiance_bin() else { return };
+    let t = tempfile::tempdir().unwrap();
+    let d = t.path();
+    std::fs::write(
+        d.join("spot.rad"),
+        "void spotlight spot 0 0 7 200 200 200 30 1 0 -.3
+void plastic grey 0 0 5 .5 .5 .5 0 0
+void mirror silver 0 0 3 .9 .9 .9
+grey polygon floor 0 0 12  -5 -4 0  5 -4 0  5 4 0  -5 4 0
+spot ring bulb 0 0 8  -2 0 3  1 0 -1  0 .1
+silver polygon mir 0 0 12  2 2 4  2 2 0.01  2 -2 0.01  2 -2 4
+grey polygon block 0 0 12  -1.5 -4 0.01 -1.5 -4 2 -1.5 4 2 -1.5 4 0.01
+",
+    )
+    .unwrap();
+    let oct = run_ok(radiance(&bin, "oconv").current_dir(d).arg("spot.rad"));
+    std::fs::write(d.join("spot.oct"), oct).unwrap();
+    let opts: Vec<&str> = "-vp 0 -7 6 -vd 0 1 -1 -vu 0 0 1 -vh 70 -vv 60 -x 128 -y 96 -ps 1 \
+         -pj 0 -dj 0 -ds .1 -dt 0 -ab 0 -dr 1"
+        .split_whitespace()
+        .collect();
+    check_against_rpict(&bin, d, &["spot.rad"], "spot.oct", &opts, &SUITE);
+    let name = format!("spot.rad{}", opts.join(""));
+    let (ours, reference) = (
+        mean(&d.join(format!("ours-{name}.hdr"))),
+        mean(&d.join(format!("ref-{name}.hdr"))),
+    );
+    assert!(reference > 0.0);
+    assert!(
+        (ours / reference - 1.0).abs() < 0.01,
+        "mean {ours} against rpict's {reference}"
+    );
 }

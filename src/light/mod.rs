@@ -8,6 +8,7 @@
 
 pub mod direct;
 pub mod source;
+pub mod virtuals;
 pub mod viscache;
 
 pub use source::{LightSet, Source, SourceSample};

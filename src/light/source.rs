@@ -5,7 +5,7 @@ use crate::geometry::any_perpendicular;
 use crate::geometry::cone::ConeKind;
 use crate::geometry::Surface;
 use crate::material::emitter::{Emitter, EmitterKind};
-use crate::material::{reflect, Material};
+use crate::material::Material;
 use crate::render::sampler::Sampler;
 use crate::scene::build::Scene;
 use crate::FTINY;
@@ -74,8 +74,12 @@ pub struct Relay {
     pub normal: DVec3,
     /// Plane offset: `normal · x = offset` on the mirror.
     pub offset: f64,
-    /// Index of the source it reflects.
+    /// Index of the source it reflects (real, or virtual of the generation before).
+    pub parent: usize,
+    /// Index of the real source at the end of the chain.
     pub real: usize,
+    /// Its generation (1: the image of a real source).
+    pub generation: u32,
 }
 
 /// A light source.
@@ -185,7 +189,7 @@ fn strat(i: usize, n: usize, dj: f64, rng: &mut Sampler) -> f64 {
 
 impl LightSet {
     /// Collect the sources of a scene; `relays` is the number of virtual-source generations
-    /// (`-dr`; one generation is modelled).
+    /// (`-dr`; see [`super::virtuals`]).
     pub fn collect(scene: &Scene, relays: i32) -> LightSet {
         let mut set = LightSet::default();
         for (i, o) in scene.objects.iter().enumerate() {
@@ -281,12 +285,7 @@ impl LightSet {
             });
         }
         if relays > 0 {
-            set.add_virtual(scene);
-            if relays > 1 {
-                set.warnings.push(format!(
-                    "-dr {relays}: only one generation of virtual sources is modelled"
-                ));
-            }
+            set.add_virtual(scene, relays);
         }
         set.glows = set
             .sources
@@ -303,59 +302,6 @@ impl LightSet {
             .collect();
         set.glows.sort_by_key(|g| g.2);
         set
-    }
-
-    fn add_virtual(&mut self, scene: &Scene) {
-        let nreal = self.sources.len();
-        for (mi, o) in scene.objects.iter().enumerate() {
-            let Some(m) = o.material else { continue };
-            let Material::Mirror(mirror) = scene.material(m) else {
-                continue;
-            };
-            let (normal, point) = match &o.surface {
-                Surface::Polygon(p) if p.area > 0.0 => (p.normal, p.centroid),
-                Surface::Ring(r) => (r.normal, r.center),
-                _ => {
-                    self.warnings.push(format!(
-                        "{}: mirror '{}' is not flat and relays no light sources",
-                        scene.objects.loc(mi),
-                        scene.objects.name(mi)
-                    ));
-                    continue;
-                }
-            };
-            let offset = normal.dot(point);
-            for si in 0..nreal {
-                let s = &self.sources[si];
-                if s.obj == Some(mi) {
-                    continue;
-                }
-                // Only sources in front of the mirror are reflected.
-                let in_front = match s.shape {
-                    SourceShape::Distant { dir, .. } => dir.dot(normal) > FTINY,
-                    _ => normal.dot(s.center) - offset > scene.eps,
-                };
-                if !in_front {
-                    continue;
-                }
-                let center = s.center - 2.0 * (normal.dot(s.center) - offset) * normal;
-                let mut e = s.emitter.clone();
-                e.radiance *= mirror.color;
-                self.sources.push(Source {
-                    obj: s.obj,
-                    distant: s.distant,
-                    shape: s.shape.clone(),
-                    emitter: e,
-                    center,
-                    relay: Some(Relay {
-                        obj: mi,
-                        normal,
-                        offset,
-                        real: si,
-                    }),
-                });
-            }
-        }
     }
 
     /// The local, real glow sources with a radius of influence (`glow` with radius > 0):
@@ -414,16 +360,14 @@ impl LightSet {
     ) {
         let Partition { weight, ds, dj } = how;
         let src = &self.sources[si];
-        // Virtual sources: sample the real source from the mirrored point, then mirror back.
-        let (q, relay) = match &src.relay {
-            Some(r) => {
-                let h = r.normal.dot(p) - r.offset;
-                if h <= scene.eps {
-                    return;
-                }
-                (p - 2.0 * h * r.normal, Some(r))
-            }
-            None => (p, None),
+        // Virtual sources: sample the real source from the point folded through the
+        // mirrors, then map the directions back.
+        let (q, real_center) = match &src.relay {
+            Some(r) => match self.fold(si, p, scene.eps) {
+                Some(q) => (q, self.sources[r.real].center),
+                None => return,
+            },
+            None => (p, src.center),
         };
         if let EmitterKind::Glow { maxrad } = src.emitter.kind {
             // A virtual source's centre is the mirrored one: the distance is the path's length.
@@ -433,12 +377,11 @@ impl LightSet {
         }
         let start = out.len();
         let focal = src.emitter.focal_distance();
-        let center = src.center;
         let mut push = |dir: DVec3, dist: f64, mut omega: f64, _at: DVec3| {
             if omega.is_nan() || omega <= 0.0 || !dir.is_finite() {
                 return;
             }
-            let spot = src.emitter.spot_factor(center, q);
+            let spot = src.emitter.spot_factor(real_center, q);
             if focal > 0.0 && dist.is_finite() {
                 // A spotlight's area is seen as if from its focal point behind the source.
                 omega *= (dist / (dist + focal)).powi(2);
@@ -598,20 +541,14 @@ impl LightSet {
                 }
             }
         }
-        if let Some(r) = relay {
-            // Mirror the directions back, and keep only the samples whose path crosses the
-            // mirror itself: the others cannot be relayed, whatever else is in the way, and
-            // would otherwise reach the adaptive shadow test's untested estimate.
-            let mirror = &scene.objects[r.obj].surface;
+        if src.relay.is_some() {
+            // Map the directions back, and keep only the samples whose path crosses every
+            // mirror of the chain: the others cannot be relayed, whatever else is in the
+            // way, and would otherwise reach the adaptive shadow test's untested estimate.
             let mut kept = start;
             for i in start..out.len() {
-                let dir = reflect(out[i].dir, r.normal);
-                let reach = if out[i].dist.is_finite() {
-                    out[i].dist
-                } else {
-                    f64::MAX
-                };
-                if mirror.intersect(p, dir, reach).is_some() {
+                let dir = self.unfold_dir(si, out[i].dir);
+                if self.relay_path(scene, si, p, dir, out[i].dist).is_some() {
                     out[i].dir = dir;
                     out.swap(kept, i);
                     kept += 1;

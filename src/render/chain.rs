@@ -10,7 +10,7 @@ use super::shading::ShadingPoint;
 use super::trace::Tracer;
 use crate::color::{sanitize, Color};
 use crate::light::SourceSample;
-use crate::material::{reflect, MatId};
+use crate::material::MatId;
 use crate::modifier::{MixCoefficient, ModRef, ModifierKind};
 use crate::scene::build::DistantObject;
 use crate::scene::transform::Transform;
@@ -135,13 +135,9 @@ impl Tracer<'_> {
             return Color::ONE;
         }
         // The leg of the path that reaches the source.
-        let (org, dir, reach) = match &src.relay {
-            Some(r) => {
-                let (h, cos) = (r.normal.dot(p) - r.offset, -s.dir.dot(r.normal));
-                let tm = if h > 0.0 && cos > 0.0 { h / cos } else { 0.0 };
-                (p + s.dir * tm, reflect(s.dir, r.normal), s.dist - tm)
-            }
-            None => (p, s.dir, s.dist),
+        let Some((org, dir, reach)) = self.lights.relay_path(self.scene, s.src, p, s.dir, s.dist)
+        else {
+            return Color::ONE;
         };
         let ray = Ray::shadow(org, dir);
         match (src.obj, src.distant) {

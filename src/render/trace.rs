@@ -583,10 +583,11 @@ impl<'a> Tracer<'a> {
             } else {
                 dist
             };
-            // The mirror's reflectance is already in the virtual source's radiance (its
-            // potential), so the transmission here is that of the two legs only.
-            let real = self.shadow_real(hit.point, rdir, rest, relay.real, hit.antimatter, rng);
-            return t * real;
+            // The mirrors' reflectances are already in the virtual source's radiance (its
+            // potential), so the transmission here is that of the legs only. The next leg
+            // leads to the source this one reflects: real, or the image in another mirror.
+            let next = self.shadow((hit.point, rdir, rest), relay.parent, hit.antimatter, rng);
+            return t * next;
         }
         self.shadow_real(org, dir, dist, si, antimatter, rng)
     }
