@@ -476,3 +476,76 @@ fn rif_scene_commands_run_built_in() {
         "job mean {a} against rpict's {b}"
     );
 }
+
+/// rad's last steps: a job from a rif file is finished as rad's pfilt finishes rad's picture
+/// (the reduction by the supersampling factor, the EXPOSURE), and `trad` runs a rif end to
+/// end (plan, workers, merge, assemble) into rad's picture names. Against real `rad` (its
+/// oconv, rpict and pfilt): same sizes and exposure, means within 1% (`-ab 0`), pictures
+/// within the suite's tolerance. Without Radiance only Tessera's side is checked.
+#[test]
+fn trad_renders_a_rif_as_rad_does() {
+    let t = tempfile::tempdir().unwrap();
+    let d = t.path();
+    std::fs::write(d.join("room.rad"), ROOM).unwrap();
+    std::fs::write(
+        d.join("p.rif"),
+        "scene= room.rad\nZONE= I 0 4 0 5 0 3\nQUALITY= Medium\nEXPOSURE= +1\n\
+         RESOLUTION= 64 48\nview= X\nview= corner -vp .5 .5 1.5 -vd 1 1 0\n",
+    )
+    .unwrap();
+    let trad = || {
+        let mut c = Command::new(env!("CARGO_BIN_EXE_trad"));
+        c.current_dir(d).env_remove("RAYPATH");
+        c
+    };
+    run_ok(trad().args(["p.rif", "--set", "PICTURE=t", "--threads", "2"]));
+    assert!(!d.join("t.job").exists(), "the job directory is removed");
+    let read = |n: &str| tessera::image::read_picture(&d.join(n)).unwrap();
+    let (x, corner) = (read("t_X.hdr"), read("t_corner.hdr"));
+    // Medium quality renders at twice the resolution; the 45-degree views are square.
+    assert_eq!((x.width, x.height), (48, 48));
+    assert_eq!((corner.width, corner.height), (48, 48));
+    assert_eq!(x.header.exposure, 2.0);
+    // --raw keeps the rendered picture: twice the size, half the value.
+    run_ok(trad().args([
+        "p.rif",
+        "--set",
+        "PICTURE=r",
+        "--view",
+        "X",
+        "--raw",
+        "--keep-job",
+    ]));
+    assert!(d.join("r.job").is_dir());
+    let raw = read("r_X.hdr");
+    assert_eq!((raw.width, raw.height), (96, 96));
+    let mean = |p: &tessera::image::Image| {
+        p.pixels.iter().map(|c| c[1] as f64).sum::<f64>() / p.pixels.len() as f64
+    };
+    assert!((mean(&x) / (2.0 * mean(&raw)) - 1.0).abs() < 0.02);
+    // An existing job directory is refused before anything is rendered.
+    let o = trad()
+        .args(["p.rif", "--set", "PICTURE=r", "--job", "r.job"])
+        .output()
+        .unwrap();
+    assert!(!o.status.success());
+    assert!(String::from_utf8_lossy(&o.stderr).contains("exists"));
+    let Some(bin) = radiance_bin() else { return };
+    run_ok(radiance(&bin, "rad").current_dir(d).arg("p.rif"));
+    for v in ["X", "corner"] {
+        let (ours, theirs) = (d.join(format!("t_{v}.hdr")), d.join(format!("p_{v}.hdr")));
+        let (a, b) = (
+            tessera::image::read_picture(&ours).unwrap(),
+            tessera::image::read_picture(&theirs).unwrap(),
+        );
+        assert_eq!((a.width, a.height), (b.width, b.height), "{v}");
+        assert_eq!(a.header.exposure, b.header.exposure, "{v}");
+        assert!(
+            (mean(&a) / mean(&b) - 1.0).abs() < 0.01,
+            "{v}: mean {} against rad's {}",
+            mean(&a),
+            mean(&b)
+        );
+        assert_like_reference(&bin, &ours, &theirs, &AMBIENT, v);
+    }
+}

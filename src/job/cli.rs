@@ -142,14 +142,14 @@ fn tplan(a: TplanArgs) -> Result<i32> {
         (_, Some(o)) => o,
         (_, None) => bail!("--output JOBDIR is required"),
     };
-    let (rest, views) = match &a.rif {
+    let (rest, views, finish) = match &a.rif {
         Some(_) => {
             if a.frames.is_some() {
                 bail!("--frames and --rif do not go together: the rif file's views are the frames");
             }
             rif_job_args(&a)?
         }
-        None => (a.rest.clone(), None),
+        None => (a.rest.clone(), None, None),
     };
     let req = PlanRequest {
         tiles: a.tiles,
@@ -172,6 +172,7 @@ fn tplan(a: TplanArgs) -> Result<i32> {
             rest
         },
         command: command_line(),
+        finish,
     };
     let m = create_job(&output, &req)?;
     let tiles: usize = m.frames.iter().map(|f| f.tiles.len()).sum();
@@ -241,7 +242,13 @@ fn rif_print(a: &TplanArgs) -> Result<i32> {
 
 /// The job's rpict arguments and frame views from a rif file. rad's `-af` (the job has its
 /// own store), `-t` and `-e` (rpict's progress reports) are left out.
-fn rif_job_args(a: &TplanArgs) -> Result<(Vec<String>, Option<Vec<crate::view::View>>)> {
+type RifJobArgs = (
+    Vec<String>,
+    Option<Vec<crate::view::View>>,
+    Option<super::finish::Finish>,
+);
+
+fn rif_job_args(a: &TplanArgs) -> Result<RifJobArgs> {
     let (plan, views, resolved) = rif_plan(a)?;
     let mut args = Vec::new();
     let words = plan.rpict_words_inline(&views[0]);
@@ -260,14 +267,19 @@ fn rif_job_args(a: &TplanArgs) -> Result<(Vec<String>, Option<Vec<crate::view::V
         i += 1;
     }
     args.extend(plan.scene_files.iter().cloned());
+    let (finish, warnings) = super::finish::Finish::from_rad(plan.supersample, &plan.pfilt)
+        .with_context(|| format!("{}", a.rif.as_ref().expect("--rif").display()))?;
+    for w in warnings {
+        eprintln!("tplan: warning - {w}");
+    }
     for (n, v) in views.iter().enumerate() {
         eprintln!(
-            "tplan: frame {n}: view {} (rad reduces it with: {})",
+            "tplan: frame {n}: view {} (tassemble finishes it as rad's {})",
             v.name,
             plan.pfilt_command(v, &format!("frame{n}.hdr"))
         );
     }
-    Ok((args, Some(resolved)))
+    Ok((args, Some(resolved), finish.changes().then_some(finish)))
 }
 
 /// `tpiece`: a worker.
@@ -443,6 +455,11 @@ struct TassembleArgs {
     /// their own.
     #[arg(long)]
     temporal_exposure: bool,
+    /// For a job made from a rif file: write the rendered picture as it is, without rad's
+    /// last step (the reduction by the supersampling factor and the EXPOSURE) that is
+    /// otherwise applied.
+    #[arg(long)]
+    raw: bool,
 }
 
 /// Entry point of `tassemble`.
@@ -486,7 +503,10 @@ fn tassemble(a: TassembleArgs) -> Result<i32> {
     let mut failed = false;
     let mut pictures = Vec::new();
     for f in frames {
-        let (img, missing) = super::assemble::assemble_frame(&job, &m, f, &cmd)?;
+        let (mut img, missing) = super::assemble::assemble_frame(&job, &m, f, &cmd)?;
+        if let (Some(fin), false) = (&m.finish, a.raw) {
+            img = fin.apply(&img);
+        }
         if !missing.is_empty() {
             let list: Vec<String> = missing
                 .iter()

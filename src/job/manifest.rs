@@ -75,6 +75,10 @@ pub struct Manifest {
     /// it was planned that way (informational).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub frame_cost_estimate: Option<f64>,
+    /// For a job made from a rif file: rad's last step, which `tassemble` applies
+    /// ([`super::finish`]).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub finish: Option<super::finish::Finish>,
     /// The frames.
     pub frames: Vec<FramePlan>,
 }
@@ -99,6 +103,8 @@ struct ManifestFile {
     workers_expected: usize,
     #[serde(default)]
     frame_cost_estimate: Option<f64>,
+    #[serde(default)]
+    finish: Option<super::finish::Finish>,
     frames: Vec<FramePlan>,
 }
 
@@ -132,6 +138,7 @@ impl TryFrom<ManifestFile> for Manifest {
             lease_seconds: f.lease_seconds,
             workers_expected: f.workers_expected,
             frame_cost_estimate: f.frame_cost_estimate,
+            finish: f.finish,
             frames: f.frames,
         })
     }
@@ -168,6 +175,9 @@ impl Manifest {
             );
         }
         check_plain_name(&self.scene_file).context("scene_file")?;
+        if let Some(f) = &self.finish {
+            f.validate()?;
+        }
         if parse_hex32(&self.fingerprint).is_none() {
             bail!("fingerprint must be 64 hex digits");
         }
@@ -261,6 +271,8 @@ pub struct PlanRequest {
     pub args: Vec<String>,
     /// The full command line (for headers).
     pub command: String,
+    /// A rif job's last step (rad's pfilt), applied by `tassemble`.
+    pub finish: Option<super::finish::Finish>,
 }
 
 /// Write primitives back in Radiance's scene syntax (numbers in shortest round-trip form,
@@ -465,6 +477,7 @@ pub fn create_job(dir: &Path, req: &PlanRequest) -> Result<Manifest> {
         lease_seconds: lease,
         workers_expected: workers,
         frame_cost_estimate,
+        finish: req.finish.clone(),
         frames,
     };
     m.validate()?;
@@ -594,6 +607,7 @@ mod tests {
             lease_seconds: 180.0,
             workers_expected: 2,
             frame_cost_estimate: None,
+            finish: None,
             frames: Vec::new(),
         };
         let now = serde_json::to_value(&m).unwrap();

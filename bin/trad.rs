@@ -1,0 +1,4 @@
+//! `trad`: see `tessera::job::rad`.
+fn main() {
+    std::process::exit(tessera::job::rad::trad_main());
+}
