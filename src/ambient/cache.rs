@@ -120,19 +120,31 @@ struct CellList {
 
 type Grid = HashMap<Key, CellList, BuildHasherDefault<KeyHasher>>;
 
+/// A shard's lock on a cache line of its own: taking a read lock writes the lock word, and
+/// neighbouring shards' locks in one line made threads reading different shards contend.
+#[repr(align(128))]
+struct Shard(RwLock<Grid>);
+
+/// Counters written at every insert, kept off the line the lookups read.
+#[derive(Default)]
+#[repr(align(128))]
+struct Written {
+    count: AtomicU64,
+    seq: AtomicU64,
+    refused: AtomicU64,
+}
+
 /// The shared cache.
 pub struct AmbientCache {
     base: f64,
     aa: f64,
-    shards: Vec<RwLock<Grid>>,
+    shards: Vec<Shard>,
     levels_used: AtomicU64,
-    count: AtomicU64,
-    seq: AtomicU64,
     origin_id: u64,
     max_level_seen: AtomicU32,
     sink: OnceLock<Box<dyn ValueSink>>,
-    /// Values refused by [`AmbientCache::insert`].
-    refused: AtomicU64,
+    /// Values held, ids handed out and values refused by [`AmbientCache::insert`].
+    written: Written,
     /// Largest radius accepted ([`AmbientCache::with_max_radius`]).
     max_rad: f64,
 }
@@ -156,14 +168,14 @@ impl AmbientCache {
         AmbientCache {
             base,
             aa,
-            shards: (0..SHARDS).map(|_| RwLock::new(Grid::default())).collect(),
+            shards: (0..SHARDS)
+                .map(|_| Shard(RwLock::new(Grid::default())))
+                .collect(),
             levels_used: AtomicU64::new(0),
-            count: AtomicU64::new(0),
-            seq: AtomicU64::new(0),
             origin_id,
             max_level_seen: AtomicU32::new(0),
             sink: OnceLock::new(),
-            refused: AtomicU64::new(0),
+            written: Written::default(),
             max_rad: f64::INFINITY,
         }
     }
@@ -192,12 +204,12 @@ impl AmbientCache {
 
     /// Values refused by [`AmbientCache::insert`] (non-finite or absurd).
     pub fn refused(&self) -> u64 {
-        self.refused.load(Ordering::Relaxed)
+        self.written.refused.load(Ordering::Relaxed)
     }
 
     /// Number of values held.
     pub fn len(&self) -> u64 {
-        self.count.load(Ordering::Relaxed)
+        self.written.count.load(Ordering::Relaxed)
     }
 
     /// True when empty.
@@ -209,7 +221,7 @@ impl AmbientCache {
     pub fn next_id(&self) -> ValueId {
         ValueId {
             origin: self.origin_id,
-            seq: self.seq.fetch_add(1, Ordering::Relaxed),
+            seq: self.written.seq.fetch_add(1, Ordering::Relaxed),
         }
     }
 
@@ -250,7 +262,7 @@ impl AmbientCache {
             && v.val.is_finite()
             && v.val.min_element() >= 0.0;
         if !sane {
-            self.refused.fetch_add(1, Ordering::Relaxed);
+            self.written.refused.fetch_add(1, Ordering::Relaxed);
             return;
         }
         // Padded so that rounding never leaves out a cell the sphere touches.
@@ -263,7 +275,7 @@ impl AmbientCache {
             for y in lo.y as i64..=hi.y as i64 {
                 for z in lo.z as i64..=hi.z as i64 {
                     let key = (l, x, y, z);
-                    if let Ok(mut shard) = self.shards[shard_of(&key)].write() {
+                    if let Ok(mut shard) = self.shards[shard_of(&key)].0.write() {
                         let cell = shard.entry(key).or_default();
                         cell.reach.push(entry);
                         cell.vals.push(Arc::clone(&shared));
@@ -271,9 +283,14 @@ impl AmbientCache {
                 }
             }
         }
-        self.levels_used.fetch_or(1u64 << l, Ordering::Relaxed);
-        self.max_level_seen.fetch_max(l, Ordering::Relaxed);
-        self.count.fetch_add(1, Ordering::Relaxed);
+        // Written only when they change: every lookup reads them.
+        if self.levels_used.load(Ordering::Relaxed) & (1u64 << l) == 0 {
+            self.levels_used.fetch_or(1u64 << l, Ordering::Relaxed);
+        }
+        if self.max_level_seen.load(Ordering::Relaxed) < l {
+            self.max_level_seen.fetch_max(l, Ordering::Relaxed);
+        }
+        self.written.count.fetch_add(1, Ordering::Relaxed);
         if v.id.origin == self.origin_id {
             if let Some(s) = self.sink.get() {
                 s.accept(&v);
@@ -301,7 +318,7 @@ impl AmbientCache {
                 continue;
             }
             let key = self.key_at(l, p);
-            if let Ok(grid) = self.shards[shard_of(&key)].read() {
+            if let Ok(grid) = self.shards[shard_of(&key)].0.read() {
                 if let Some(cell) = grid.get(&key) {
                     for (k, r) in cell.reach.iter().enumerate() {
                         let d = [p.x - r[0], p.y - r[1], p.z - r[2]];
@@ -318,7 +335,7 @@ impl AmbientCache {
     pub fn all(&self) -> Vec<CachedValue> {
         let mut out = Vec::with_capacity(self.len() as usize);
         for s in &self.shards {
-            if let Ok(shard) = s.read() {
+            if let Ok(shard) = s.0.read() {
                 // Each value once: from the cell holding its position.
                 for (key, cell) in shard.iter() {
                     for v in &cell.vals {

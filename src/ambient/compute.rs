@@ -8,6 +8,7 @@
 
 use super::cache::AmbientCache;
 use super::settings::{caches, computes, AmbientSettings, AS0_SPLIT_LIMIT, CACHE_MIN_AA};
+use super::striped::Striped;
 use crate::color::{bright, Color};
 use crate::light::viscache::VisQuery;
 use crate::options::render::RenderParams;
@@ -25,9 +26,9 @@ pub const AVGREFL: f64 = 0.5;
 #[derive(Debug, Default)]
 pub struct AmbientStats {
     /// Cache lookups.
-    pub lookups: AtomicU64,
+    pub lookups: Striped,
     /// Lookups answered by interpolation.
-    pub hits: AtomicU64,
+    pub hits: Striped,
     /// New values computed, by ambient level (index clamped to 7).
     pub new_values: [AtomicU64; 8],
     /// CPU nanoseconds (of the threads that made them) spent computing new level-0 values,
@@ -35,16 +36,16 @@ pub struct AmbientStats {
     /// counted twice.
     pub amb_nanos: AtomicU64,
     /// Hemisphere sample rays traced.
-    pub sample_rays: AtomicU64,
+    pub sample_rays: Striped,
     /// New values that got light-leak (corral) flags.
     pub corral_values: AtomicU64,
     /// Light-leak test rays traced at lookups.
-    pub leak_tests: AtomicU64,
+    pub leak_tests: Striped,
     /// Cached values rejected at a lookup because a leak-test ray was blocked.
-    pub leak_rejects: AtomicU64,
+    pub leak_rejects: Striped,
     /// Shadow rays at sample hits answered from their footprint's cube instead of traced
     /// (see [`crate::light::viscache`]).
-    pub shadows_reused: AtomicU64,
+    pub shadows_reused: Striped,
 }
 
 impl AmbientStats {
