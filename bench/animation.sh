@@ -48,7 +48,7 @@ for m in "${modes[@]}"; do
         $RES $AMB $opts demo.rad 2>/dev/null
     /usr/bin/time -f "%U %S %e" -o "$TMP/$name.time" "$B/tpiece" "$job" --threads 1 -q
     "$B/tstat" "$job" --json > "$OUT/$name.json"
-    "$B/tassemble" "$job" --all-frames -o "$TMP/$name-%03d.hdr" 2>/dev/null
+    "$B/tassemble" "$job" --force --all-frames -o "$TMP/$name-%03d.hdr" 2>/dev/null
     [[ $name == ax ]] && "$B/tassemble" "$job" --contact-sheet "$OUT/sheet-$name.png" --thumb-width 64 2>/dev/null
     echo "$name: $(cat "$TMP/$name.time") (user sys wall s)" >&2
 done
@@ -87,7 +87,7 @@ for seeds in per-frame same; do
     "$B/tplan" --workers 1 --frames "$TMP/still.vf" -o "$job" -- $RES $AMB -aa .1 $extra \
         demo.rad 2>/dev/null
     "$B/tpiece" "$job" --threads 1 -q
-    "$B/tassemble" "$job" --all-frames -o "$TMP/still-$seeds-%03d.hdr" 2>/dev/null
+    "$B/tassemble" "$job" --force --all-frames -o "$TMP/still-$seeds-%03d.hdr" 2>/dev/null
     for k in $(seq 1 $((STILL - 1))); do
         pvalue -h -H -b -d "$TMP/still-$seeds-$(printf %03d $((k - 1))).hdr" > "$TMP/a.txt"
         pvalue -h -H -b -d "$TMP/still-$seeds-$(printf %03d "$k").hdr" > "$TMP/b.txt"

@@ -76,7 +76,7 @@ for res in $RES; do
             plan --workers "$WORKERS" -o "$TMP/job" -- "${VIEW[@]}" -x "$res" -y "$res" -ab "$ab" "${SCENE[@]}" >/dev/null
             wn+=("$(run_workers "$TMP/job" "$WORKERS")")
             idle+=("$(job_idle "$TMP/job")")
-            asm+=("$(cputime 1 "$B/tassemble" "$TMP/job" -o "$TMP/out.hdr")")
+            asm+=("$(cputime 1 "$B/tassemble" "$TMP/job" --force -o "$TMP/out.hdr")")
         done
         m1=$(median "${one[@]}")
         printf '%-6s %-3s %-22s %-10s %-22s %-22s %-7s %-7s %-10s %-6s %-22s %s\n' "${res}²" "$ab" "$(stats "${one[@]}")" "$rays" \

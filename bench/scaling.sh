@@ -96,7 +96,7 @@ for P in $WORKERS; do
         read -r idle sync < <(job_stats "$job")
         if [ "$mode" = processes ]; then label="$P x tpiece --threads 1"; else label="tpiece --threads $P"; fi
         row "$label ($tiles tiles)" "$P" "$w" "$c" "$m" "$idle" "$sync"
-        "$B/tassemble" "$job" -o "$OUT/job-$P-$mode.hdr" 2> /dev/null
+        "$B/tassemble" "$job" --force -o "$OUT/job-$P-$mode.hdr" 2> /dev/null
         rm -rf "$job"
     done
 done

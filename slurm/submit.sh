@@ -24,6 +24,7 @@
 #   TESSERA_ARRAY_LIMIT      at most this many render tasks at once (sbatch --array=...%M)
 #   TESSERA_AMB_FLUSH        passed to tpiece --amb-flush
 #   TESSERA_PARTIAL=1        tassemble --partial
+#   TESSERA_FORCE=1          tassemble --force (replace an existing picture)
 #   TESSERA_SBATCH_TIMEOUT   seconds allowed for one sbatch call (default 120)
 # The batch jobs inherit this environment (sbatch's default --export=ALL), which is how
 # TESSERA_BIN, PATH and RAYPATH reach them; the job directory and output are passed as

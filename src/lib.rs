@@ -40,6 +40,7 @@ pub mod options;
 pub mod render;
 pub mod rif;
 pub mod runinfo;
+pub mod safefile;
 pub mod scene;
 pub mod session;
 pub mod tpict;

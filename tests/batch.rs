@@ -1026,6 +1026,26 @@ fn tassemble_writes_every_format() {
         (img.width() as usize, img.height() as usize),
         (hdr.width, hdr.height)
     );
+    // An existing picture is not replaced without --force (it is left as it was).
+    std::fs::write(&png, b"mine").unwrap();
+    let o = cmd("tassemble")
+        .arg(&job)
+        .arg("-o")
+        .arg(&png)
+        .output()
+        .unwrap();
+    assert!(!o.status.success());
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(err.contains("exists") && err.contains("--force"), "{err}");
+    assert_eq!(std::fs::read(&png).unwrap(), b"mine");
+    run_ok(
+        cmd("tassemble")
+            .arg(&job)
+            .arg("--force")
+            .arg("-o")
+            .arg(&png),
+    );
+    assert!(std::fs::read(&png).unwrap().starts_with(b"\x89PNG"));
 }
 
 /// `tstat --baseline`: speed-up and efficiency against a one-worker job, counting a

@@ -1201,3 +1201,28 @@ fn bad_output_names_are_refused_before_rendering() {
     assert!(out.status.success());
     assert!(read_picture(&d.join("out.pic")).is_ok());
 }
+
+/// An empty scene (nothing on standard input, or empty files) is an error, not a black
+/// picture (rpict reads an octree, which oconv does not make of nothing); a scene of
+/// materials only still renders (black), as rpict renders it.
+#[test]
+fn an_empty_scene_is_an_error() {
+    let t = workdir();
+    let d = t.path();
+    std::fs::write(d.join("empty.rad"), "# nothing\n").unwrap();
+    let err = fails(
+        tpict_in(d)
+            .args(["-x", "8", "-y", "8", "-o", "e.hdr"])
+            .stdin(std::process::Stdio::null()),
+    );
+    assert!(
+        one_line(&err).contains("<stdin>: the scene is empty"),
+        "{err}"
+    );
+    let err = fails(tpict_in(d).args(["-x", "8", "-y", "8", "-o", "e.hdr", "empty.rad"]));
+    assert!(
+        one_line(&err).contains("empty.rad: the scene is empty"),
+        "{err}"
+    );
+    assert!(!d.join("e.hdr").exists());
+}

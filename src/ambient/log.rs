@@ -648,10 +648,11 @@ impl LogReader {
         expect: Option<&[u8; 32]>,
         force: bool,
     ) -> Result<LogReader, AmbLogError> {
-        let mut file = File::open(path).map_err(|source| AmbLogError::Io {
-            path: path.to_path_buf(),
-            source,
-        })?;
+        let mut file =
+            crate::safefile::open_regular(path, true).map_err(|source| AmbLogError::Io {
+                path: path.to_path_buf(),
+                source,
+            })?;
         let (header, start) = read_header(path, &mut file)?;
         if let Some(f) = expect {
             check_fingerprint(path, &header, f, force)?;

@@ -52,7 +52,7 @@ fn record_path(job: &JobDir, frame: u32) -> PathBuf {
 /// silently replaced).
 pub fn read(job: &JobDir, b: &TimeBudget, frame: u32) -> Result<Option<FrameBudget>> {
     let path = record_path(job, frame);
-    let bytes = match std::fs::read(&path) {
+    let bytes = match crate::safefile::read_bounded(&path, 1 << 16) {
         Ok(b) => b,
         Err(e) if e.kind() == std::io::ErrorKind::NotFound => return Ok(None),
         Err(e) => return Err(anyhow!("cannot read {}: {e}", path.display())),

@@ -455,6 +455,9 @@ struct TassembleArgs {
     /// their own.
     #[arg(long)]
     temporal_exposure: bool,
+    /// Replace an existing output picture (refused otherwise).
+    #[arg(long)]
+    force: bool,
     /// For a job made from a rif file: write the rendered picture as it is, without rad's
     /// last step (the reduction by the supersampling factor and the EXPOSURE) that is
     /// otherwise applied.
@@ -500,6 +503,19 @@ fn tassemble(a: TassembleArgs) -> Result<i32> {
     if let Some(p) = &a.output {
         crate::image::check_output_path(p).map_err(anyhow::Error::msg)?;
     }
+    // Outputs are never replaced unless asked, as tpict's.
+    if !a.force {
+        for f in &frames {
+            if let Some(Some(p)) = target(*f)? {
+                if p.exists() {
+                    bail!(
+                        "{} exists: tassemble replaces a picture only with --force",
+                        p.display()
+                    );
+                }
+            }
+        }
+    }
     let mut failed = false;
     let mut pictures = Vec::new();
     for f in frames {
@@ -514,7 +530,9 @@ fn tassemble(a: TassembleArgs) -> Result<i32> {
                 .collect();
             if !a.partial {
                 eprintln!(
-                    "tassemble: frame {f}: {} of {} tiles missing or invalid: {}",
+                    "tassemble: error: frame {f}: {} of {} tiles missing or invalid: {} \
+                     (run tpiece on the job to render them, or pass --partial to fill them \
+                     black)",
                     missing.len(),
                     m.frame(f).map(|p| p.tiles.len()).unwrap_or(0),
                     list.join(", ")

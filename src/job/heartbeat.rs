@@ -94,7 +94,7 @@ pub fn beat_interval(lease: f64) -> Duration {
 
 /// Read a heartbeat file (None when missing or unreadable, e.g. being replaced).
 pub fn read_record(path: &Path) -> Option<WorkerRecord> {
-    let text = std::fs::read_to_string(path).ok()?;
+    let text = crate::safefile::read_text_bounded(path, 1 << 16).ok()?;
     serde_json::from_str(&text).ok()
 }
 

@@ -19,7 +19,7 @@ pub const DEFAULT_LEASE: f64 = 180.0;
 /// Longest lease accepted (30 days): a worker's clocks and timers hold it as a duration.
 pub const MAX_LEASE: f64 = 30.0 * 86400.0;
 /// Largest picture side accepted.
-const MAX_RES: usize = 1 << 15;
+pub const MAX_RES: usize = 1 << 15;
 /// Most frames and tiles per frame (task names have five digits).
 const MAX_INDEX: usize = 99_999;
 
@@ -144,11 +144,14 @@ impl TryFrom<ManifestFile> for Manifest {
     }
 }
 
+/// The largest manifest read (99,999 frames of many tiles stay far below it).
+pub const MAX_MANIFEST_BYTES: u64 = 1 << 30;
+
 impl Manifest {
     /// Read and validate `JOB/manifest.json`.
     pub fn load(job: &JobDir) -> Result<Manifest> {
         let path = job.manifest();
-        let text = std::fs::read_to_string(&path)
+        let text = crate::safefile::read_text_bounded(&path, MAX_MANIFEST_BYTES)
             .with_context(|| format!("cannot read job manifest {}", path.display()))?;
         let m: Manifest = serde_json::from_str(&text).map_err(|e| {
             anyhow!(

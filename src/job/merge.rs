@@ -63,7 +63,7 @@ fn index_path(job: &JobDir) -> PathBuf {
 pub fn load_store(job: &JobDir, fingerprint: &[u8; 32], force: bool) -> Result<Option<Store>> {
     let ip = index_path(job);
     for _attempt in 0..20 {
-        let text = match std::fs::read_to_string(&ip) {
+        let text = match crate::safefile::read_text_bounded(&ip, 1 << 20) {
             Ok(t) => t,
             Err(e) if e.kind() == std::io::ErrorKind::NotFound => return Ok(None),
             Err(e) => return Err(anyhow!("cannot read {}: {e}", ip.display())),
@@ -235,6 +235,10 @@ pub fn merge(job: &JobDir, fingerprint: &[u8; 32], options: &str) -> Result<Merg
     names.sort();
     for name in names {
         let path = job.amb().join(&name);
+        if !crate::safefile::is_plain_file(&path) {
+            report.refused.push(format!("{name}: not a regular file"));
+            continue;
+        }
         let mut r = match LogReader::open(&path, Some(fingerprint), false) {
             Ok(r) => r,
             Err(crate::ambient::log::AmbLogError::HeaderTruncated { .. }) => {
@@ -289,7 +293,7 @@ pub fn merge(job: &JobDir, fingerprint: &[u8; 32], options: &str) -> Result<Merg
 /// (which carries no fingerprint).
 pub fn read_any_store(path: &Path, fingerprint: &[u8; 32], force: bool) -> Result<Vec<AmbRecord>> {
     let mut magic = [0u8; 10];
-    let is_log = std::fs::File::open(path)
+    let is_log = crate::safefile::open_regular(path, true)
         .and_then(|mut f| {
             use std::io::Read;
             f.read_exact(&mut magic)

@@ -166,7 +166,8 @@ pub fn trad(a: TradArgs) -> Result<i32> {
         c.arg(&job)
             .args(["--frame", &n.to_string()])
             .arg("-o")
-            .arg(p);
+            .arg(p)
+            .arg("--force");
         if a.raw {
             c.arg("--raw");
         }

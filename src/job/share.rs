@@ -132,6 +132,15 @@ impl JobPeers {
             {
                 continue;
             }
+            // A job's logs are its workers' regular files: not links, FIFOs or devices.
+            if !crate::safefile::is_plain_file(&e.path()) {
+                self.warn(format!(
+                    "ignoring ambient log {}: not a regular file",
+                    e.path().display()
+                ));
+                rd.refused.insert(name);
+                continue;
+            }
             match LogReader::open(&e.path(), Some(&self.fingerprint), false) {
                 Ok(r) => {
                     rd.logs.insert(name, r);

@@ -221,9 +221,14 @@ impl ResultDir {
     }
 }
 
+/// The largest tile result read: a tile of the largest picture a job may plan, with its
+/// header.
+pub const MAX_TILE_BYTES: u64 = (super::manifest::MAX_RES as u64).pow(2) * 12 + (1 << 16);
+
 /// Read and check a tile result file.
 pub fn read(path: &Path) -> Result<(TileMeta, Vec<[f32; 3]>)> {
-    let bytes = std::fs::read(path).map_err(|e| anyhow!("cannot read {}: {e}", path.display()))?;
+    let bytes = crate::safefile::read_bounded(path, MAX_TILE_BYTES)
+        .map_err(|e| anyhow!("cannot read {}: {e}", path.display()))?;
     decode(&bytes).map_err(|e| anyhow!("{}: {e}", path.display()))
 }
 

@@ -49,6 +49,18 @@ impl SceneSource {
     /// Read scene files (`-` is standard input) and fingerprint them with `params`.
     pub fn read(files: &[String], ro: &ReadOptions, params: &RenderParams) -> Result<SceneSource> {
         let prims = read_scene_files(files, ro)?;
+        if prims.is_empty() {
+            let names: Vec<&str> = files
+                .iter()
+                .map(|f| if f == "-" { "<stdin>" } else { f.as_str() })
+                .collect();
+            let names = if names.is_empty() {
+                "<stdin>".to_string()
+            } else {
+                names.join(" ")
+            };
+            anyhow::bail!("{names}: the scene is empty (no primitives were read)");
+        }
         let fingerprint = crate::ambient::fingerprint::fingerprint(&prims, params);
         Ok(SceneSource {
             prims,

@@ -1,0 +1,170 @@
+//! Special files in a job directory (issue 27 item 8): a FIFO, a symbolic link to
+//! `/dev/zero` or a link out of the job, put where a manifest, heartbeat, ambient log, tile,
+//! merged store index or the flattened scene belongs, never blocks `tpiece`, `tmerge`,
+//! `tassemble` or `tstat` and is never read: each tool ends within seconds, with a clear
+//! error naming the file or by ignoring it.
+
+use std::path::{Path, PathBuf};
+use std::process::{Command, Stdio};
+use std::time::{Duration, Instant};
+
+fn bin(name: &str) -> PathBuf {
+    PathBuf::from(match name {
+        "tplan" => env!("CARGO_BIN_EXE_tplan"),
+        "tpiece" => env!("CARGO_BIN_EXE_tpiece"),
+        "tmerge" => env!("CARGO_BIN_EXE_tmerge"),
+        "tassemble" => env!("CARGO_BIN_EXE_tassemble"),
+        _ => env!("CARGO_BIN_EXE_tstat"),
+    })
+}
+
+/// Run a tool, killing it after 20 s: (finished in time, exit success, stderr).
+fn run(name: &str, args: &[&std::ffi::OsStr]) -> (bool, bool, String) {
+    let mut c = Command::new(bin(name))
+        .args(args)
+        .stdin(Stdio::null())
+        .stdout(Stdio::null())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    let start = Instant::now();
+    loop {
+        if let Some(st) = c.try_wait().unwrap() {
+            let mut err = String::new();
+            use std::io::Read;
+            c.stderr.take().unwrap().read_to_string(&mut err).unwrap();
+            return (true, st.success(), err);
+        }
+        if start.elapsed() > Duration::from_secs(20) {
+            let _ = c.kill();
+            let _ = c.wait();
+            return (false, false, String::new());
+        }
+        std::thread::sleep(Duration::from_millis(20));
+    }
+}
+
+fn mkfifo(p: &Path) {
+    let _ = std::fs::remove_file(p);
+    assert!(Command::new("mkfifo").arg(p).status().unwrap().success());
+}
+
+fn copy_dir(from: &Path, to: &Path) {
+    std::fs::create_dir_all(to).unwrap();
+    for e in std::fs::read_dir(from).unwrap() {
+        let e = e.unwrap();
+        let t = to.join(e.file_name());
+        if e.file_type().unwrap().is_dir() {
+            copy_dir(&e.path(), &t);
+        } else {
+            std::fs::copy(e.path(), &t).unwrap();
+        }
+    }
+}
+
+#[test]
+fn special_files_in_a_job_never_block_or_get_read() {
+    let t = tempfile::tempdir().unwrap();
+    let d = t.path();
+    std::fs::write(
+        d.join("s.rad"),
+        "void light l 0 0 3 5 5 5\nl sphere b 0 0 4 0 0 2 .2\n\
+         void plastic w 0 0 5 .5 .5 .5 0 0\nw polygon f 0 0 12 -2 -2 0 2 -2 0 2 2 0 -2 2 0\n",
+    )
+    .unwrap();
+    std::fs::write(d.join("outside.txt"), "{}").unwrap();
+    // A finished job to damage.
+    let base = d.join("base");
+    let o = Command::new(bin("tplan"))
+        .current_dir(d)
+        .args(["--tiles", "4", "--workers", "1", "-o"])
+        .arg(&base)
+        .args([
+            "--", "-vp", "0", "-5", "3", "-vd", "0", "1", "-.5", "-x", "32", "-y", "24", "-ab",
+            "1", "s.rad",
+        ])
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let (done, ok, err) = run(
+        "tpiece",
+        &[
+            base.as_os_str(),
+            "--threads".as_ref(),
+            "1".as_ref(),
+            "-q".as_ref(),
+        ],
+    );
+    assert!(done && ok, "{err}");
+    let (_, ok, err) = run("tmerge", &[base.as_os_str()]);
+    assert!(ok, "{err}");
+    let one = |dir: &Path, sub: &str, ext: &str| -> PathBuf {
+        std::fs::read_dir(dir.join(sub))
+            .unwrap()
+            .map(|e| e.unwrap().path())
+            .find(|p| p.extension().is_some_and(|e| e == ext))
+            .unwrap()
+    };
+    // (what is replaced, how): each case in a fresh copy of the job.
+    type Where<'a> = Box<dyn Fn(&Path) -> PathBuf + 'a>;
+    let targets: Vec<(&str, Where)> = vec![
+        ("manifest", Box::new(|j: &Path| j.join("manifest.json"))),
+        ("heartbeat", Box::new(|j: &Path| one(j, "workers", "json"))),
+        ("ambient log", Box::new(|j: &Path| one(j, "amb", "log"))),
+        ("tile", Box::new(|j: &Path| one(j, "tiles", "tile"))),
+        (
+            "store index",
+            Box::new(|j: &Path| j.join("merged/store.json")),
+        ),
+        ("scene", Box::new(|j: &Path| j.join("scene.rad"))),
+    ];
+    let mut n = 0;
+    for (what, path_of) in &targets {
+        for kind in ["fifo", "zero", "outside"] {
+            n += 1;
+            let job = d.join(format!("job{n}"));
+            copy_dir(&base, &job);
+            let p = path_of(&job);
+            let _ = std::fs::remove_file(&p);
+            match kind {
+                "fifo" => mkfifo(&p),
+                "zero" => std::os::unix::fs::symlink("/dev/zero", &p).unwrap(),
+                _ => std::os::unix::fs::symlink(d.join("outside.txt"), &p).unwrap(),
+            }
+            let out = d.join(format!("out{n}.hdr"));
+            for (tool, args) in [
+                (
+                    "tpiece",
+                    vec![
+                        job.as_os_str(),
+                        "--threads".as_ref(),
+                        "1".as_ref(),
+                        "-q".as_ref(),
+                        "--no-wait".as_ref(),
+                    ],
+                ),
+                ("tmerge", vec![job.as_os_str()]),
+                ("tstat", vec![job.as_os_str()]),
+                (
+                    "tassemble",
+                    vec![job.as_os_str(), "-o".as_ref(), out.as_os_str()],
+                ),
+            ] {
+                let (done, ok, err) = run(tool, &args);
+                assert!(done, "{tool} blocked on a {kind} as the {what}");
+                assert!(!err.contains("panicked"), "{tool}, {kind} {what}: {err}");
+                // The manifest and the tiles are needed: their tools fail, naming the file.
+                if !ok {
+                    assert!(
+                        err.contains("error") && err.len() < 4000,
+                        "{tool}, {kind} {what}: {err}"
+                    );
+                }
+                if *what == "manifest" {
+                    assert!(!ok, "{tool} accepted a {kind} manifest");
+                    assert!(err.contains("manifest.json"), "{tool}: {err}");
+                }
+            }
+        }
+    }
+}
