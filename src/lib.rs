@@ -44,6 +44,7 @@ pub mod safefile;
 pub mod scene;
 pub mod session;
 pub mod tpict;
+pub mod ttrace;
 pub mod view;
 
 /// Radiance's intersection tolerance (`FTINY` in a double build).

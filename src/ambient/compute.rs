@@ -234,6 +234,10 @@ impl Ambient {
     }
 
     fn excluded(&self, tr: &Tracer, hit: &Hit) -> bool {
+        // A point that is no surface (ttrace -I) has no modifier to exclude.
+        if hit.obj == crate::render::ray::NO_OBJECT {
+            return false;
+        }
         let m = tr.scene.hit_info(hit.href()).modifier;
         match &self.include {
             Some(inc) => !inc.contains(m),

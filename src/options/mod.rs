@@ -19,6 +19,7 @@ pub mod defaults;
 pub mod picture;
 pub mod render;
 pub mod rpict;
+pub mod rtrace;
 pub mod run;
 pub mod schedule;
 pub mod words;

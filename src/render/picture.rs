@@ -93,7 +93,7 @@ fn sample_pixel(tr: &Tracer, fs: &FrameSetup, px: usize, py_top: usize, rays: &m
 /// `trans2`, `glass`, `dielectric`, `interface`, a `BRTDfunc` where its transmission is not
 /// zero) and surfaces without a material, and the irradiance
 /// is that of the surface behind them; light sources show their radiance.
-fn irradiance(tr: &Tracer, ray: &Ray, rng: &mut Sampler) -> Color {
+pub(crate) fn irradiance(tr: &Tracer, ray: &Ray, rng: &mut Sampler) -> Color {
     let mut ray = *ray;
     let mut hit = None;
     // Bound the walk through stacked transparent surfaces, as pass_through does.
@@ -126,8 +126,39 @@ fn irradiance(tr: &Tracer, ray: &Ray, rng: &mut Sampler) -> Color {
     let Some(hit) = hit else {
         return Color::ZERO;
     };
-    let ray = &ray;
     let n = if hit.back { -hit.normal } else { hit.normal };
+    white_lambertian(tr, &ray, &hit, n, rng)
+}
+
+/// `rtrace -I`: the irradiance at point `p` (relative frame) on a white Lambertian surface
+/// facing the unit normal `n` that is no surface of the scene: the light arriving at `p`
+/// from the hemisphere around `n`.
+pub(crate) fn irradiance_at(tr: &Tracer, p: DVec3, n: DVec3, rng: &mut Sampler) -> Color {
+    // A ray arriving at p against the normal, from one unit away.
+    let ray = Ray::primary(p + n, -n, f64::INFINITY);
+    let hit = super::ray::Hit {
+        obj: super::ray::NO_OBJECT,
+        inst: super::ray::NO_INST,
+        t: 1.0,
+        point: p,
+        normal: n,
+        back: false,
+        flat: true,
+        material: None,
+        antimatter: ray.antimatter,
+    };
+    white_lambertian(tr, &ray, &hit, n, rng)
+}
+
+/// Irradiance at a hit with normal `n` (facing the ray): direct light and indirect light as
+/// a white Lambertian surface reflects them, times π.
+fn white_lambertian(
+    tr: &Tracer,
+    ray: &Ray,
+    hit: &super::ray::Hit,
+    n: DVec3,
+    rng: &mut Sampler,
+) -> Color {
     let coef = move |l: DVec3, omega: f64| -> Color {
         let c = n.dot(l);
         if c > 0.0 {
@@ -136,8 +167,8 @@ fn irradiance(tr: &Tracer, ray: &Ray, rng: &mut Sampler) -> Color {
             Color::ZERO
         }
     };
-    let d = tr.direct(ray, &hit, (n, tr.constant_ambient(Color::ONE)), &coef, rng);
-    let l = d + tr.ambient(ray, &hit, Color::ONE, n, bright(d), rng);
+    let d = tr.direct(ray, hit, (n, tr.constant_ambient(Color::ONE)), &coef, rng);
+    let l = d + tr.ambient(ray, hit, Color::ONE, n, bright(d), rng);
     l * std::f64::consts::PI
 }
 

@@ -175,6 +175,9 @@ pub struct Hit {
 /// `Hit::inst` of a surface of the scene itself.
 pub const NO_INST: u32 = u32::MAX;
 
+/// `Hit::obj` of a point that is no surface of the scene (the ray origin of `ttrace -I`).
+pub const NO_OBJECT: usize = usize::MAX;
+
 /// A surface the tracer hit: an object of the scene (`inst == NO_INST`) or object `obj` of
 /// placement `inst`'s set.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]

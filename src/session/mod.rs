@@ -217,6 +217,11 @@ impl Session {
         }
     }
 
+    /// Run `f` on the session's render threads (its rayon pool).
+    pub fn install<R: Send>(&self, f: impl FnOnce() -> R + Send) -> R {
+        self.pool.install(f)
+    }
+
     /// A tracer over the session's scene, lights and ambient calculation.
     pub fn tracer(&self) -> Tracer<'_> {
         Tracer::new(&self.scene, &self.params, &self.lights).with_ambient(self.ambient.as_deref())
