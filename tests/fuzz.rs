@@ -458,6 +458,7 @@ fn manifest_seed(dir: &Path) -> Vec<u8> {
         ],
         command: "fuzz".into(),
         finish: None,
+        points: None,
     };
     let _ = tessera::job::manifest::create_job(&job, &req);
     std::fs::read(job.join("manifest.json")).unwrap_or_else(|_| b"{}".to_vec())

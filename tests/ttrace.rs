@@ -298,3 +298,99 @@ fn irradiance_grids_match_rtrace() {
         }
     }
 }
+
+fn tool(name: &str, dir: &Path) -> Command {
+    let mut c = Command::new(match name {
+        "tplan" => env!("CARGO_BIN_EXE_tplan"),
+        "tpiece" => env!("CARGO_BIN_EXE_tpiece"),
+        _ => env!("CARGO_BIN_EXE_tassemble"),
+    });
+    c.current_dir(dir).env("RAYPATH", ".");
+    c
+}
+
+/// A job over a point set: its tasks are chunks of rays, traced by several workers (here
+/// two processes of two loops) with the job's claims and shared ambient store; tassemble
+/// writes the records in input order, byte-identical at `-ab 0` to one ttrace run whatever
+/// the chunk size. A points file with a flush record, or letters a job does not write, are
+/// refused at planning.
+#[test]
+fn point_jobs_write_what_one_ttrace_run_writes() {
+    let t = tempfile::tempdir().unwrap();
+    let d = t.path();
+    for e in std::fs::read_dir(scenes().join("ies")).unwrap() {
+        let p = e.unwrap().path();
+        std::fs::copy(&p, d.join(p.file_name().unwrap())).unwrap();
+    }
+    let points = grid((0.0, 5.0), (0.0, 4.0), 0.8, 0.25);
+    std::fs::write(d.join("grid.pts"), &points).unwrap();
+    let mut c = ttrace(d);
+    c.args(["-h-", "-I", "-ovo", "room.rad"]);
+    let (ok, want, err) = feed(c, points.as_bytes());
+    assert!(ok, "{err}");
+    for chunk in ["1", "7", "1000"] {
+        let job = d.join(format!("job{chunk}"));
+        let o = tool("tplan", d)
+            .args([
+                "--points",
+                "grid.pts",
+                "--chunk",
+                chunk,
+                "--workers",
+                "4",
+                "-o",
+            ])
+            .arg(&job)
+            .args(["--", "-h-", "-I", "-ovo", "room.rad"])
+            .output()
+            .unwrap();
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+        let workers: Vec<_> = (0..2)
+            .map(|_| {
+                tool("tpiece", d)
+                    .arg(&job)
+                    .args(["--threads", "2", "-q"])
+                    .spawn()
+                    .unwrap()
+            })
+            .collect();
+        for mut w in workers {
+            assert!(w.wait().unwrap().success());
+        }
+        let out = d.join(format!("out{chunk}.txt"));
+        let o = tool("tassemble", d)
+            .arg(&job)
+            .arg("-o")
+            .arg(&out)
+            .output()
+            .unwrap();
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+        assert_eq!(std::fs::read(&out).unwrap(), want, "--chunk {chunk}");
+    }
+    // Planning refuses what a job cannot do.
+    std::fs::write(d.join("flush.pts"), "1 1 1 0 0 1\n0 0 0 0 0 0\n").unwrap();
+    for (args, want) in [
+        (
+            vec![
+                "--points",
+                "flush.pts",
+                "-o",
+                "bad1",
+                "--",
+                "-I",
+                "room.rad",
+            ],
+            "record 2",
+        ),
+        (
+            vec![
+                "--points", "grid.pts", "-o", "bad2", "--", "-ovp", "room.rad",
+            ],
+            "not 'p'",
+        ),
+    ] {
+        let o = tool("tplan", d).args(&args).output().unwrap();
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert!(!o.status.success() && err.contains(want), "{args:?}: {err}");
+    }
+}

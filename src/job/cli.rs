@@ -79,6 +79,15 @@ struct TplanArgs {
     /// `--allow-commands` after `--`).
     #[arg(long)]
     allow_commands: bool,
+    /// A job over the rays of FILE (origin and direction per record, as ttrace reads them,
+    /// in the format of -f): its tasks are chunks of rays; the arguments after `--` are
+    /// rtrace's options and the scene (docs/ttrace.md).
+    #[arg(long, value_name = "FILE", conflicts_with_all = ["frames", "path", "rif", "tiles", "tile_size"])]
+    points: Option<PathBuf>,
+    /// With --points: rays per task (default: about sixteen tasks per worker, at most 4096
+    /// rays each).
+    #[arg(long, value_name = "N", requires = "points")]
+    chunk: Option<usize>,
     /// Make the job from a `rad` input file: its scene, materials, views and the rpict
     /// options rad derives (docs/rif.md); scene files may follow after `--`.
     #[arg(long, value_name = "FILE")]
@@ -173,6 +182,10 @@ fn tplan(a: TplanArgs) -> Result<i32> {
         },
         command: command_line(),
         finish,
+        points: a
+            .points
+            .as_ref()
+            .map(|p| (p.display().to_string(), a.chunk)),
     };
     let m = create_job(&output, &req)?;
     let tiles: usize = m.frames.iter().map(|f| f.tiles.len()).sum();
@@ -465,6 +478,63 @@ struct TassembleArgs {
     raw: bool,
 }
 
+/// `tassemble` of a point job: every ray's results in input order, to `-o` or standard
+/// output.
+fn assemble_points(
+    job: &JobDir,
+    m: &Manifest,
+    p: &super::points::PointsPlan,
+    a: &TassembleArgs,
+    cmd: &str,
+) -> Result<i32> {
+    if a.all_frames || a.contact_sheet.is_some() || a.frame != 0 {
+        bail!("a point job has no frames or pictures: tassemble JOB [-o FILE]");
+    }
+    if let Some(o) = &a.output {
+        if o.exists() && !a.force {
+            bail!(
+                "{} exists: tassemble replaces it only with --force",
+                o.display()
+            );
+        }
+    }
+    let (img, missing) = super::assemble::assemble_frame(job, m, 0, cmd)?;
+    if !missing.is_empty() {
+        let list: Vec<String> = missing
+            .iter()
+            .map(|t| format!("{} ({})", t.task, t.reason))
+            .collect();
+        if !a.partial {
+            eprintln!(
+                "tassemble: error: {} of {} chunks missing or invalid: {} (run tpiece on the \
+                 job to trace them, or pass --partial to write zeros)",
+                missing.len(),
+                m.frames[0].tiles.len(),
+                list.join(", ")
+            );
+            return Ok(1);
+        }
+        eprintln!(
+            "tassemble: warning - {} chunks written as zeros: {}",
+            missing.len(),
+            list.join(", ")
+        );
+    }
+    let rays = super::points::load_rays(job, p)?;
+    let bytes = super::points::records(p, &rays, &img.pixels, &m.command);
+    match &a.output {
+        Some(o) => crate::image::output::write_atomic(o, |f| std::io::Write::write_all(f, &bytes))
+            .with_context(|| format!("cannot write {}", o.display()))?,
+        None => {
+            let mut out = std::io::stdout().lock();
+            std::io::Write::write_all(&mut out, &bytes)
+                .and_then(|()| std::io::Write::flush(&mut out))
+                .context("cannot write the results")?;
+        }
+    }
+    Ok(0)
+}
+
 /// Entry point of `tassemble`.
 pub fn tassemble_main() -> i32 {
     let a = TassembleArgs::parse();
@@ -480,6 +550,9 @@ fn tassemble(a: TassembleArgs) -> Result<i32> {
     }
     if a.temporal_exposure && !a.all_frames {
         bail!("--temporal-exposure needs --all-frames -o PATTERN.png");
+    }
+    if let Some(p) = &m.points {
+        return assemble_points(&job, &m, p, &a, &cmd);
     }
     let every = a.all_frames || a.contact_sheet.is_some();
     let frames: Vec<u32> = if every {

@@ -79,6 +79,9 @@ pub struct Manifest {
     /// ([`super::finish`]).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub finish: Option<super::finish::Finish>,
+    /// For a job over a point set: its rays' layout and output ([`super::points`]).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub points: Option<super::points::PointsPlan>,
     /// The frames.
     pub frames: Vec<FramePlan>,
 }
@@ -105,6 +108,8 @@ struct ManifestFile {
     frame_cost_estimate: Option<f64>,
     #[serde(default)]
     finish: Option<super::finish::Finish>,
+    #[serde(default)]
+    points: Option<super::points::PointsPlan>,
     frames: Vec<FramePlan>,
 }
 
@@ -139,6 +144,7 @@ impl TryFrom<ManifestFile> for Manifest {
             workers_expected: f.workers_expected,
             frame_cost_estimate: f.frame_cost_estimate,
             finish: f.finish,
+            points: f.points,
             frames: f.frames,
         })
     }
@@ -180,6 +186,13 @@ impl Manifest {
         check_plain_name(&self.scene_file).context("scene_file")?;
         if let Some(f) = &self.finish {
             f.validate()?;
+        }
+        if let Some(p) = &self.points {
+            p.validate()?;
+            let size = p.frame_size();
+            if self.frames.len() != 1 || (self.frames[0].xres, self.frames[0].yres) != size {
+                bail!("points: the frame does not hold the plan's rays");
+            }
         }
         if parse_hex32(&self.fingerprint).is_none() {
             bail!("fingerprint must be 64 hex digits");
@@ -276,6 +289,9 @@ pub struct PlanRequest {
     pub command: String,
     /// A rif job's last step (rad's pfilt), applied by `tassemble`.
     pub finish: Option<super::finish::Finish>,
+    /// `--points FILE [--chunk N]`: a job over the rays of FILE (the arguments are then
+    /// rtrace's options and the scene).
+    pub points: Option<(String, Option<usize>)>,
 }
 
 /// Write primitives back in Radiance's scene syntax (numbers in shortest round-trip form,
@@ -316,9 +332,12 @@ pub fn scene_text(prims: &[Primitive], sources: &[String]) -> String {
 /// Create a job directory (`tplan`). The directory is assembled under a temporary name
 /// beside `dir` and renamed into place, so a job directory is either complete or absent.
 pub fn create_job(dir: &Path, req: &PlanRequest) -> Result<Manifest> {
-    let opts = match parse_rpict_args(&req.args).map_err(|e| anyhow!(e))? {
-        Command::Render(o) => *o,
-        _ => bail!("tplan needs render options and scene files after '--'"),
+    let (opts, points, rays) = match &req.points {
+        Some((file, chunk)) => points_options(req, file, *chunk)?,
+        None => match parse_rpict_args(&req.args).map_err(|e| anyhow!(e))? {
+            Command::Render(o) => (*o, None, Vec::new()),
+            _ => bail!("tplan needs render options and scene files after '--'"),
+        },
     };
     let opts: RpictOptions = opts;
     if opts.run.sequence_start.is_some() {
@@ -408,7 +427,9 @@ pub fn create_job(dir: &Path, req: &PlanRequest) -> Result<Manifest> {
         let vfr = v.frame().map_err(|e| anyhow!("bad view: {e}"))?;
         let mut pa = opts.picture.pa;
         let (mut x, mut y) = (opts.picture.x, opts.picture.y);
-        normaspect(vfr.aspect(), &mut pa, &mut x, &mut y);
+        if points.is_none() {
+            normaspect(vfr.aspect(), &mut pa, &mut x, &mut y);
+        }
         if x == 0 || y == 0 || x > MAX_RES || y > MAX_RES {
             bail!("resolution {x}x{y} is out of range");
         }
@@ -416,6 +437,9 @@ pub fn create_job(dir: &Path, req: &PlanRequest) -> Result<Manifest> {
         // traced by two tiles.
         let grid = crate::render::cell_size(opts.picture.ps.max(1));
         let tiles = match (req.tile_size, req.tiles) {
+            _ if points.is_some() => {
+                plan_fixed(x, y, x, points.as_ref().map_or(1, |p| p.rows_per_task))
+            }
             (Some((tw, th)), _) => plan_fixed(x, y, tw, th),
             (None, Some(n)) => plan_tiles(x, y, n, grid),
             (None, None) => {
@@ -481,6 +505,7 @@ pub fn create_job(dir: &Path, req: &PlanRequest) -> Result<Manifest> {
         workers_expected: workers,
         frame_cost_estimate,
         finish: req.finish.clone(),
+        points,
         frames,
     };
     m.validate()?;
@@ -502,6 +527,13 @@ pub fn create_job(dir: &Path, req: &PlanRequest) -> Result<Manifest> {
     super::write_file_atomic(&job.file("scene.rad"), text.as_bytes())
         .context("cannot write scene.rad")?;
     copy_inputs(&job, &scene.inputs)?;
+    if m.points.is_some() {
+        super::write_file_atomic(
+            &job.file(super::points::RAYS_FILE),
+            &super::points::encode_rays(&rays),
+        )
+        .context("cannot write the job's rays")?;
+    }
     for (name, _, _) in m.tasks() {
         std::fs::File::create(job.tasks().join(format!("{name}.todo")))
             .with_context(|| format!("cannot create task {name}"))?;
@@ -527,6 +559,61 @@ pub fn create_job(dir: &Path, req: &PlanRequest) -> Result<Manifest> {
     }
     super::sync_dir(&parent);
     Ok(m)
+}
+
+/// A point job's options: rtrace's command line after `--` (its `-o` letters of `v`, `o`,
+/// `d`), the rays of `file` read in its input format, and the plan of their chunks; the
+/// job renders through the picture machinery, so the options are given as rpict's.
+fn points_options(
+    req: &PlanRequest,
+    file: &str,
+    chunk: Option<usize>,
+) -> Result<(
+    RpictOptions,
+    Option<super::points::PointsPlan>,
+    Vec<crate::ttrace::records::InRay>,
+)> {
+    use crate::options::rtrace::{parse_rtrace_args, Format, TraceCommand};
+    let o = match parse_rtrace_args(&req.args).map_err(|e| anyhow!(e))? {
+        TraceCommand::Trace(o) => *o,
+        _ => bail!("tplan --points needs rtrace options and scene files after '--'"),
+    };
+    let t = &o.trace;
+    if let Some(c) = t.spec.chars().find(|c| !"vod".contains(*c)) {
+        bail!(
+            "-o{}: a point job writes v (value), o (origin) and d (direction), not '{c}'",
+            t.spec
+        );
+    }
+    if t.flush > 0 || t.yres > 0 {
+        bail!("-x and -y have no meaning in a point job (tassemble writes every record)");
+    }
+    let rays = super::points::read_points(Path::new(file), t.input)?;
+    let workers = req.workers.unwrap_or(4).max(1);
+    let mut plan = super::points::PointsPlan::new(rays.len() as u64, workers, chunk)?;
+    plan.at_origin = t.irradiance_at_origin;
+    plan.limit_distance = t.limit_distance;
+    plan.output = match t.output {
+        Format::Ascii => 'a',
+        Format::Float => 'f',
+        Format::Double => 'd',
+    };
+    plan.spec.clone_from(&t.spec);
+    plan.header = t.header;
+    let (x, y) = plan.frame_size();
+    let picture = PictureParams {
+        x,
+        y,
+        ps: 1,
+        ..PictureParams::default()
+    };
+    let opts = RpictOptions {
+        params: o.params,
+        picture,
+        run: o.run,
+        scene_files: o.scene_files,
+    };
+    Ok((opts, Some(plan), rays))
 }
 
 /// Copy the files the scene's primitives read by relative name (function files, data
@@ -611,6 +698,7 @@ mod tests {
             workers_expected: 2,
             frame_cost_estimate: None,
             finish: None,
+            points: None,
             frames: Vec::new(),
         };
         let now = serde_json::to_value(&m).unwrap();

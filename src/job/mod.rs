@@ -34,6 +34,7 @@ pub mod manifest;
 pub mod merge;
 pub mod path;
 pub mod plan;
+pub mod points;
 pub mod probe;
 pub mod rad;
 pub mod share;

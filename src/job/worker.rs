@@ -283,6 +283,11 @@ pub fn run_worker(job: &JobDir, wo: &WorkerOptions) -> Result<WorkerSummary> {
     beat.write(None, None);
     let beater = beat.spawn(beat_interval(m.lease_seconds));
     let all = m.tasks();
+    // A point job's rays, read once for every loop.
+    let rays = match &m.points {
+        Some(p) => super::points::load_rays(job, p)?,
+        None => Vec::new(),
+    };
     let stop = AtomicBool::new(false);
     let taken = Mutex::new(HashSet::new());
     let pending = AtomicUsize::new(0);
@@ -301,8 +306,8 @@ pub fn run_worker(job: &JobDir, wo: &WorkerOptions) -> Result<WorkerSummary> {
         let committer = scope.spawn(move || commit_loop(rx, results, target));
         let handles: Vec<_> = (0..loops)
             .map(|index| {
-                let (m, owner, worker_id, session, beat, all, stop, taken, pending) = (
-                    &m, &owner, &worker_id, &session, &beat, &all, &stop, &taken, &pending,
+                let (m, owner, worker_id, session, beat, all, stop, taken, pending, rays) = (
+                    &m, &owner, &worker_id, &session, &beat, &all, &stop, &taken, &pending, &rays,
                 );
                 let commit = tx.clone();
                 scope.spawn(move || -> Result<()> {
@@ -329,6 +334,7 @@ pub fn run_worker(job: &JobDir, wo: &WorkerOptions) -> Result<WorkerSummary> {
                         commit,
                         pending,
                         budget_aa: Default::default(),
+                        rays,
                     };
                     let r = worker.work();
                     if r.is_err() {
@@ -429,6 +435,8 @@ struct Worker<'a> {
     pending: &'a AtomicUsize,
     /// `-axt`: the frames' accuracies read or decided so far ([`super::budget`]).
     budget_aa: std::cell::RefCell<HashMap<u32, f64>>,
+    /// A point job's rays (empty for a picture job).
+    rays: &'a [crate::ttrace::records::InRay],
 }
 
 impl Worker<'_> {
@@ -759,9 +767,18 @@ impl Worker<'_> {
             x1: rect.x0 + rect.w,
             y1: rect.y0 + rect.h,
         };
-        let pixels = self
-            .session
-            .render_here(&self.here, &fs, region, &progress)?;
+        let pixels = match &self.m.points {
+            Some(p) => super::points::trace_chunk(
+                (self.session, &self.here),
+                p,
+                self.rays,
+                rect,
+                &progress,
+            )?,
+            None => self
+                .session
+                .render_here(&self.here, &fs, region, &progress)?,
+        };
         let wall = t0.elapsed();
         let counters = &self.beat.counters;
         add_time(&counters.render_ns, wall);

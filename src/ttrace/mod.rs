@@ -20,6 +20,7 @@ use crate::options::rtrace::{parse_rtrace_args, Format, RtraceOptions, TraceComm
 use crate::render::picture::{irradiance, irradiance_at};
 use crate::render::ray::{Ray, NO_INST};
 use crate::render::sampler::Sampler;
+use crate::render::trace::Tracer;
 use crate::runinfo::SOFTWARE;
 use crate::scene::ReadOptions;
 use crate::session::{SceneSource, Session};
@@ -230,19 +231,63 @@ fn bogus(prev: Option<&InRay>) -> Traced {
     }
 }
 
+/// What a ray's value is (`-I`, `-i`, `-ld`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct ValueKind {
+    /// `-I`: irradiance at the origin.
+    pub at_origin: bool,
+    /// `-i`: irradiance at the first surface hit.
+    pub at_hit: bool,
+    /// `-ld`: the ray ends at the length of its direction.
+    pub limit_distance: bool,
+}
+
+/// The value of ray `r`, record `index` of its input (its random numbers depend on that
+/// alone), on the calling thread: what `ttrace` writes as `v`, and what a point job's
+/// workers compute for the same record.
+pub fn ray_value(tr: &Tracer, kind: ValueKind, r: &InRay, index: u64) -> DVec3 {
+    let len = r.dir.length();
+    if len <= 0.0 || !len.is_finite() {
+        return DVec3::ZERO;
+    }
+    let dir = r.dir / len;
+    let mut rng = Sampler::for_pixel(0, index as u32, (index >> 32) as u32, 0x7472);
+    let org = r.org - tr.scene.origin;
+    let v = if kind.at_origin {
+        irradiance_at(tr, org, dir, &mut rng)
+    } else {
+        let tmax = if kind.limit_distance {
+            len
+        } else {
+            f64::INFINITY
+        };
+        let ray = Ray::primary(org, dir, tmax);
+        if kind.at_hit {
+            irradiance(tr, &ray, &mut rng)
+        } else {
+            tr.trace_dist(&ray, &mut rng).0
+        }
+    };
+    crate::color::sanitize(v)
+}
+
 fn trace_one(session: &Session, o: &RtraceOptions, r: &InRay, index: u64) -> Traced {
     let tr = session.tracer();
     let scene = &session.scene;
     let len = r.dir.length();
     let dir = r.dir / len;
-    let mut rng = Sampler::for_pixel(0, index as u32, (index >> 32) as u32, 0x7472);
+    let kind = ValueKind {
+        at_origin: o.trace.irradiance_at_origin,
+        at_hit: o.params.i,
+        limit_distance: o.trace.limit_distance,
+    };
+    let value = ray_value(&tr, kind, r, index);
     let wants_hit = o
         .trace
         .spec
         .contains(['p', 'n', 'N', 'l', 'L', 'm', 'M', 's']);
     let org = r.org - scene.origin;
     if o.trace.irradiance_at_origin {
-        let value = irradiance_at(&tr, org, dir, &mut rng);
         return Traced {
             value,
             org: r.org,
@@ -261,13 +306,8 @@ fn trace_one(session: &Session, o: &RtraceOptions, r: &InRay, index: u64) -> Tra
         f64::INFINITY
     };
     let ray = Ray::primary(org, dir, tmax);
-    let value = if o.params.i {
-        irradiance(&tr, &ray, &mut rng)
-    } else {
-        tr.trace_dist(&ray, &mut rng).0
-    };
     let mut t = Traced {
-        value: crate::color::sanitize(value),
+        value,
         org: r.org,
         dir,
         point: DVec3::ZERO,
