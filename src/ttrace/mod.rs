@@ -14,6 +14,7 @@
 //! results) or the end of the input, so a run that fails on a bad record before then writes
 //! nothing.
 
+pub mod grid;
 pub mod records;
 
 use crate::options::rtrace::{parse_rtrace_args, Format, RtraceOptions, TraceCommand};
