@@ -209,6 +209,32 @@ fn every_output_letter_matches_rtrace() {
             "{spec}"
         );
     }
+    // -fc: the values as a picture of -x by -y pixels, the same pixels as rtrace's.
+    let four = b"0 0 1 0 0 -1\n1 1 1 0 0 -1\n3 0 2 0 0 -1\n2 2 2 -1 -1 -1\n";
+    let mut r = radiance(&bin, "rtrace");
+    r.current_dir(d)
+        .args(["-fac", "-x", "2", "-y", "2", "p.oct"]);
+    let (ok, theirs, err) = feed(r, four);
+    assert!(ok, "{err}");
+    let mut c = ttrace(d);
+    c.args(["-fac", "-x", "2", "-y", "2", "p.rad"]);
+    let (ok, ours, err) = feed(c, four);
+    assert!(ok, "{err}");
+    std::fs::write(d.join("theirs.hdr"), theirs).unwrap();
+    std::fs::write(d.join("ours.hdr"), ours).unwrap();
+    let a = tessera::image::read_picture(&d.join("ours.hdr")).unwrap();
+    let b = tessera::image::read_picture(&d.join("theirs.hdr")).unwrap();
+    assert_eq!((a.width, a.height), (2, 2));
+    assert_eq!(a.pixels, b.pixels);
+    assert!(a.pixels.iter().any(|p| p[0] > 0.0));
+    // A picture needs its size, and that many records.
+    let mut c = ttrace(d);
+    c.args(["-fac", "-x", "3", "-y", "2", "p.rad"]);
+    let (ok, out, err) = feed(c, four);
+    assert!(
+        !ok && err.contains("needs 6 records") && out.is_empty(),
+        "{err}"
+    );
 }
 
 /// Per-point relative differences of two value lists: (mean, max), over points where the

@@ -401,7 +401,12 @@ pub fn render_text(st: &JobStatus) -> String {
             "unreported", "", a.unreported_tiles
         );
     }
-    let _ = writeln!(s, "  {:.2} CPU-s, {} rays", a.cpu_seconds, a.rays);
+    let per_cpu = if a.cpu_seconds > 0.0 {
+        format!(", {:.0} rays per CPU-s", a.rays as f64 / a.cpu_seconds)
+    } else {
+        String::new()
+    };
+    let _ = writeln!(s, "  {:.2} CPU-s, {} rays{per_cpu}", a.cpu_seconds, a.rays);
     if a.rejected > 0 {
         let _ = writeln!(
             s,

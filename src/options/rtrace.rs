@@ -61,6 +61,8 @@ pub struct TraceParams {
     pub irradiance_at_origin: bool,
     /// `-ld`: limit each ray to the length of its direction vector.
     pub limit_distance: bool,
+    /// `-f?c`: the values as a Radiance picture of `-x` × `-y` pixels.
+    pub picture: bool,
 }
 
 impl Default for TraceParams {
@@ -74,6 +76,7 @@ impl Default for TraceParams {
             yres: 0,
             irradiance_at_origin: false,
             limit_distance: false,
+            picture: false,
         }
     }
 }
@@ -126,7 +129,8 @@ pub fn trace_help() -> String {
      \n\
      Traces the rays read on standard input (origin and direction per record) through\n\
      Radiance scene files or octrees, as rtrace does, with rtrace's defaults. Options:\n\
-       -f[afd][afd]   input and output format: a text, f 32-bit, d 64-bit floats\n\
+       -f[afd][afdc]  input and output format: a text, f 32-bit, d 64-bit floats;\n\
+                      c: the values as a Radiance picture of -x by -y pixels\n\
        -o[vodpnNlLwmMs]  output per ray: v value, o origin, d direction, p hit point,\n\
                       n normal facing the ray, N surface normal, l/L distance, w weight,\n\
                       m modifier, M material, s surface name\n\
@@ -166,15 +170,14 @@ fn apply_trace_option(t: &mut TraceParams, words: &[String]) -> Result<Option<us
                 t.input = f;
                 t.output = f;
             }
+            [i, 'c'] => {
+                t.input = Format::from_letter(*i).ok_or_else(bad)?;
+                t.picture = true;
+            }
             [i, o] => {
                 t.input = Format::from_letter(*i).ok_or_else(bad)?;
-                t.output = Format::from_letter(*o).ok_or_else(|| {
-                    if *o == 'c' {
-                        unsupported(w, "picture output (-fc) is not implemented")
-                    } else {
-                        bad()
-                    }
-                })?;
+                t.output = Format::from_letter(*o).ok_or_else(bad)?;
+                t.picture = false;
             }
             _ => return Err(bad()),
         }
@@ -316,7 +319,10 @@ mod tests {
         assert_eq!(o.scene_files, ["scene.oct"]);
         let e = parse("-oq s.oct").unwrap_err().to_string();
         assert!(e.contains("'q'"), "{e}");
-        assert!(parse("-fac s.oct").unwrap_err().to_string().contains("-fc"));
+        let TraceCommand::Trace(o) = parse("-ffc -x 4 -y 2 s.oct").unwrap() else {
+            panic!()
+        };
+        assert!(o.trace.picture && o.trace.input == Format::Float);
         assert!(parse("-fx s.oct").is_err());
         assert!(parse("-I -i s.oct").is_err());
         assert!(parse("-ab 1").is_err());

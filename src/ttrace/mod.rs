@@ -36,6 +36,8 @@ use std::path::Path;
 const BATCH: usize = 4096;
 /// Results kept before they are written.
 const KEEP_BYTES: usize = 64 << 20;
+/// Largest side of a `-fc` picture.
+const MAX_PICTURE_SIDE: usize = 1 << 15;
 /// rtrace's distance for a ray that hits nothing (`FHUGE`).
 const FHUGE: f64 = 1e10;
 
@@ -102,6 +104,21 @@ pub fn run(
     if t.output != Format::Ascii && t.spec.contains(['m', 'M', 's']) {
         bail!("names (-o m, M, s) need text output (-fa or -f?a)");
     }
+    if t.picture {
+        if t.flush == 0 || t.yres == 0 {
+            bail!("-fc writes a picture: give its size with -x and -y");
+        }
+        if t.spec != "v" {
+            bail!("-fc writes values only: use -ov");
+        }
+        if t.flush > MAX_PICTURE_SIDE || t.yres > MAX_PICTURE_SIDE {
+            bail!(
+                "-fc: a picture of {} x {} pixels is too large",
+                t.flush,
+                t.yres
+            );
+        }
+    }
     let mut ro = ReadOptions::from_env();
     ro.allow_commands |= o.run.allow_commands;
     ro.obj_material.clone_from(&o.run.obj_material);
@@ -129,7 +146,8 @@ pub fn run(
         }
     }
     let mut pending: Vec<u8> = Vec::new();
-    if t.header {
+    let mut picture: Vec<[f32; 3]> = Vec::new();
+    if t.header && !t.picture {
         pending.extend_from_slice(
             format!(
                 "#?RADIANCE\nttrace {}\nSOFTWARE= {SOFTWARE}\nNCOMP=3\nFORMAT={}\n\n",
@@ -178,6 +196,17 @@ pub fn run(
             bail!("{e}");
         }
         done += rays.len() as u64;
+        if t.picture {
+            picture.extend(traced.iter().map(|r| r.value.as_vec3().to_array()));
+            if flush_record.is_some() {
+                picture.push([0.0; 3]);
+                done += 1;
+            }
+            if ended || limit.is_some_and(|l| done >= l) {
+                break;
+            }
+            continue;
+        }
         let mut w = FieldWriter::new(t.output);
         for r in &traced {
             write_record(&mut w, &t.spec, r);
@@ -205,6 +234,26 @@ pub fn run(
     session.finish()?;
     if let Some(af) = &amb_file {
         session.save_ambient_file(Path::new(af))?;
+    }
+    if t.picture {
+        let (w, h) = (t.flush, t.yres);
+        if picture.len() != w * h {
+            bail!(
+                "-fc: a picture of {w} x {h} needs {} records, the input held {}",
+                w * h,
+                picture.len()
+            );
+        }
+        let mut img = crate::image::Image::new(w, h);
+        img.pixels = picture;
+        img.header.software = Some(SOFTWARE.to_string());
+        img.header
+            .commands
+            .push(format!("ttrace {}", args.join(" ")));
+        let mut sink = &mut *out;
+        crate::image::hdr::write_hdr(&mut sink, &img).context("cannot write the picture")?;
+        out.flush().context("cannot write the picture")?;
+        return Ok(());
     }
     out.write_all(&pending)
         .and_then(|()| out.flush())
