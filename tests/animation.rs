@@ -241,6 +241,25 @@ fn keyframed_paths_and_previews() {
         .unwrap();
     assert!(!out.status.success());
     assert!(String::from_utf8_lossy(&out.stderr).contains("at least two key views"));
+    // A billion frames is refused before any view is made (it took 13.7 GB and rising).
+    std::fs::write(
+        &keys,
+        "-vp 1 1 1 -vd 0 1 0
+-vp 2 1 1
+",
+    )
+    .unwrap();
+    let out = tool("tplan")
+        .args(["--path"])
+        .arg(&keys)
+        .args(["--path-frames", "1000000000", "-o"])
+        .arg(t.path().join("job3"))
+        .args(["--", "demo.rad"])
+        .output()
+        .unwrap();
+    assert!(!out.status.success());
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(err.contains("at most 99999 frames"), "{err}");
 }
 
 /// `-axm`: where the camera turns away, tiles whose surfaces leave the view render at a

@@ -126,3 +126,31 @@ fn a_changed_job_file_is_refused() {
     assert!(!out.status.success(), "tpiece accepted a changed job file");
     assert!(err.contains("fingerprint"), "unclear error: {err}");
 }
+
+/// A file named with `..` (`../up.cal`) cannot travel with the job (a worker would look for
+/// it outside the job's folders): tplan refuses it, naming the file, and makes no job.
+#[test]
+fn names_that_climb_out_of_the_job_are_refused() {
+    let t = tempfile::tempdir().unwrap();
+    let d = t.path().join("scene");
+    std::fs::create_dir_all(&d).unwrap();
+    std::fs::write(t.path().join("up.cal"), "up = 1;\n").unwrap();
+    std::fs::write(
+        d.join("s.rad"),
+        "void brightfunc b 2 up ../up.cal 0 0\n\
+         b light l 0 0 3 1 1 1\n\
+         l sphere s 0 0 4 0 0 0 1\n",
+    )
+    .unwrap();
+    let o = tool("tplan", &d)
+        .env("RAYPATH", ".")
+        .args([
+            "--tiles", "1", "-o", "job", "--", "-x", "8", "-y", "8", "s.rad",
+        ])
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(!o.status.success(), "{err}");
+    assert!(err.contains("../up.cal") && err.contains("'..'"), "{err}");
+    assert!(!d.join("job").exists());
+}

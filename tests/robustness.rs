@@ -669,3 +669,39 @@ fn absurd_thread_counts_are_capped() {
     let many = read_picture(&p.join("many.hdr")).unwrap();
     assert_eq!(one.pixels, many.pixels);
 }
+
+/// A picture used as a pattern whose header claims more pixels than memory can hold (a
+/// run-length picture is small on disk: 20000² made a 9.4 GB reader) is refused before a
+/// pixel is decoded, naming the file; the render fails cleanly with no output.
+#[test]
+fn pictures_too_large_for_memory_are_refused_before_decoding() {
+    let t = tempfile::tempdir().unwrap();
+    let d = t.path();
+    // 60000 x 60000 = 3.6e9 pixels: about 107 GiB to read, beyond any machine here.
+    std::fs::write(
+        d.join("big.hdr"),
+        b"#?RADIANCE\nFORMAT=32-bit_rle_rgbe\n\n-Y 60000 +X 60000\n",
+    )
+    .unwrap();
+    std::fs::write(d.join("pic.cal"), "u = Px; v = Py;\n").unwrap();
+    std::fs::write(
+        d.join("s.rad"),
+        "void colorpict pic 7 red green blue big.hdr pic.cal u v 0 0\n\
+         pic plastic p 0 0 5 1 1 1 0 0\n\
+         p sphere s 0 0 4 0 0 0 1\n\
+         void light l 0 0 3 1 1 1\n\
+         l sphere sun 0 0 4 0 0 5 .5\n",
+    )
+    .unwrap();
+    let o = tpict_in(d)
+        .args([
+            "-vp", "0", "-5", "0", "-vd", "0", "1", "0", "-x", "8", "-y", "8", "-o", "out.hdr",
+        ])
+        .arg("s.rad")
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(!o.status.success(), "{err}");
+    assert!(err.contains("big.hdr") && err.contains("GiB"), "{err}");
+    assert!(!d.join("out.hdr").exists());
+}

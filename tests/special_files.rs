@@ -168,3 +168,61 @@ fn special_files_in_a_job_never_block_or_get_read() {
         }
     }
 }
+
+/// Crafted heartbeats (issue 27 item 12): counters near 2^64 that would wrap the sums,
+/// times of 1e300 or infinity, an owner that is not the file's name. tstat leaves each out
+/// with a warning naming the file and why, and its sums stay those of the real workers.
+#[test]
+fn crafted_heartbeats_are_left_out() {
+    let t = tempfile::tempdir().unwrap();
+    let d = t.path();
+    std::fs::write(
+        d.join("s.rad"),
+        "void light l 0 0 3 5 5 5\nl sphere b 0 0 4 0 0 2 .2\n\
+         void plastic w 0 0 5 .5 .5 .5 0 0\nw polygon f 0 0 12 -2 -2 0 2 -2 0 2 2 0 -2 2 0\n",
+    )
+    .unwrap();
+    let job = d.join("job");
+    let o = Command::new(bin("tplan"))
+        .current_dir(d)
+        .args(["--tiles", "2", "-o"])
+        .arg(&job)
+        .args([
+            "--", "-vp", "0", "-5", "3", "-vd", "0", "1", "-.5", "-x", "16", "-y", "12", "s.rad",
+        ])
+        .output()
+        .unwrap();
+    assert!(o.status.success());
+    let (done, ok, err) = run("tpiece", &[job.as_os_str(), "-q".as_ref()]);
+    assert!(done && ok, "{err}");
+    let real = std::fs::read_dir(job.join("workers"))
+        .unwrap()
+        .map(|e| e.unwrap().path())
+        .next()
+        .unwrap();
+    let text = std::fs::read_to_string(&real).unwrap();
+    let v: serde_json::Value = serde_json::from_str(&text).unwrap();
+    let craft = |name: &str, f: &dyn Fn(&mut serde_json::Value)| {
+        let mut w = v.clone();
+        w["owner"] = serde_json::Value::String(name.to_string());
+        f(&mut w);
+        std::fs::write(
+            job.join("workers").join(format!("{name}.json")),
+            w.to_string(),
+        )
+        .unwrap();
+    };
+    craft("wrap", &|w| w["rays"] = serde_json::json!(u64::MAX - 5));
+    craft("huge", &|w| w["cpu_seconds"] = serde_json::json!(1e300));
+    craft("liar", &|w| w["owner"] = serde_json::json!("someone-else"));
+    let o = Command::new(bin("tstat")).arg(&job).output().unwrap();
+    let out = String::from_utf8_lossy(&o.stdout);
+    let err = String::from_utf8_lossy(&o.stderr);
+    let all = format!("{out}{err}");
+    for name in ["wrap.json", "huge.json", "liar.json"] {
+        assert!(all.contains(&format!("heartbeat {name}")), "{name}: {all}");
+    }
+    assert!(!all.contains("inf") && !all.contains("e300"), "{all}");
+    let real_rays = v["rays"].as_u64().unwrap();
+    assert!(all.contains(&format!("{real_rays} rays")), "{all}");
+}

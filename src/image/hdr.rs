@@ -389,6 +389,19 @@ pub fn read_hdr<R: BufRead>(r: &mut R) -> Result<Image, ImageError> {
         .checked_mul(height)
         .filter(|&t| t <= MAX_PIXELS)
         .ok_or_else(|| bad(format!("picture size {width}x{height} is too large")))?;
+    // A valid run-length picture can be small on disk and huge in memory: check its pixels
+    // against the memory there is before decoding (about 32 bytes a pixel: the encoded
+    // pixels, the floats and a reader's copy), 2^30 pixels when that is unknown.
+    let fits = crate::runinfo::available_memory()
+        .map(|b| (b / 32) as usize)
+        .unwrap_or(1 << 30);
+    if total > fits {
+        return Err(bad(format!(
+            "picture size {width}x{height} needs about {:.1} GiB to read, more than this \
+             machine has free",
+            total as f64 * 32.0 / (1u64 << 30) as f64
+        )));
+    }
     let (line_len, lines) = if o.y_major {
         (width, height)
     } else {

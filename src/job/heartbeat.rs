@@ -69,6 +69,59 @@ pub struct WorkerRecord {
     pub error: Option<String>,
 }
 
+/// Largest count a heartbeat may report (tiles, values, rays): far beyond any real job.
+const MAX_COUNT: u64 = 1 << 53;
+/// Largest number of seconds a heartbeat may report (durations; Unix times up to about
+/// the year 5000).
+const MAX_SECONDS: f64 = 1e11;
+
+impl WorkerRecord {
+    /// Why the record cannot be a worker's own heartbeat in the file `file_stem.json`: an
+    /// owner that is not the file's name, a time that is not finite or out of range, a
+    /// count beyond any real job. None when it is plausible.
+    pub fn implausible(&self, file_stem: &str) -> Option<String> {
+        if self.owner != file_stem {
+            return Some(format!(
+                "its owner '{}' is not the file's name",
+                self.owner.escape_debug()
+            ));
+        }
+        let times = [
+            ("started_unix", self.started_unix),
+            ("updated_unix", self.updated_unix),
+            ("t_render", self.t_render),
+            ("t_spec", self.t_spec),
+            ("t_amb", self.t_amb),
+            ("t_idle", self.t_idle),
+            ("t_sync", self.t_sync),
+            ("cpu_seconds", self.cpu_seconds),
+        ];
+        for (name, v) in times {
+            if !(v.is_finite() && (0.0..=MAX_SECONDS).contains(&v)) {
+                return Some(format!("{name} {v} is out of range"));
+            }
+        }
+        let counts = [
+            ("tiles_done", self.tiles_done),
+            ("new_values", self.new_values),
+            ("shared_in", self.shared_in),
+            ("shared_out", self.shared_out),
+            ("reclaimed", self.reclaimed),
+            ("rejected", self.rejected),
+            ("rays", self.rays),
+        ];
+        for (name, v) in counts {
+            if v > MAX_COUNT {
+                return Some(format!("{name} {v} is out of range"));
+            }
+        }
+        if self.threads > 1 << 16 {
+            return Some(format!("threads {} is out of range", self.threads));
+        }
+        None
+    }
+}
+
 /// Counters a worker updates while it runs (read by its heartbeat thread; the ambient
 /// store keeps its own, [`crate::session::store::StoreCounters`]).
 #[derive(Debug, Default)]

@@ -618,12 +618,26 @@ fn points_options(
 
 /// Copy the files the scene's primitives read by relative name (function files, data
 /// files, pictures, fonts, text) into `JOB/files/` under the same names, so that workers
-/// find them whatever their directory and RAYPATH. Names climbing out with `..` are left
-/// to the workers' RAYPATH.
+/// find them whatever their directory and RAYPATH. Absolute names are left as they are
+/// (a shared filesystem); names climbing out with `..` are refused.
 fn copy_inputs(job: &JobDir, inputs: &[(String, std::path::PathBuf)]) -> Result<()> {
     let dir = job.root().join(INPUTS_DIR);
     for (name, path) in inputs {
         let rel = Path::new(name);
+        // A name that climbs out (`../up.cal`) would be looked up by a worker from the
+        // job's own folders, outside the job: it cannot be carried, so it is refused here
+        // rather than failing on every worker later.
+        if rel
+            .components()
+            .any(|c| matches!(c, std::path::Component::ParentDir))
+        {
+            bail!(
+                "the scene reads '{name}' ({}), a name that climbs out with '..': a job \
+                 carries the files a scene names inside its folders only; name it without \
+                 '..' (put its folder on RAYPATH) or give an absolute path",
+                path.display()
+            );
+        }
         if rel
             .components()
             .any(|c| !matches!(c, std::path::Component::Normal(_)))

@@ -89,10 +89,17 @@ pub fn view_at(keys: &[View], s: f64) -> View {
     v
 }
 
+/// Most frames of a job (task names have five digits).
+pub const MAX_FRAMES: usize = 99_999;
+
 /// `frames` views evenly spread along the path (the first and last are the end keys).
 pub fn frames(keys: &[View], frames: usize) -> Result<Vec<View>> {
     if frames < 2 {
         bail!("a path needs at least 2 frames");
+    }
+    // Checked before any view is made: a job holds at most this many frames.
+    if frames > MAX_FRAMES {
+        bail!("--path-frames {frames}: a job holds at most {MAX_FRAMES} frames");
     }
     (0..frames)
         .map(|k| {

@@ -117,6 +117,9 @@ pub struct JobStatus {
     pub aggregate: Aggregate,
     /// With a baseline job: its wall time, and this job's speed-up and efficiency.
     pub baseline: Option<Baseline>,
+    /// Heartbeat files left out as implausible (crafted or damaged), each with why.
+    #[serde(default)]
+    pub bad_heartbeats: Vec<String>,
 }
 
 /// Comparison with a one-worker job.
@@ -202,6 +205,11 @@ pub fn status(job: &JobDir) -> Result<JobStatus> {
         let Some(r) = read_record(&job.workers().join(&n)) else {
             continue;
         };
+        let stem = n.strip_suffix(".json").unwrap_or(&n);
+        if let Some(why) = r.implausible(stem) {
+            st.bad_heartbeats.push(format!("{n}: {why}"));
+            continue;
+        }
         a.workers += 1;
         let mut shown = r.state.clone();
         if r.state == "running" || r.state == "idle" {
@@ -413,6 +421,9 @@ pub fn render_text(st: &JobStatus) -> String {
             "  warning: {} invalid ambient records skipped (damaged or foreign logs in amb/)",
             a.rejected
         );
+    }
+    for b in &st.bad_heartbeats {
+        let _ = writeln!(s, "  warning: heartbeat {b}: left out");
     }
     if let Some(b) = &st.baseline {
         let _ = writeln!(
