@@ -206,3 +206,57 @@ mod tests {
         assert!(w.unwrap().contains("10000000 threads requested"));
     }
 }
+
+/// Longest word an error message shows whole; longer ones are cut in the middle.
+const MAX_SHOWN_WORD: usize = 120;
+
+/// An error message made safe to print: control characters other than newline and tab
+/// are escaped (`\u{0}`), and a word longer than 120 characters (a 30 MB token from bad
+/// input) keeps its first 80 and last 20 characters around a note of its length.
+pub fn printable(msg: &str) -> String {
+    let mut out = String::with_capacity(msg.len().min(1 << 16));
+    let mut word = String::new();
+    let flush = |word: &mut String, out: &mut String| {
+        let n = word.chars().count();
+        if n > MAX_SHOWN_WORD {
+            let head: String = word.chars().take(80).collect();
+            let tail: String = word.chars().skip(n - 20).collect();
+            out.push_str(&format!("{head}…[{n} characters]…{tail}"));
+        } else {
+            out.push_str(word);
+        }
+        word.clear();
+    };
+    for c in msg.chars() {
+        if c.is_whitespace() {
+            flush(&mut word, &mut out);
+            if c == '\n' || c == '\t' || c == ' ' {
+                out.push(c);
+            } else {
+                out.push_str(&c.escape_default().to_string());
+            }
+        } else if c.is_control() {
+            word.push_str(&c.escape_default().to_string());
+        } else {
+            word.push(c);
+        }
+    }
+    flush(&mut word, &mut out);
+    out
+}
+
+#[cfg(test)]
+mod printable_tests {
+    use super::printable;
+
+    #[test]
+    fn long_words_are_cut_and_control_bytes_escaped() {
+        assert_eq!(printable("a.rad:3: bad\tvalue"), "a.rad:3: bad\tvalue");
+        let long = format!("x{}y", "9".repeat(30_000_000));
+        let p = printable(&format!("option -x: '{long}' is not a number"));
+        assert!(p.len() < 300, "{}", p.len());
+        assert!(p.contains("[30000004 characters]") && p.starts_with("option -x: 'x999"));
+        assert!(p.ends_with("99y' is not a number"), "{p}");
+        assert_eq!(printable("nul \0 here"), "nul \\u{0} here");
+    }
+}

@@ -52,7 +52,7 @@ pub fn run(args: &[String]) -> i32 {
     match run_inner(args, log) {
         Ok(()) => 0,
         Err((log, e)) => {
-            log.say(&format!("tpict: error: {e:#}"));
+            log.say(&crate::runinfo::printable(&format!("tpict: error: {e:#}")));
             1
         }
     }

@@ -13,7 +13,10 @@ fn finish(program: &str, r: Result<i32>) -> i32 {
     match r {
         Ok(code) => code,
         Err(e) => {
-            eprintln!("{program}: error: {e:#}");
+            eprintln!(
+                "{}",
+                crate::runinfo::printable(&format!("{program}: error: {e:#}"))
+            );
             1
         }
     }

@@ -190,7 +190,10 @@ pub fn trad_main() -> i32 {
     match trad(a) {
         Ok(c) => c,
         Err(e) => {
-            eprintln!("trad: error: {e:#}");
+            eprintln!(
+                "{}",
+                crate::runinfo::printable(&format!("trad: error: {e:#}"))
+            );
             1
         }
     }

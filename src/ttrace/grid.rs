@@ -176,7 +176,10 @@ pub fn tgrid_main() -> i32 {
     match tgrid(GridArgs::parse()) {
         Ok(c) => c,
         Err(e) => {
-            eprintln!("tgrid: error: {e:#}");
+            eprintln!(
+                "{}",
+                crate::runinfo::printable(&format!("tgrid: error: {e:#}"))
+            );
             1
         }
     }

@@ -61,7 +61,10 @@ pub fn ttrace_main() -> i32 {
     let cmd = match parse_rtrace_args(&args) {
         Ok(c) => c,
         Err(e) => {
-            eprintln!("ttrace: error: {e}");
+            eprintln!(
+                "{}",
+                crate::runinfo::printable(&format!("ttrace: error: {e}"))
+            );
             return 1;
         }
     };
@@ -81,7 +84,10 @@ pub fn ttrace_main() -> i32 {
     match run(&o, &args, stdin.lock(), &mut stdout.lock()) {
         Ok(()) => 0,
         Err(e) => {
-            eprintln!("ttrace: error: {e:#}");
+            eprintln!(
+                "{}",
+                crate::runinfo::printable(&format!("ttrace: error: {e:#}"))
+            );
             1
         }
     }
