@@ -253,6 +253,26 @@ fn bad_obj_files_are_one_line_errors() {
         "nomat.obj:4: undefined modifier 'chrome'",
     );
     fails_with(d, &[l, "binary.obj"], "binary.obj:1: bad vertex z");
+    // A face beyond 4096 vertices is refused at once (ear clipping 200,000 took 111 s).
+    let mut big: String = (0..5000)
+        .map(|k| {
+            let a = k as f64 * std::f64::consts::TAU / 5000.0;
+            format!("v {} {} 0\n", a.cos(), a.sin())
+        })
+        .collect();
+    big.push('f');
+    for k in 1..=5000 {
+        big.push_str(&format!(" {k}"));
+    }
+    big.push('\n');
+    bad("bigface.obj", &big);
+    let t0 = std::time::Instant::now();
+    fails_with(
+        d,
+        &[l, "bigface.obj"],
+        "bigface.obj:5001: face of 5000 vertices (at most 4096",
+    );
+    assert!(t0.elapsed().as_secs() < 5);
     fails_with(d, &[l, "missing.obj"], "missing.obj");
     // The materials after the OBJ come too late (obj2mesh's -a files come first).
     fails_with(

@@ -119,6 +119,9 @@ fn area2(a: [f64; 2], b: [f64; 2], c: [f64; 2]) -> f64 {
     (b[0] - a[0]) * (c[1] - a[1]) - (c[0] - a[0]) * (b[1] - a[1])
 }
 
+/// Most vertices of one OBJ face.
+pub const MAX_FACE_VERTICES: usize = 4096;
+
 /// Cut a simple polygon (counter-clockwise 2-D points) into triangles by ear clipping:
 /// indices into `p`. None when no ear can be found (a self-intersecting outline).
 fn ear_clip(p: &[[f64; 2]]) -> Option<Vec<[usize; 3]>> {
@@ -335,6 +338,15 @@ pub fn parse_obj(text: &str, file: &str) -> Result<ObjMesh, (u32, String)> {
                     .map_err(at)?;
                 if corners.len() < 3 {
                     return Err(at(format!("face of {} vertices", corners.len())));
+                }
+                // Ear clipping takes time growing as the square of a face's vertices
+                // (200,000 took 111 s): faces beyond any modelled polygon are refused.
+                if corners.len() > MAX_FACE_VERTICES {
+                    return Err(at(format!(
+                        "face of {} vertices (at most {MAX_FACE_VERTICES}: split it, or \
+                         triangulate the model when exporting it)",
+                        corners.len()
+                    )));
                 }
                 let modifier = match material.as_ref().or(group.as_ref()) {
                     Some((name, l)) => {
