@@ -250,15 +250,13 @@ fn missing_and_octree_top_level_files() {
     let e = read_scene_files(&["/nonexistent/x.rad".to_string()], &o).unwrap_err();
     assert!(matches!(e, SceneError::Io { .. }));
     assert!(
-        e.to_string()
-            .starts_with("/nonexistent/x.rad:0: cannot read"),
+        e.to_string().starts_with("/nonexistent/x.rad: cannot read"),
         "{e}"
     );
     // Octrees are read; a missing one is an I/O error naming it.
     let e = read_scene_files(&["/nonexistent/a.oct".to_string()], &o).unwrap_err();
     assert!(
-        e.to_string()
-            .starts_with("/nonexistent/a.oct:0: cannot read"),
+        e.to_string().starts_with("/nonexistent/a.oct: cannot read"),
         "{e}"
     );
 }

@@ -6,6 +6,43 @@
 //! Parsing rules follow rpict: booleans toggle when bare and accept `+ 1 y Y t T` / `- 0 n N
 //! f F` suffixes; numbers must be finite.
 
+/// rpict's and rtrace's option names, for the suggestion of an unknown option.
+const KNOWN: &[&str] = &[
+    "-vtv", "-vtl", "-vtc", "-vth", "-vta", "-vts", "-vp", "-vd", "-vu", "-vh", "-vv", "-vo",
+    "-va", "-vs", "-vl", "-vf", "-x", "-y", "-pa", "-pj", "-ps", "-pt", "-pm", "-pd", "-dt", "-dc",
+    "-dj", "-ds", "-dr", "-dp", "-dv", "-ss", "-st", "-lr", "-lw", "-av", "-aw", "-ab", "-aa",
+    "-ar", "-ad", "-as", "-ae", "-ai", "-aE", "-aI", "-af", "-me", "-ma", "-mg", "-ms", "-i", "-u",
+    "-bv", "-w", "-t", "-e", "-o", "-S", "-n", "-h", "-I", "-ld",
+];
+
+/// ` (did you mean -ab? 'tpict -help' lists every option)` for an unknown option one edit
+/// away from a known one, else the pointer to the list.
+fn suggest(w: &str) -> String {
+    let close = KNOWN.iter().find(|k| edit_distance(k, w) == 1);
+    match close {
+        Some(k) => format!(" (did you mean {k}? -defaults lists every option)"),
+        None => " (-defaults lists every option)".to_string(),
+    }
+}
+
+/// Levenshtein distance of two short words.
+fn edit_distance(a: &str, b: &str) -> usize {
+    let (a, b): (Vec<char>, Vec<char>) = (a.chars().collect(), b.chars().collect());
+    if a.len().abs_diff(b.len()) > 2 || b.len() > 64 {
+        return usize::MAX;
+    }
+    let mut prev: Vec<usize> = (0..=b.len()).collect();
+    for (i, ca) in a.iter().enumerate() {
+        let mut cur = vec![i + 1; b.len() + 1];
+        for (j, cb) in b.iter().enumerate() {
+            let sub = prev[j] + usize::from(ca != cb);
+            cur[j + 1] = sub.min(prev[j + 1] + 1).min(cur[j] + 1);
+        }
+        prev = cur;
+    }
+    prev[b.len()]
+}
+
 /// Errors from option parsing, view validation and view files.
 #[derive(Debug, thiserror::Error)]
 pub enum OptError {
@@ -40,7 +77,7 @@ pub enum OptError {
         reason: String,
     },
     /// An option nobody knows.
-    #[error("unknown option {0}")]
+    #[error("unknown option {0}{hint}", hint = suggest(.0))]
     Unknown(String),
     /// A Radiance option that tpict does not implement.
     #[error("option {option} is not supported: {reason}")]
