@@ -72,6 +72,36 @@ pub fn is_plain_file(path: &Path) -> bool {
     std::fs::symlink_metadata(path).is_ok_and(|m| m.file_type().is_file())
 }
 
+/// Refuse a job file that is not a regular file (a symbolic link, FIFO or device: reading
+/// it could block or never end), or a folder of the job's inputs holding one. A missing
+/// path is left to the reader's own error.
+pub fn check_plain_tree(path: &Path) -> anyhow::Result<()> {
+    plain_tree(path, 0)
+}
+
+fn plain_tree(path: &Path, depth: usize) -> anyhow::Result<()> {
+    let Ok(md) = std::fs::symlink_metadata(path) else {
+        return Ok(());
+    };
+    let ft = md.file_type();
+    if ft.is_file() {
+        return Ok(());
+    }
+    if ft.is_dir() && depth < 16 {
+        let list = std::fs::read_dir(path)
+            .map_err(|e| anyhow::anyhow!("cannot list {}: {e}", path.display()))?;
+        for e in list {
+            plain_tree(&e?.path(), depth + 1)?;
+        }
+        return Ok(());
+    }
+    anyhow::bail!(
+        "{}: not a regular file (a symbolic link, FIFO or device in the job directory is \
+         never read)",
+        path.display()
+    )
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

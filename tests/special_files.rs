@@ -62,16 +62,15 @@ fn copy_dir(from: &Path, to: &Path) {
     }
 }
 
+/// A lamp over a floor.
+const SCENE: &str = "void light l 0 0 3 5 5 5\nl sphere b 0 0 4 0 0 2 .2\n\
+     void plastic w 0 0 5 .5 .5 .5 0 0\nw polygon f 0 0 12 -2 -2 0 2 -2 0 2 2 0 -2 2 0\n";
+
 #[test]
 fn special_files_in_a_job_never_block_or_get_read() {
     let t = tempfile::tempdir().unwrap();
     let d = t.path();
-    std::fs::write(
-        d.join("s.rad"),
-        "void light l 0 0 3 5 5 5\nl sphere b 0 0 4 0 0 2 .2\n\
-         void plastic w 0 0 5 .5 .5 .5 0 0\nw polygon f 0 0 12 -2 -2 0 2 -2 0 2 2 0 -2 2 0\n",
-    )
-    .unwrap();
+    std::fs::write(d.join("s.rad"), SCENE).unwrap();
     std::fs::write(d.join("outside.txt"), "{}").unwrap();
     // A finished job to damage.
     let base = d.join("base");
@@ -176,12 +175,7 @@ fn special_files_in_a_job_never_block_or_get_read() {
 fn crafted_heartbeats_are_left_out() {
     let t = tempfile::tempdir().unwrap();
     let d = t.path();
-    std::fs::write(
-        d.join("s.rad"),
-        "void light l 0 0 3 5 5 5\nl sphere b 0 0 4 0 0 2 .2\n\
-         void plastic w 0 0 5 .5 .5 .5 0 0\nw polygon f 0 0 12 -2 -2 0 2 -2 0 2 2 0 -2 2 0\n",
-    )
-    .unwrap();
+    std::fs::write(d.join("s.rad"), SCENE).unwrap();
     let job = d.join("job");
     let o = Command::new(bin("tplan"))
         .current_dir(d)

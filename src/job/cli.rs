@@ -481,6 +481,15 @@ struct TassembleArgs {
     raw: bool,
 }
 
+/// The missing or invalid tiles of a frame, each with why, for a message.
+fn missing_list(missing: &[super::assemble::MissingTile]) -> String {
+    missing
+        .iter()
+        .map(|t| format!("{} ({})", t.task, t.reason))
+        .collect::<Vec<_>>()
+        .join(", ")
+}
+
 /// `tassemble` of a point job: every ray's results in input order, to `-o` or standard
 /// output.
 fn assemble_points(
@@ -503,24 +512,21 @@ fn assemble_points(
     }
     let (img, missing) = super::assemble::assemble_frame(job, m, 0, cmd)?;
     if !missing.is_empty() {
-        let list: Vec<String> = missing
-            .iter()
-            .map(|t| format!("{} ({})", t.task, t.reason))
-            .collect();
+        let list = missing_list(&missing);
         if !a.partial {
             eprintln!(
                 "tassemble: error: {} of {} chunks missing or invalid: {} (run tpiece on the \
                  job to trace them, or pass --partial to write zeros)",
                 missing.len(),
                 m.frames[0].tiles.len(),
-                list.join(", ")
+                list
             );
             return Ok(1);
         }
         eprintln!(
             "tassemble: warning - {} chunks written as zeros: {}",
             missing.len(),
-            list.join(", ")
+            list
         );
     }
     let rays = super::points::load_rays(job, p)?;
@@ -600,10 +606,7 @@ fn tassemble(a: TassembleArgs) -> Result<i32> {
             img = fin.apply(&img);
         }
         if !missing.is_empty() {
-            let list: Vec<String> = missing
-                .iter()
-                .map(|t| format!("{} ({})", t.task, t.reason))
-                .collect();
+            let list = missing_list(&missing);
             if !a.partial {
                 eprintln!(
                     "tassemble: error: frame {f}: {} of {} tiles missing or invalid: {} \
@@ -611,7 +614,7 @@ fn tassemble(a: TassembleArgs) -> Result<i32> {
                      black)",
                     missing.len(),
                     m.frame(f).map(|p| p.tiles.len()).unwrap_or(0),
-                    list.join(", ")
+                    list
                 );
                 failed = true;
                 continue;
@@ -619,7 +622,7 @@ fn tassemble(a: TassembleArgs) -> Result<i32> {
             eprintln!(
                 "tassemble: warning - frame {f}: {} tiles filled black: {}",
                 missing.len(),
-                list.join(", ")
+                list
             );
         }
         pictures.push((target(f)?, img));

@@ -198,39 +198,13 @@ impl Beater {
     }
 }
 
-/// Refuse a job file that is not a regular file (a symbolic link, FIFO or device: reading
-/// it could block or never end), or a folder of the job's inputs holding one. A missing
-/// path is left to the reader's own error.
-fn check_plain_tree(path: &std::path::Path, depth: usize) -> Result<()> {
-    let Ok(md) = std::fs::symlink_metadata(path) else {
-        return Ok(());
-    };
-    let ft = md.file_type();
-    if ft.is_file() {
-        return Ok(());
-    }
-    if ft.is_dir() && depth < 16 {
-        for e in
-            std::fs::read_dir(path).with_context(|| format!("cannot list {}", path.display()))?
-        {
-            check_plain_tree(&e?.path(), depth + 1)?;
-        }
-        return Ok(());
-    }
-    bail!(
-        "{}: not a regular file (a symbolic link, FIFO or device in the job directory is \
-         never read)",
-        path.display()
-    )
-}
-
 /// Read the job's flattened scene, refuse it if the scene or the manifest's parameters no
 /// longer give the manifest's fingerprint, and start the render session (with ambient
 /// sharing when the values are cached).
 fn start_session(job: &JobDir, m: &Manifest, owner: &str, wo: &WorkerOptions) -> Result<Session> {
     let scene_path = job.file(&m.scene_file);
-    check_plain_tree(&scene_path, 0)?;
-    check_plain_tree(&job.root().join(super::manifest::INPUTS_DIR), 0)?;
+    crate::safefile::check_plain_tree(&scene_path)?;
+    crate::safefile::check_plain_tree(&job.root().join(super::manifest::INPUTS_DIR))?;
     // The files the planner copied (function files, data files, pictures, fonts), the job
     // directory (the flattened scene names no other scene file), then the RAYPATH.
     let mut raypath = vec![

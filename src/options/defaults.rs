@@ -4,7 +4,7 @@ use super::rpict::RpictOptions;
 use crate::view::fmt_g6;
 
 /// Format like C's `%.{prec}e` (two-digit exponent at least).
-fn fmt_e(v: f64, prec: usize) -> String {
+pub(crate) fn fmt_e(v: f64, prec: usize) -> String {
     let s = format!("{:.*e}", prec, v);
     match s.split_once('e') {
         Some((m, e)) => {

@@ -145,15 +145,7 @@ impl<R: BufRead> RayReader<R> {
 
 /// C's `%e`: six decimals, an exponent of at least two digits.
 pub fn fmt_e(v: f64) -> String {
-    let s = format!("{v:.6e}");
-    match s.split_once('e') {
-        Some((m, e)) => {
-            let e: i32 = e.parse().unwrap_or(0);
-            let sign = if e < 0 { '-' } else { '+' };
-            format!("{m}e{sign}{:02}", e.abs())
-        }
-        None => s,
-    }
+    crate::options::defaults::fmt_e(v, 6)
 }
 
 /// Writes result fields in the output format.
