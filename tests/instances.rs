@@ -263,6 +263,41 @@ fn a_large_instance_count_renders() {
     check_against_rpict(&bin, d, &["many.rad"], "many.oct", &o, &SUITE);
 }
 
+/// Instances nested 24 deep, each level holding two of the one below (2²⁴ spheres from
+/// 114-byte octrees): refused at the instance that makes the placements pass the limit
+/// (naming its file and line), before anything is flattened, in little time and memory.
+#[test]
+fn multiplying_instances_are_refused_at_the_line_that_crosses_the_limit() {
+    let Some(bin) = radiance_bin() else { return };
+    let t = tempfile::tempdir().unwrap();
+    let d = t.path();
+    let oconv = |k: usize, text: String| {
+        let rad = format!("l{k}.rad");
+        std::fs::write(d.join(&rad), text).unwrap();
+        let oct = run_ok(radiance(&bin, "oconv").current_dir(d).arg(&rad));
+        std::fs::write(d.join(format!("l{k}.oct")), oct).unwrap();
+    };
+    oconv(
+        0,
+        "void plastic red 0 0 5 .5 .1 .1 0 0\nred sphere s 0 0 4 0 0 0 .4\n".into(),
+    );
+    for k in 1..=24 {
+        let j = k - 1;
+        oconv(
+            k,
+            format!(
+                "# level {k}: two of level {j}\n\n\n\nvoid instance a 1 l{j}.oct 0 0\n\n\
+                 void instance b 5 l{j}.oct -t 1 0 0 0 0\n"
+            ),
+        );
+    }
+    std::fs::write(d.join("top.rad"), "void instance top 1 l24.oct 0 0\n").unwrap();
+    let start = std::time::Instant::now();
+    // Level k places 2^k spheres: level 23's second instance makes 2^23 > 2^22.
+    fails_with(d, &["top.rad"], "l23.rad:7: instance b: more than 4194304");
+    assert!(start.elapsed().as_secs() < 20, "{:?}", start.elapsed());
+}
+
 /// The instance scene moved 1e6 away, or scaled by 1e3 and 1e-3 (instances, their
 /// transforms and the view with it), renders the same picture.
 #[test]

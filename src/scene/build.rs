@@ -4,7 +4,7 @@
 use super::error::SceneError;
 pub use super::object::{Object, Objects};
 use super::primitive::{Location, Primitive};
-use super::sets::{flatten, map_box, Child, ObjectSet, Placement};
+use super::sets::{flatten, map_box, placement_count, Child, ObjectSet, Placement, MAX_PLACEMENTS};
 use crate::geometry::bvh::Bvh;
 use crate::geometry::source::DistantSource;
 use crate::geometry::Surface;
@@ -360,6 +360,8 @@ impl Builder<'_> {
         let mut children = Vec::new();
         let mut defined = Vec::with_capacity(prims.len());
         let mut pending = pending.into_iter();
+        // Placements the instances so far make once flattened.
+        let mut placed = 0u64;
         let (mods, materials) = (&mut self.mods, &mut self.materials);
         for p in prims {
             let t = p.ptype.as_str();
@@ -371,6 +373,19 @@ impl Builder<'_> {
             } else if t == "instance" || t == "mesh" {
                 let chain = mods.modref(&p.modifier).map_err(|m| err(p, m))?;
                 if let Some((set, xf)) = pending.next() {
+                    placed = placed.saturating_add(placement_count(&self.sets[set]));
+                    if placed > MAX_PLACEMENTS as u64 {
+                        return Err(err(
+                            p,
+                            format!(
+                                "{t} {}: more than {MAX_PLACEMENTS} instance placements \
+                                 (nested instances multiply: this one places {} and the \
+                                 file's instances up to it {placed})",
+                                p.name,
+                                placement_count(&self.sets[set])
+                            ),
+                        ));
+                    }
                     super::obj::bind_names(mods, &mut self.sets[set])?;
                     children.push(Child {
                         set,

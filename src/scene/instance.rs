@@ -126,6 +126,7 @@ impl Builder<'_> {
                 .iter()
                 .map(|c| self.sets[c.set].expanded)
                 .fold(0u64, u64::saturating_add);
+        let placements = placements_of(&self.sets, &level.children);
         Ok(ObjectSet {
             file: name.to_string(),
             geom: SetGeom::Objects(level.objects),
@@ -135,6 +136,7 @@ impl Builder<'_> {
             full: level.full,
             children: level.children,
             expanded,
+            placements,
             unbound: None,
         })
     }
@@ -226,6 +228,7 @@ pub(super) fn mesh_object_set(
         full,
         children: Vec::new(),
         expanded,
+        placements: 0,
         unbound: None,
     }
 }

@@ -75,6 +75,10 @@ pub struct ObjectSet {
     pub children: Vec<Child>,
     /// Surfaces once every nested instance is expanded.
     pub expanded: u64,
+    /// Placements its nested instances make once flattened (saturating): known as soon as
+    /// the set is built, so a scene whose instances multiply beyond [`MAX_PLACEMENTS`] is
+    /// refused at the instance that crosses it, before anything is flattened.
+    pub placements: u64,
     /// An OBJ file's modifier names, bound where it is first placed
     /// ([`super::obj::bind_names`]).
     pub unbound: Option<super::obj::ObjNames>,
@@ -219,6 +223,20 @@ pub fn instance_transform(p: &Primitive) -> Result<Transform, String> {
         return Err("singular transform".into());
     }
     Ok(xf)
+}
+
+/// The placements that `children` make once flattened (each child with geometry of its own
+/// is one, plus what its set's instances make), saturating.
+pub fn placements_of(sets: &[ObjectSet], children: &[Child]) -> u64 {
+    children
+        .iter()
+        .map(|c| placement_count(&sets[c.set]))
+        .fold(0u64, u64::saturating_add)
+}
+
+/// The placements one instance of `set` makes.
+pub fn placement_count(set: &ObjectSet) -> u64 {
+    u64::from(set.bounds.is_some()).saturating_add(set.placements)
 }
 
 /// Flatten the scene's instances into placements relative to `origin`.
