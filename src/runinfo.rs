@@ -38,12 +38,100 @@ pub fn thread_count(opt: Option<usize>) -> (usize, Option<String>) {
     (n, None)
 }
 
-/// Memory this machine can give a process now (`MemAvailable` of `/proc/meminfo`), if known.
+/// Memory this process can still allocate, if known: the least of the machine's
+/// `MemAvailable` (`/proc/meminfo`), what its control group's limit leaves (cgroup v2
+/// `memory.max − memory.current`, v1 `memory.limit_in_bytes − memory.usage_in_bytes`: a
+/// SLURM job's `--mem`) and what `RLIMIT_AS` leaves of its address space (`ulimit -v`).
 pub fn available_memory() -> Option<u64> {
-    let info = std::fs::read_to_string("/proc/meminfo").ok()?;
-    let line = info.lines().find(|l| l.starts_with("MemAvailable:"))?;
-    let kib: u64 = line.split_whitespace().nth(1)?.parse().ok()?;
+    [mem_available(), cgroup_headroom(), address_space_headroom()]
+        .into_iter()
+        .flatten()
+        .min()
+}
+
+/// A small text file of the system (at most 64 KiB read).
+fn small_text(path: &str) -> Option<String> {
+    use std::io::Read;
+    let mut s = String::new();
+    std::fs::File::open(path)
+        .ok()?
+        .take(64 << 10)
+        .read_to_string(&mut s)
+        .ok()?;
+    Some(s)
+}
+
+/// `key:  N kB` of a `/proc` status file, in bytes.
+fn kib_field(text: &str, key: &str) -> Option<u64> {
+    let line = text.lines().find(|l| l.starts_with(key))?;
+    let kib: u64 = line[key.len()..].split_whitespace().next()?.parse().ok()?;
     kib.checked_mul(1024)
+}
+
+/// `MemAvailable` of `/proc/meminfo`.
+fn mem_available() -> Option<u64> {
+    kib_field(&small_text("/proc/meminfo")?, "MemAvailable:")
+}
+
+/// What this process's memory control group still allows (None: no limit, or unknown).
+fn cgroup_headroom() -> Option<u64> {
+    let groups = small_text("/proc/self/cgroup")?;
+    cgroup_headroom_in(&groups, small_text)
+}
+
+/// [`cgroup_headroom`] over `/proc/self/cgroup`'s text `groups`, reading files with `read`.
+fn cgroup_headroom_in(groups: &str, read: impl Fn(&str) -> Option<String>) -> Option<u64> {
+    let num = |p: &str| -> Option<u64> { read(p)?.trim().parse().ok() };
+    let mut best: Option<u64> = None;
+    for line in groups.lines() {
+        let mut f = line.splitn(3, ':');
+        let (_, controllers, path) = (f.next()?, f.next()?, f.next()?);
+        let path = path.trim_end_matches('/');
+        let (limit, usage) = if controllers.is_empty() {
+            let d = format!("/sys/fs/cgroup{path}");
+            (
+                num(&format!("{d}/memory.max")),
+                num(&format!("{d}/memory.current")),
+            )
+        } else if controllers.split(',').any(|c| c == "memory") {
+            let d = format!("/sys/fs/cgroup/memory{path}");
+            (
+                num(&format!("{d}/memory.limit_in_bytes")),
+                num(&format!("{d}/memory.usage_in_bytes")),
+            )
+        } else {
+            continue;
+        };
+        // "max" (v2) does not parse: no limit. v1 says "no limit" with a huge number.
+        if let Some(l) = limit.filter(|&l| l < 1 << 60) {
+            let left = l.saturating_sub(usage.unwrap_or(0));
+            best = Some(best.map_or(left, |b| b.min(left)));
+        }
+    }
+    best
+}
+
+/// What `RLIMIT_AS` leaves of this process's address space (None: unlimited or unknown).
+#[cfg(unix)]
+fn address_space_headroom() -> Option<u64> {
+    let mut r = libc::rlimit {
+        rlim_cur: 0,
+        rlim_max: 0,
+    };
+    // SAFETY: `r` is a valid, writable rlimit for the duration of the call.
+    if unsafe { libc::getrlimit(libc::RLIMIT_AS, &mut r) } != 0 || r.rlim_cur == libc::RLIM_INFINITY
+    {
+        return None;
+    }
+    let used = kib_field(&small_text("/proc/self/status")?, "VmSize:").unwrap_or(0);
+    #[allow(clippy::unnecessary_cast)] // rlim_t is not u64 everywhere
+    let cur = r.rlim_cur as u64;
+    Some(cur.saturating_sub(used))
+}
+
+#[cfg(not(unix))]
+fn address_space_headroom() -> Option<u64> {
+    None
 }
 
 /// Bytes a single-process picture of `x`×`y` pixels holds at once: the rendered rows and
@@ -53,6 +141,23 @@ pub const PICTURE_BYTES_PER_PIXEL: u64 = 32;
 /// Refuse a picture that cannot fit in `available` bytes (None: unknown, then only an
 /// overflowing size is refused), with what to do instead.
 pub fn check_picture_memory(x: usize, y: usize, available: Option<u64>) -> Result<(), String> {
+    check_memory_for(
+        x,
+        y,
+        available,
+        "lower -x/-y, or render it as a batch job (tplan splits it into tiles and \
+         tassemble writes it)",
+    )
+}
+
+/// Refuse a picture or tile of `x`×`y` pixels that cannot fit in `available` bytes (None:
+/// unknown, then only an overflowing size is refused); `advice` says what to do instead.
+pub fn check_memory_for(
+    x: usize,
+    y: usize,
+    available: Option<u64>,
+    advice: &str,
+) -> Result<(), String> {
     let need = (x as u64)
         .checked_mul(y as u64)
         .and_then(|p| p.checked_mul(PICTURE_BYTES_PER_PIXEL));
@@ -61,8 +166,7 @@ pub fn check_picture_memory(x: usize, y: usize, available: Option<u64>) -> Resul
         (None, _) => Err(format!("a {x}x{y} picture is too large to address")),
         (Some(n), Some(a)) if n > a => Err(format!(
             "a {x}x{y} picture needs about {:.1} GiB of memory and {:.1} GiB are available: \
-             lower -x/-y, or render it as a batch job (tplan splits it into tiles and \
-             tassemble writes it)",
+             {advice}",
             gib(n),
             gib(a)
         )),
@@ -204,6 +308,52 @@ mod tests {
         assert!(check_picture_memory(100_000, 100_000, None).is_ok());
         assert_eq!(n, cores * MAX_THREADS_PER_CORE);
         assert!(w.unwrap().contains("10000000 threads requested"));
+    }
+
+    /// A SLURM job's `--mem` (a control group's limit) bounds the memory a process may use:
+    /// v2 (`0::/path`) and v1 (`N:memory:/path`), "max" and v1's huge "no limit".
+    #[test]
+    fn control_group_limits_are_read() {
+        let files = |map: &'static [(&'static str, &'static str)]| {
+            move |p: &str| {
+                map.iter()
+                    .find(|(k, _)| *k == p)
+                    .map(|(_, v)| v.to_string())
+            }
+        };
+        let v2 = files(&[
+            ("/sys/fs/cgroup/slurm/job1/memory.max", "4294967296\n"),
+            ("/sys/fs/cgroup/slurm/job1/memory.current", "1073741824\n"),
+        ]);
+        assert_eq!(cgroup_headroom_in("0::/slurm/job1\n", v2), Some(3 << 30));
+        let unlimited = files(&[
+            ("/sys/fs/cgroup/user/memory.max", "max\n"),
+            ("/sys/fs/cgroup/user/memory.current", "10\n"),
+        ]);
+        assert_eq!(cgroup_headroom_in("0::/user\n", unlimited), None);
+        let v1 = files(&[
+            (
+                "/sys/fs/cgroup/memory/job/memory.limit_in_bytes",
+                "2147483648",
+            ),
+            (
+                "/sys/fs/cgroup/memory/job/memory.usage_in_bytes",
+                "3221225472",
+            ),
+            (
+                "/sys/fs/cgroup/memory/user/memory.limit_in_bytes",
+                "9223372036854771712",
+            ),
+        ]);
+        // Over its limit already: nothing left.
+        let groups = "5:cpu,cpuacct:/job\n4:memory:/job\n";
+        assert_eq!(cgroup_headroom_in(groups, v1), Some(0));
+        assert_eq!(cgroup_headroom_in("4:memory:/user\n", v1), None);
+        assert_eq!(cgroup_headroom_in("garbage", v1), None);
+        // This machine: whatever it says, never more than MemAvailable.
+        if let (Some(a), Some(m)) = (available_memory(), mem_available()) {
+            assert!(a <= m);
+        }
     }
 }
 

@@ -110,6 +110,9 @@ pub fn start_session(opts: &RpictOptions, log: &Log) -> Result<Session> {
     let mut ro = ReadOptions::from_env();
     ro.allow_commands |= opts.run.allow_commands;
     ro.obj_material.clone_from(&opts.run.obj_material);
+    if let Some(n) = opts.run.max_primitives {
+        ro.max_primitives = n;
+    }
     let files = if opts.scene_files.is_empty() {
         if opts.run.sequence_start.is_some() {
             bail!("no scene files given (with -S, views come from standard input, so the scene cannot)");

@@ -104,12 +104,21 @@ fn sweep_text(bin: &Path, dir: &Path, strings: &str, frame: [f64; 9], spacing: O
     let words: Vec<&str> = strings.split_whitespace().collect();
     let font = Arc::new(Font::load(&dir.join(words[0])).unwrap());
     let lines = if words.len() == 2 {
-        split_lines(&std::fs::read(dir.join(words[1])).unwrap())
+        let bytes = std::fs::read(dir.join(words[1])).unwrap();
+        split_lines(&bytes).map(|l| l.to_vec()).collect::<Vec<_>>()
     } else {
         vec![words[2..].join(" ").into_bytes()]
     };
     let v = |k: usize| DVec3::new(frame[k], frame[k + 1], frame[k + 2]);
-    let text = Text::new(font, lines, v(0), v(3), v(6), spacing).unwrap();
+    let text = Text::new(
+        font,
+        lines.iter().map(|l| &l[..]),
+        v(0),
+        v(3),
+        v(6),
+        spacing,
+    )
+    .unwrap();
     // Points over the text's area, a grid dense enough to cross every glyph edge.
     let mut pts = Vec::new();
     let (o, r, d) = (v(0), v(3), v(6));
@@ -582,15 +591,7 @@ fn helvet_values_of_the_reference() {
     assert_eq!((i.left, i.right, i.bottom, i.top), (102, 153, 48, 222));
     // brighttext helvet.fnt . AI, reals 0 1 0 1 0 0 0 -1 0 2 0.5 on z = 0.
     let o = DVec3::new(0.0, 1.0, 0.0);
-    let t = Text::new(
-        f.clone(),
-        vec![b"AI".to_vec()],
-        o,
-        DVec3::X,
-        -DVec3::Y,
-        None,
-    )
-    .unwrap();
+    let t = Text::new(f.clone(), [&b"AI"[..]], o, DVec3::X, -DVec3::Y, None).unwrap();
     let inside = |x: f64, y: f64| t.inside(DVec3::new(x, y, 0.0));
     assert!(inside(1.502, 0.5294));
     assert!(!inside(1.3, 0.5294));

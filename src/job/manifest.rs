@@ -379,6 +379,9 @@ pub fn create_job(dir: &Path, req: &PlanRequest) -> Result<Manifest> {
     let mut ro = ReadOptions::from_env();
     ro.allow_commands |= opts.run.allow_commands;
     ro.obj_material.clone_from(&opts.run.obj_material);
+    if let Some(n) = opts.run.max_primitives {
+        ro.max_primitives = n;
+    }
     let prims = read_scene_files(&opts.scene_files, &ro)?;
     let scene = Scene::build_read(&prims, &ro)?;
     for w in &scene.warnings {

@@ -215,6 +215,8 @@ fn start_session(job: &JobDir, m: &Manifest, owner: &str, wo: &WorkerOptions) ->
     let ro = ReadOptions {
         allow_commands: false,
         raypath,
+        // The flattened scene holds what the planner counted (its limit was applied there).
+        max_primitives: m.primitives.max(1),
         ..ReadOptions::default()
     };
     let source = SceneSource::read(&[scene_path.display().to_string()], &ro, &m.params)?;
@@ -638,6 +640,18 @@ impl Worker<'_> {
         if c.reclaimed && self.result_exists(&out, &rect) {
             task::complete(&self.tasks_dir, name, self.owner)?;
             return Ok(());
+        }
+        // A tile larger than the memory this process may still use (the machine's, its
+        // control group's, its address-space limit) is handed back before it is rendered.
+        let fits = crate::runinfo::check_memory_for(
+            rect.w,
+            rect.h,
+            crate::runinfo::available_memory(),
+            "plan the job with smaller tiles (tplan --tiles N or --tile-size)",
+        );
+        if let Err(e) = fits {
+            let _ = task::release(&self.tasks_dir, name, self.owner);
+            bail!("tile {name}: {e} (tile released)");
         }
         let (meta, pixels) = self.render_tile(c, fp, &rect)?;
         // Values made for this tile go out before it counts as done (a write, no peer read:

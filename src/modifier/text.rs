@@ -24,7 +24,7 @@
 //! foreground modifier) and 0 outside (the background).
 
 use super::files::SceneFiles;
-use super::font::{Font, LineLayout, CELL};
+use super::font::{Font, CELL};
 use super::{MixCoefficient, ModifierKind, ModifierLookup, Pattern};
 use crate::color::Color;
 use crate::render::shading::ShadingPoint;
@@ -36,10 +36,21 @@ use std::sync::Arc;
 pub const MAX_LINE: usize = 511;
 
 /// Laid-out text in its frame: the geometry shared by the three types.
+///
+/// The lines are packed (every line's bytes one after the other, one glyph origin per
+/// byte, and a start and a width per line): a text of many short lines costs about 9 bytes
+/// a character and 12 a line, not an allocation or two per line.
 #[derive(Debug)]
 pub struct Text {
     font: Arc<Font>,
-    lines: Vec<(Vec<u8>, LineLayout)>,
+    /// Every line's bytes, one after the other.
+    bytes: Vec<u8>,
+    /// The glyph origin of each byte ([`NO_GLYPH`]: none).
+    origins: Vec<i64>,
+    /// Where each line starts in `bytes`, and a last entry: the end of the last line.
+    starts: Vec<u32>,
+    /// Each line's width in font units.
+    widths: Vec<i64>,
     origin: DVec3,
     /// Dual of R: x = (P − O)·rstar.
     rstar: DVec3,
@@ -49,11 +60,17 @@ pub struct Text {
     hscale: f64,
 }
 
+/// The origin of a byte without a glyph.
+const NO_GLYPH: i64 = i64::MIN;
+
+/// Most bytes a text may hold (its lines' starts are 32-bit).
+const MAX_TEXT_BYTES: usize = u32::MAX as usize;
+
 impl Text {
     /// Lay out `lines` with `font` in the frame (O, R, D) with `spacing`.
-    pub fn new(
+    pub fn new<'a>(
         font: Arc<Font>,
-        lines: Vec<Vec<u8>>,
+        lines: impl IntoIterator<Item = &'a [u8]>,
         o: DVec3,
         r: DVec3,
         d: DVec3,
@@ -72,16 +89,28 @@ impl Text {
             None => CELL as f64,
             Some(s) => font.mwidth() as f64 + CELL as f64 * s.abs(),
         };
-        let lines = lines
-            .into_iter()
-            .map(|l| {
-                let lay = font.layout(&l, spacing.unwrap_or(0.0));
-                (l, lay)
-            })
-            .collect();
+        let (mut bytes, mut origins, mut starts, mut widths) =
+            (Vec::new(), Vec::new(), vec![0u32], Vec::new());
+        for l in lines {
+            if bytes.len() + l.len() > MAX_TEXT_BYTES {
+                return Err(format!("text of more than {MAX_TEXT_BYTES} bytes"));
+            }
+            let lay = font.layout(l, spacing.unwrap_or(0.0));
+            bytes.extend_from_slice(l);
+            origins.extend(lay.origins.iter().map(|o| o.unwrap_or(NO_GLYPH)));
+            starts.push(bytes.len() as u32);
+            widths.push(lay.width);
+        }
+        bytes.shrink_to_fit();
+        origins.shrink_to_fit();
+        starts.shrink_to_fit();
+        widths.shrink_to_fit();
         Ok(Text {
             font,
-            lines,
+            bytes,
+            origins,
+            starts,
+            widths,
             origin: o,
             rstar: rs / rd,
             dstar: ds / dd,
@@ -97,16 +126,21 @@ impl Text {
             return false;
         }
         let line = y.trunc();
-        let Some((text, lay)) = self.lines.get(line as usize).filter(|_| line < 1e9) else {
+        let Some(&width) = self.widths.get(line as usize).filter(|_| line < 1e10) else {
             return false;
         };
+        let k = line as usize;
+        let (a, b) = (self.starts[k] as usize, self.starts[k + 1] as usize);
         let gy = (line + 1.0 - y) * CELL as f64;
         let h = x * self.hscale;
-        if h >= lay.width as f64 {
+        if h >= width as f64 {
             return false;
         }
-        text.iter().zip(&lay.origins).any(|(&c, o)| {
-            let Some(o) = *o else { return false };
+        let (text, origins) = (&self.bytes[a..b], &self.origins[a..b]);
+        text.iter().zip(origins).any(|(&c, &o)| {
+            if o == NO_GLYPH {
+                return false;
+            }
             let dx = h - o as f64;
             dx >= 0.0 && dx < CELL as f64 && self.font.glyph(c).is_some_and(|g| g.contains(dx, gy))
         })
@@ -159,47 +193,61 @@ impl MixCoefficient for TextMix {
     }
 }
 
-/// The lines of a text file (found along the RAYPATH): one per line, newline stripped,
-/// lines longer than [`MAX_LINE`] bytes split.
-pub fn read_text_file(files: &SceneFiles, name: &str) -> Result<Vec<Vec<u8>>, String> {
+/// The bytes of a text file (found along the RAYPATH), at most [`MAX_TEXT_BYTES`].
+pub fn read_text_file(files: &SceneFiles, name: &str) -> Result<Vec<u8>, String> {
+    use std::io::Read;
     let path = files.find(name)?;
-    let bytes = std::fs::read(&path)
+    let f = crate::safefile::open_regular(&path, true)
         .map_err(|e| format!("{}: cannot read text file: {e}", path.display()))?;
-    Ok(split_lines(&bytes))
+    let mut bytes = Vec::new();
+    f.take(MAX_TEXT_BYTES as u64 + 1)
+        .read_to_end(&mut bytes)
+        .map_err(|e| format!("{}: cannot read text file: {e}", path.display()))?;
+    if bytes.len() > MAX_TEXT_BYTES {
+        return Err(format!(
+            "{}: text file of more than {MAX_TEXT_BYTES} bytes",
+            path.display()
+        ));
+    }
+    Ok(bytes)
 }
 
-/// Text-file bytes as lines (see [`read_text_file`]).
-pub fn split_lines(bytes: &[u8]) -> Vec<Vec<u8>> {
-    let mut lines = Vec::new();
+/// A text file's lines: one per line, newline stripped, lines longer than [`MAX_LINE`]
+/// bytes split.
+pub fn split_lines(bytes: &[u8]) -> impl Iterator<Item = &[u8]> {
     let mut rest = bytes;
-    while !rest.is_empty() {
+    let mut parts: std::slice::Chunks<'_, u8> = [].chunks(MAX_LINE);
+    let mut empty = false;
+    std::iter::from_fn(move || loop {
+        if empty {
+            empty = false;
+            return Some(&[][..]);
+        }
+        if let Some(p) = parts.next() {
+            return Some(p);
+        }
+        if rest.is_empty() {
+            return None;
+        }
         let (line, next) = match rest.iter().position(|&b| b == b'\n') {
             Some(k) => (&rest[..k], &rest[k + 1..]),
             None => (rest, &rest[rest.len()..]),
         };
-        if line.is_empty() {
-            lines.push(Vec::new());
-        }
-        for part in line.chunks(MAX_LINE) {
-            lines.push(part.to_vec());
-        }
+        empty = line.is_empty();
+        parts = line.chunks(MAX_LINE);
         rest = next;
-    }
-    lines
+    })
 }
 
 /// Font and text from string arguments `font textfile` or `font . word ...`.
-fn font_and_lines(
-    sargs: &[String],
-    files: &SceneFiles,
-) -> Result<(Arc<Font>, Vec<Vec<u8>>), String> {
+fn font_and_text(sargs: &[String], files: &SceneFiles) -> Result<(Arc<Font>, Vec<u8>), String> {
     let font = files.font(&sargs[0])?;
-    let lines = if sargs.len() == 2 {
+    let text = if sargs.len() == 2 {
         read_text_file(files, &sargs[1])?
     } else {
-        vec![sargs[2..].join(" ").into_bytes()]
+        sargs[2..].join(" ").into_bytes()
     };
-    Ok((font, lines))
+    Ok((font, text))
 }
 
 /// O, R, D from the first nine reals.
@@ -245,9 +293,13 @@ fn parse_text(
         ));
     }
     let spacing = p.rargs.get(n).copied();
-    let (font, lines) = font_and_lines(strings, files)?;
+    let (font, text) = font_and_text(strings, files)?;
     let (o, r, d) = frame(&p.rargs);
-    Text::new(font, lines, o, r, d, spacing)
+    if strings.len() == 2 {
+        Text::new(font, split_lines(&text), o, r, d, spacing)
+    } else {
+        Text::new(font, [&text[..]], o, r, d, spacing)
+    }
 }
 
 /// Parser of `brighttext`.
@@ -294,7 +346,7 @@ mod tests {
         let f = Arc::new(Font::parse(FONT, "t.fnt").unwrap());
         Text::new(
             f,
-            vec![words.as_bytes().to_vec()],
+            [words.as_bytes()],
             DVec3::new(0.0, 1.0, 0.0),
             DVec3::X,
             -DVec3::Y,
@@ -338,22 +390,43 @@ mod tests {
             DVec3::new(1.0, 0.0, 0.0),
             DVec3::new(0.5, -1.0, 0.0),
         );
-        let t = Text::new(f.clone(), vec![b"AI".to_vec()], o, r, d, None).unwrap();
+        let t = Text::new(f.clone(), [&b"AI"[..]], o, r, d, None).unwrap();
         assert!(t.inside(o + 1.5 * r + 0.5 * d + DVec3::new(0.0, 0.0, 3.0)));
         assert!(!t.inside(o + 1.3 * r + 0.5 * d));
-        let e = Text::new(f, vec![], o, r, 2.0 * r, None).unwrap_err();
+        let e = Text::new(f, [], o, r, 2.0 * r, None).unwrap_err();
         assert_eq!(e, "illegal motion vector");
     }
 
     #[test]
     fn text_file_lines() {
+        let lines = |b: &[u8]| split_lines(b).map(|l| l.to_vec()).collect::<Vec<_>>();
         assert_eq!(
-            split_lines(b"AB\n\nCD"),
+            lines(b"AB\n\nCD"),
             vec![b"AB".to_vec(), vec![], b"CD".to_vec()]
         );
         let long = vec![b'x'; 600];
-        let l = split_lines(&long);
+        let l = lines(&long);
         assert_eq!((l.len(), l[0].len(), l[1].len()), (2, 511, 89));
-        assert_eq!(split_lines(b"A\n").len(), 1);
+        assert_eq!(lines(b"A\n").len(), 1);
+        assert_eq!(lines(b"\n\nA").len(), 3);
+        assert!(lines(b"").is_empty());
+    }
+
+    /// A text of many short lines is packed: about 9 bytes a character and 12 a line.
+    #[test]
+    fn many_short_lines_are_packed() {
+        let f = Arc::new(Font::parse(FONT, "t.fnt").unwrap());
+        let src = b"AI\n".repeat(100_000);
+        let t = Text::new(f, split_lines(&src), DVec3::ZERO, DVec3::X, -DVec3::Y, None).unwrap();
+        assert_eq!(t.widths.len(), 100_000);
+        let held = t.bytes.capacity()
+            + 8 * t.origins.capacity()
+            + 4 * t.starts.capacity()
+            + 8 * t.widths.capacity();
+        assert!(held <= 100_000 * (2 * 9 + 12 + 1), "{held}");
+        // Line 77,777 still reads: its I.
+        assert!(t.inside(DVec3::new(1.502, -77_777.470_6, 0.0)));
+        assert!(!t.inside(DVec3::new(1.3, -77_777.470_6, 0.0)));
+        assert!(!t.inside(DVec3::new(1.502, -100_000.470_6, 0.0)));
     }
 }

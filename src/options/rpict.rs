@@ -51,6 +51,7 @@ pub fn help_text() -> String {
            -o FILE                 output: .hdr (Radiance), .exr or .png; -S n: a pattern\n\
            --allow-commands        run a scene's !commands other than xform and genbox\n\
            --obj-material NAME     modifier of .obj triangles with no or an undefined name\n\
+           --max-primitives N      most primitives the scene may expand to (default 4194304)\n\
            --stats FILE            write render statistics (JSON)\n\
            --amb-log FILE          share ambient values through Tessera's append-only log\n\
            --amb-flush N           values per log write (default 128)\n\
@@ -207,6 +208,7 @@ mod tests {
         for name in [
             "--allow-commands",
             "--obj-material",
+            "--max-primitives",
             "--stats",
             "--amb-log",
             "--amb-flush",

@@ -1,7 +1,8 @@
 //! The run parameters: how one tpict process runs and where its output goes, none of which
 //! changes a pixel: progress reports (`-t`), warnings (`-w`), threads (`-n`), the output file
 //! (`-o`), view sequences (`-S`), the error file (`-e`), inline commands
-//! (`--allow-commands`), the default modifier of `.obj` scene files (`--obj-material`, which
+//! (`--allow-commands`), the most primitives a scene may expand to (`--max-primitives`), the
+//! default modifier of `.obj` scene files (`--obj-material`, which
 //! changes only what is read: a job keeps it in its flattened scene), statistics (`--stats`) and the ambient stores (`-af`, `--amb-log`,
 //! `--amb-flush`, `--amb-force`). Not kept in job manifests.
 
@@ -37,6 +38,10 @@ pub struct RunParams {
     pub amb_flush: usize,
     /// `--amb-force`: use an ambient log whose fingerprint does not match.
     pub amb_force: bool,
+    /// `--max-primitives N`: most primitives the scene may expand to (None: the default,
+    /// [`crate::scene::reader::DEFAULT_MAX_PRIMITIVES`]).
+    #[serde(default)]
+    pub max_primitives: Option<usize>,
 }
 
 impl Default for RunParams {
@@ -56,6 +61,7 @@ impl Default for RunParams {
             amb_log: None,
             amb_flush: 128,
             amb_force: false,
+            max_primitives: None,
         }
     }
 }
@@ -146,6 +152,19 @@ impl RunParams {
                 self.amb_force = true;
                 1
             }
+            "--max-primitives" => {
+                let v = arg(words, 1, "a count")?;
+                self.max_primitives = match v.parse::<usize>() {
+                    Ok(n) if n > 0 => Some(n),
+                    _ => {
+                        return Err(OptError::BadValue {
+                            option: w.to_string(),
+                            reason: format!("expected a positive count, got '{v}'"),
+                        })
+                    }
+                };
+                2
+            }
             _ => return Ok(None),
         };
         Ok(Some(n))
@@ -178,6 +197,9 @@ impl RunParams {
         }
         if let Some(m) = &self.obj_material {
             w.extend(["--obj-material".into(), m.clone()]);
+        }
+        if let Some(n) = self.max_primitives {
+            w.extend(["--max-primitives".into(), n.to_string()]);
         }
         if let Some(f) = &self.stats_file {
             w.extend(["--stats".into(), f.clone()]);

@@ -93,7 +93,7 @@ pub const KNOWN_TYPES: &[&str] = &[
 ];
 
 /// How to read scenes.
-#[derive(Clone, Debug, Default)]
+#[derive(Clone, Debug)]
 pub struct ReadOptions {
     /// Run inline commands other than the built-in ones (`xform`, the generators) through
     /// `sh -c`.
@@ -103,6 +103,41 @@ pub struct ReadOptions {
     /// `--obj-material NAME`: the modifier of the triangles of `.obj` files given as scene
     /// files that have no modifier name or an undefined one.
     pub obj_material: Option<String>,
+    /// `--max-primitives N`: most primitives the scene may expand to (its text, inline
+    /// commands, generators and `xform` arrays together; instances are not expanded).
+    pub max_primitives: usize,
+}
+
+/// The default of [`ReadOptions::max_primitives`]: 2²² (about 4 GB of memory while the
+/// scene is built).
+pub const DEFAULT_MAX_PRIMITIVES: usize = 1 << 22;
+
+impl Default for ReadOptions {
+    fn default() -> Self {
+        ReadOptions {
+            allow_commands: false,
+            raypath: Vec::new(),
+            obj_material: None,
+            max_primitives: DEFAULT_MAX_PRIMITIVES,
+        }
+    }
+}
+
+/// Refuse a scene that expands to more than `opts.max_primitives` primitives: `n` would be
+/// held at once, made by what is at `loc`.
+fn check_count(n: usize, opts: &ReadOptions, loc: &Location) -> Result<(), SceneError> {
+    if n > opts.max_primitives {
+        return Err(SceneError::syntax(
+            loc.clone(),
+            format!(
+                "the scene expands to more than {} primitives here (inline commands, \
+                 generators and xform arrays multiply them; raise the limit with \
+                 --max-primitives N)",
+                opts.max_primitives
+            ),
+        ));
+    }
+    Ok(())
 }
 
 /// The location of primitives made from the command line (a `.obj` scene file).
@@ -147,7 +182,7 @@ impl ReadOptions {
         ReadOptions {
             allow_commands: std::env::var("TESSERA_ALLOW_COMMANDS").is_ok_and(|v| v == "1"),
             raypath,
-            obj_material: None,
+            ..ReadOptions::default()
         }
     }
 }
@@ -359,6 +394,7 @@ fn parse_into(
         if prim.ptype == "alias" {
             let t = cur.word(start, "aliased identifier", &ctx)?;
             prim.sargs.push(t.text);
+            check_count(out.len() + 1, opts, &prim.loc)?;
             out.push(prim);
             continue;
         }
@@ -397,6 +433,7 @@ fn parse_into(
                 }
             }
         }
+        check_count(out.len() + 1, opts, &prim.loc)?;
         out.push(prim);
     }
 }
@@ -424,6 +461,7 @@ fn expand_command(
     if let Some(stages) = &stages {
         match builtin_pipeline(stages, loc, opts, depth)? {
             Builtin::Done(prims) => {
+                check_count(out.len().saturating_add(prims.len()), opts, loc)?;
                 out.extend(prims);
                 return Ok(());
             }
@@ -496,6 +534,7 @@ fn builtin_pipeline(
         let cx = gen::GenContext {
             loc,
             raypath: &opts.raypath,
+            max_primitives: opts.max_primitives,
         };
         match gen::generate(first, &cx) {
             Some(Ok(p)) => prims = p,
@@ -505,6 +544,7 @@ fn builtin_pipeline(
         }
     }
     for x in &later {
+        check_count(prims.len().saturating_mul(x.copies.len()), opts, loc)?;
         let mut next = Vec::with_capacity(prims.len() * x.copies.len());
         for copy in &x.copies {
             for p in &prims {
@@ -571,6 +611,13 @@ fn run_xform(
         parse_into(&text, Arc::from(shown), opts, depth + 1, &mut prims)?;
         contents.push(prims);
     }
+    let each: usize = contents.iter().map(Vec::len).sum();
+    check_count(
+        out.len()
+            .saturating_add(each.saturating_mul(x.copies.len())),
+        opts,
+        loc,
+    )?;
     for copy in &x.copies {
         for prims in &contents {
             for p in prims {

@@ -128,6 +128,9 @@ pub fn run(
     let mut ro = ReadOptions::from_env();
     ro.allow_commands |= o.run.allow_commands;
     ro.obj_material.clone_from(&o.run.obj_material);
+    if let Some(n) = o.run.max_primitives {
+        ro.max_primitives = n;
+    }
     let source = SceneSource::read(&o.scene_files, &ro, &o.params)?;
     let mut session = Session::start(o.params.clone(), source, o.run.threads)?;
     if o.run.warnings {

@@ -41,6 +41,22 @@ pub struct GenContext<'a> {
     pub loc: &'a Location,
     /// Directories searched for function files (`-f`), Radiance's RAYPATH.
     pub raypath: &'a [PathBuf],
+    /// Most primitives the scene may expand to ([`super::reader::ReadOptions::max_primitives`]).
+    pub max_primitives: usize,
+}
+
+impl GenContext<'_> {
+    /// Refuse to make more than [`GenContext::max_primitives`] primitives (`made` so far).
+    pub(crate) fn check_made(&self, prog: &str, made: usize) -> Result<(), ArgError> {
+        if made > self.max_primitives {
+            return Err(ArgError::Bad(format!(
+                "{prog} makes more than {} primitives, the scene's limit (raise it with \
+                 --max-primitives N)",
+                self.max_primitives
+            )));
+        }
+        Ok(())
+    }
 }
 
 /// The names of the built-in generators.

@@ -158,6 +158,7 @@ impl RevArgs {
                 rargs,
                 loc,
             ));
+            cx.check_made("genrev", out.len())?;
         }
         Ok(out)
     }

@@ -310,6 +310,7 @@ impl SurfArgs {
                     }
                 }
             }
+            cx.check_made("gensurf", out.len())?;
         }
         Ok(out)
     }

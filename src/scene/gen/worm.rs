@@ -60,6 +60,8 @@ pub fn parse_genworm_args(args: &[String]) -> Result<WormArgs, ArgError> {
 impl WormArgs {
     /// The primitives, as real genworm prints them.
     pub fn generate(&self, cx: &GenContext) -> Result<Vec<Primitive>, ArgError> {
+        // A sphere per joint at least: refuse before evaluating anything.
+        cx.check_made("genworm", self.nseg.saturating_add(1))?;
         let f = Funcs::compile(
             "genworm",
             &self.defs,
@@ -110,6 +112,7 @@ impl WormArgs {
                 out.push(prim(&self.material, "cone", name, a, cx.loc));
             }
             out.push(sphere(i, p1, r1));
+            cx.check_made("genworm", out.len())?;
             (p0, r0) = (p1, r1);
         }
         Ok(out)
