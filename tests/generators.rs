@@ -457,6 +457,7 @@ fn unsupported_and_bad_arguments() {
     let cx = GenContext {
         loc: &loc,
         raypath: &[],
+        max_primitives: 1 << 22,
     };
     let run = |s: &str| {
         let w: Vec<String> = s.split_whitespace().map(String::from).collect();
@@ -542,7 +543,11 @@ proptest! {
     ) {
         use tessera::scene::gen::{generate, GenContext};
         let loc = tessera::scene::Location::new("p", 1);
-        let cx = GenContext { loc: &loc, raypath: &[] };
+        let cx = GenContext {
+            loc: &loc,
+            raypath: &[],
+            max_primitives: 1 << 22,
+        };
         let mut w = vec![prog.to_string()];
         w.extend(words);
         let _ = generate(&w, &cx);

@@ -398,6 +398,7 @@ prop_compose! {
         amb_log in proptest::option::of(name()),
         amb_flush in 1usize..1000,
         amb_force in any::<bool>(),
+        max_primitives in proptest::option::of(1usize..100_000_000),
         amb_file in proptest::option::of(name()),
         overture in any::<bool>(),
         same_seeds in any::<bool>(),
@@ -413,7 +414,7 @@ prop_compose! {
             run: RunParams {
                 report_interval: t as f64, warnings, threads, output, sequence_start: seq,
                 error_file, allow_commands, stats_file, obj_material, amb_file, amb_log, amb_flush,
-                amb_force,
+                amb_force, max_primitives,
             },
             scene_files: vec!["scene.rad".into()],
         }
