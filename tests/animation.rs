@@ -502,7 +502,7 @@ fn reprojection_on_a_known_camera_move() {
     let ro = ReadOptions {
         allow_commands: false,
         raypath: vec![t.path().to_path_buf()],
-        obj_material: None,
+        ..ReadOptions::default()
     };
     let src = SceneSource::read(&[scene.display().to_string()], &ro, &params).unwrap();
     let session = Session::start(params, src, Some(1)).unwrap();
