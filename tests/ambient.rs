@@ -212,6 +212,7 @@ fn new_values(st: &serde_json::Value) -> u64 {
 /// Radiance's rule the second render needs almost no new values, under the default rule
 /// about a quarter.
 #[test]
+#[cfg_attr(not(radiance), ignore = "needs real Radiance: see tests/README.md")]
 fn ambient_file_is_reused_and_read_by_lookamb() {
     let t = tempfile::tempdir().unwrap();
     let amb = t.path().join("s.amb");
@@ -254,6 +255,7 @@ fn ambient_file_is_reused_and_read_by_lookamb() {
 
 /// A file written by real `rpict -af` is loaded and used.
 #[test]
+#[cfg_attr(not(radiance), ignore = "needs real Radiance: see tests/README.md")]
 fn rpict_ambient_file_is_used() {
     let Some(bin) = radiance_bin() else { return };
     let scenes = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/scenes");

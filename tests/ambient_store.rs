@@ -360,6 +360,7 @@ fn radfile_bad_header_and_magic_are_errors() {
 
 /// A file written by real `rpict -af` imports with the count and values `lookamb` reports.
 #[test]
+#[cfg_attr(not(radiance), ignore = "needs real Radiance: see tests/README.md")]
 fn radfile_reads_rpict_ambient_file() {
     let Some(bin) = common::radiance_bin() else {
         return;
@@ -409,6 +410,7 @@ fn check_rpict_file(bin: &Path, rad: &str, vf: &str) {
 
 /// A file written by Tessera is read by `lookamb -h` and `lookamb -h -d` with the same values.
 #[test]
+#[cfg_attr(not(radiance), ignore = "needs real Radiance: see tests/README.md")]
 fn lookamb_reads_our_file() {
     let Some(bin) = common::radiance_bin() else {
         return;

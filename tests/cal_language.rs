@@ -110,6 +110,7 @@ fn rcalc_batch(bin: &Path, defs: &str, texts: &[String]) -> Vec<f64> {
 }
 
 #[test]
+#[cfg_attr(not(radiance), ignore = "needs real Radiance: see tests/README.md")]
 fn random_expressions_match_rcalc() {
     let Some(bin) = radiance_bin() else { return };
     let gen = Gen { noise: false };
@@ -222,6 +223,7 @@ fn rtrace_batch(bin: &Path, dir: &Path, cal: &str, n: usize) -> Vec<f32> {
 }
 
 #[test]
+#[cfg_attr(not(radiance), ignore = "needs real Radiance: see tests/README.md")]
 fn random_noise_expressions_match_rtrace() {
     let Some(bin) = radiance_bin() else { return };
     let gen = Gen { noise: true };
@@ -308,6 +310,7 @@ fn random_noise_expressions_match_rtrace() {
 }
 
 #[test]
+#[cfg_attr(not(radiance), ignore = "needs real Radiance: see tests/README.md")]
 fn every_library_file_compiles() {
     let Some(bin) = radiance_bin() else { return };
     let lib = lib_dir(&bin);
@@ -512,6 +515,7 @@ fn rayinit_rcalc(bin: &Path, prelude: &str, texts: &[String], input: &[Vec<f64>]
 /// Tessera's built-in rayinit.cal against Radiance's, through rcalc with the ray channels,
 /// BRDF variables and real arguments given as input fields.
 #[test]
+#[cfg_attr(not(radiance), ignore = "needs real Radiance: see tests/README.md")]
 fn builtin_rayinit_matches_radiance() {
     let Some(bin) = radiance_bin() else { return };
     let mut rng = Rng(77);
@@ -607,6 +611,7 @@ proptest! {
 
 /// The noise functions at random points against rtrace (float output).
 #[test]
+#[cfg_attr(not(radiance), ignore = "needs real Radiance: see tests/README.md")]
 fn noise_functions_match_rtrace() {
     let Some(bin) = radiance_bin() else { return };
     let dir = tempfile::tempdir().unwrap();

@@ -99,18 +99,21 @@ fn check_with(scene: &str, ab: &str, extra: &[&str], tol: &Tol) {
 }
 
 #[test]
+#[cfg_attr(not(radiance), ignore = "needs real Radiance: see tests/README.md")]
 fn plasfunc_metfunc_transfunc() {
     check("funcs.rad", "0", &EXACT);
     check("funcs.rad", "1", &INDIRECT);
 }
 
 #[test]
+#[cfg_attr(not(radiance), ignore = "needs real Radiance: see tests/README.md")]
 fn plasdata_metdata_transdata() {
     check("data.rad", "0", &EXACT);
     check("data.rad", "1", &INDIRECT);
 }
 
 #[test]
+#[cfg_attr(not(radiance), ignore = "needs real Radiance: see tests/README.md")]
 fn brtdfunc() {
     check("brtd.rad", "0", &EXACT);
     check("brtd.rad", "1", &INDIRECT);
@@ -119,6 +122,7 @@ fn brtdfunc() {
 /// `-i`: irradiance rays pass through `trans2` and through a `BRTDfunc` that transmits;
 /// the other materials are shaded white (measured: rms 0.09%, mean 0.02%, all three).
 #[test]
+#[cfg_attr(not(radiance), ignore = "needs real Radiance: see tests/README.md")]
 fn irradiance_through_the_new_materials() {
     for scene in ["funcs.rad", "brtd.rad", "aniso.rad"] {
         check_with(scene, "0", &["-i"], &EXACT);
@@ -126,6 +130,7 @@ fn irradiance_through_the_new_materials() {
 }
 
 #[test]
+#[cfg_attr(not(radiance), ignore = "needs real Radiance: see tests/README.md")]
 fn ashik2_trans2_and_oriented_plastic2_metal2() {
     check("aniso.rad", "0", &SAMPLED);
     check("aniso.rad", "1", &INDIRECT);

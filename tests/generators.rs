@@ -149,6 +149,7 @@ const SITES: [&str; 5] = [
 ];
 
 #[test]
+#[cfg_attr(not(radiance), ignore = "needs real Radiance: see tests/README.md")]
 fn gensky_dates_times_sites_and_sky_types() {
     let Some((bin, dir)) = setup() else { return };
     let mut cmds = Vec::new();
@@ -169,6 +170,7 @@ fn gensky_dates_times_sites_and_sky_types() {
 }
 
 #[test]
+#[cfg_attr(not(radiance), ignore = "needs real Radiance: see tests/README.md")]
 fn gensky_options() {
     let Some((bin, dir)) = setup() else { return };
     let mut cmds: Vec<String> = [
@@ -239,6 +241,7 @@ fn gensky_options() {
 }
 
 #[test]
+#[cfg_attr(not(radiance), ignore = "needs real Radiance: see tests/README.md")]
 fn gendaylit_conditions() {
     let Some((bin, dir)) = setup() else { return };
     let mut cmds: Vec<String> = [
@@ -306,6 +309,7 @@ fn gendaylit_conditions() {
 }
 
 #[test]
+#[cfg_attr(not(radiance), ignore = "needs real Radiance: see tests/README.md")]
 fn genprism_genblinds() {
     let Some((bin, dir)) = setup() else { return };
     std::fs::write(dir.path().join("v.txt"), "0 0\n1 0\n1 1\n0.5 1.5\n").unwrap();
@@ -344,6 +348,7 @@ fn genprism_genblinds() {
 }
 
 #[test]
+#[cfg_attr(not(radiance), ignore = "needs real Radiance: see tests/README.md")]
 fn genrev_genworm() {
     let Some((bin, dir)) = setup() else { return };
     std::fs::write(
@@ -390,6 +395,7 @@ fn genrev_genworm() {
 }
 
 #[test]
+#[cfg_attr(not(radiance), ignore = "needs real Radiance: see tests/README.md")]
 fn gensurf_plain_smooth_inverted_valid() {
     let Some((bin, dir)) = setup() else { return };
     std::fs::write(
@@ -427,6 +433,7 @@ fn gensurf_plain_smooth_inverted_valid() {
 /// Generators piped into `xform` are built in too: the same primitives as the real
 /// pipeline, and no `--allow-commands` needed.
 #[test]
+#[cfg_attr(not(radiance), ignore = "needs real Radiance: see tests/README.md")]
 fn pipelines_into_xform() {
     let Some((bin, dir)) = setup() else { return };
     let cmds: Vec<String> = [

@@ -86,6 +86,7 @@ fn opts<'a>(view: &'a str, ab: &'a str) -> Vec<&'a str> {
 /// Unfrozen and frozen octrees, void and modified instances, rotated, scaled and mirrored;
 /// tpict reads the scene file, the octree oconv made of it, and a frozen octree of it.
 #[test]
+#[cfg_attr(not(radiance), ignore = "needs real Radiance: see tests/README.md")]
 fn octree_instances_void_and_modified() {
     let Some(bin) = radiance_bin() else { return };
     let t = workdir(&bin);
@@ -132,6 +133,7 @@ fn octree_instances_void_and_modified() {
 /// `#?RADIANCE`), and before 1991 had no FORMAT line either. rpict instances them; tpict
 /// reads them, as instances and as the scene, like the octree they were cut from.
 #[test]
+#[cfg_attr(not(radiance), ignore = "needs real Radiance: see tests/README.md")]
 fn octrees_with_older_headers() {
     let Some(bin) = radiance_bin() else { return };
     let t = workdir(&bin);
@@ -186,6 +188,7 @@ fn octrees_with_older_headers() {
 /// (once modified: the outermost modifier wins), with patterns in the octrees' own
 /// coordinates.
 #[test]
+#[cfg_attr(not(radiance), ignore = "needs real Radiance: see tests/README.md")]
 fn nested_instances_with_patterns() {
     let Some(bin) = radiance_bin() else { return };
     let t = workdir(&bin);
@@ -208,6 +211,7 @@ fn nested_instances_with_patterns() {
 /// Meshes from obj2mesh: smooth normals, (u,v) patterns, a triangle without either, the
 /// mesh's materials and a modifier replacing them.
 #[test]
+#[cfg_attr(not(radiance), ignore = "needs real Radiance: see tests/README.md")]
 fn meshes_with_normals_and_uv() {
     let Some(bin) = radiance_bin() else { return };
     let t = workdir(&bin);
@@ -229,6 +233,7 @@ fn meshes_with_normals_and_uv() {
 
 /// 2,500 instances (a 50×50 grid, alternately of two octrees) under a light.
 #[test]
+#[cfg_attr(not(radiance), ignore = "needs real Radiance: see tests/README.md")]
 fn a_large_instance_count_renders() {
     let Some(bin) = radiance_bin() else { return };
     let t = workdir(&bin);
@@ -267,6 +272,7 @@ fn a_large_instance_count_renders() {
 /// 114-byte octrees): refused at the instance that makes the placements pass the limit
 /// (naming its file and line), before anything is flattened, in little time and memory.
 #[test]
+#[cfg_attr(not(radiance), ignore = "needs real Radiance: see tests/README.md")]
 fn multiplying_instances_are_refused_at_the_line_that_crosses_the_limit() {
     let Some(bin) = radiance_bin() else { return };
     let t = tempfile::tempdir().unwrap();
@@ -301,6 +307,7 @@ fn multiplying_instances_are_refused_at_the_line_that_crosses_the_limit() {
 /// The instance scene moved 1e6 away, or scaled by 1e3 and 1e-3 (instances, their
 /// transforms and the view with it), renders the same picture.
 #[test]
+#[cfg_attr(not(radiance), ignore = "needs real Radiance: see tests/README.md")]
 fn instances_moved_far_away_or_scaled_render_the_same() {
     let Some(bin) = radiance_bin() else { return };
     let t = workdir(&bin);
@@ -373,6 +380,7 @@ fn fails_with(dir: &Path, files: &[&str], want: &str) {
 /// instances itself, a stale unfrozen octree, missing files: one error line naming the file,
 /// never a panic.
 #[test]
+#[cfg_attr(not(radiance), ignore = "needs real Radiance: see tests/README.md")]
 fn bad_octrees_and_meshes_are_one_line_errors() {
     let Some(bin) = radiance_bin() else { return };
     let t = workdir(&bin);
@@ -443,6 +451,7 @@ fn bad_octrees_and_meshes_are_one_line_errors() {
 
 /// Every prefix of a real octree and mesh is an error for the readers, never a panic.
 #[test]
+#[cfg_attr(not(radiance), ignore = "needs real Radiance: see tests/README.md")]
 fn readers_refuse_every_truncation() {
     let Some(bin) = radiance_bin() else { return };
     let t = workdir(&bin);
@@ -471,6 +480,7 @@ fn readers_refuse_every_truncation() {
 /// file of the unfrozen one) into the job, a worker elsewhere without a RAYPATH renders
 /// tpict's picture.
 #[test]
+#[cfg_attr(not(radiance), ignore = "needs real Radiance: see tests/README.md")]
 fn a_job_carries_its_instanced_files() {
     let Some(bin) = radiance_bin() else { return };
     let t = workdir(&bin);

@@ -52,6 +52,7 @@ fn oconv(bin: &Path, dir: &Path, files: &[&str], out: &str) {
 
 /// The OBJ as a scene file after its materials: tpict against rpict on obj2mesh's mesh.
 #[test]
+#[cfg_attr(not(radiance), ignore = "needs real Radiance: see tests/README.md")]
 fn an_obj_scene_file_renders_as_obj2mesh_and_mesh() {
     let Some(bin) = radiance_bin() else { return };
     let t = workdir(&bin);
@@ -74,6 +75,7 @@ fn an_obj_scene_file_renders_as_obj2mesh_and_mesh() {
 /// `mesh` primitives naming the OBJ file, one moved and turned, against the same naming
 /// obj2mesh's mesh.
 #[test]
+#[cfg_attr(not(radiance), ignore = "needs real Radiance: see tests/README.md")]
 fn mesh_primitives_naming_an_obj_file() {
     let Some(bin) = radiance_bin() else { return };
     let t = workdir(&bin);
@@ -102,6 +104,7 @@ fn canonical(t: [DVec3; 3]) -> [[i64; 3]; 3] {
 /// The triangles (corners, orientation, whether normals and (u,v) are kept, the modifier's
 /// name) are obj2mesh's.
 #[test]
+#[cfg_attr(not(radiance), ignore = "needs real Radiance: see tests/README.md")]
 fn triangles_are_obj2mesh_s() {
     let Some(bin) = radiance_bin() else { return };
     let t = workdir(&bin);

@@ -109,6 +109,7 @@ fn defaults_reflect_options() {
 }
 
 #[test]
+#[cfg_attr(not(radiance), ignore = "needs real Radiance: see tests/README.md")]
 fn defaults_match_real_rpict() {
     let Some(bin) = radiance_bin() else {
         eprintln!("skipping: Radiance not found");

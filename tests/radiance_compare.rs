@@ -58,6 +58,7 @@ fn check_tol(case: &Case, tol: &Tol) {
 }
 
 #[test]
+#[cfg_attr(not(radiance), ignore = "needs real Radiance: see tests/README.md")]
 fn spheres_plastic_metal_sphere_and_polygon_lights() {
     check(&Case {
         dir: "",
@@ -70,6 +71,7 @@ fn spheres_plastic_metal_sphere_and_polygon_lights() {
 }
 
 #[test]
+#[cfg_attr(not(radiance), ignore = "needs real Radiance: see tests/README.md")]
 fn curved_cones_cups_tubes_rings_and_concave_polygon() {
     check(&Case {
         dir: "",
@@ -82,6 +84,7 @@ fn curved_cones_cups_tubes_rings_and_concave_polygon() {
 }
 
 #[test]
+#[cfg_attr(not(radiance), ignore = "needs real Radiance: see tests/README.md")]
 fn glassy_glass_trans_dielectric_interface_sun_and_sky() {
     check(&Case {
         dir: "",
@@ -94,6 +97,7 @@ fn glassy_glass_trans_dielectric_interface_sun_and_sky() {
 }
 
 #[test]
+#[cfg_attr(not(radiance), ignore = "needs real Radiance: see tests/README.md")]
 fn mirrors_virtual_sources_illum_spotlight_glow() {
     check(&Case {
         dir: "",
@@ -106,6 +110,7 @@ fn mirrors_virtual_sources_illum_spotlight_glow() {
 }
 
 #[test]
+#[cfg_attr(not(radiance), ignore = "needs real Radiance: see tests/README.md")]
 fn aniso_plastic2_metal2_antimatter_genbox_xform() {
     check(&Case {
         dir: "",
@@ -118,6 +123,7 @@ fn aniso_plastic2_metal2_antimatter_genbox_xform() {
 }
 
 #[test]
+#[cfg_attr(not(radiance), ignore = "needs real Radiance: see tests/README.md")]
 fn examp_shared_scene_with_builtin_genbox() {
     check(&Case {
         dir: "examp",
@@ -130,6 +136,7 @@ fn examp_shared_scene_with_builtin_genbox() {
 }
 
 #[test]
+#[cfg_attr(not(radiance), ignore = "needs real Radiance: see tests/README.md")]
 fn daffodil_shared_scene_flat() {
     check(&Case {
         dir: "daffodil",
@@ -145,6 +152,7 @@ fn daffodil_shared_scene_flat() {
 /// every pixel. (rpict's own `-ps 4` loses about 4% of this picture's mean luminance on the
 /// thin tube light; tpict's cell subdivision stays within 0.1% of its `-ps 1` picture.)
 #[test]
+#[cfg_attr(not(radiance), ignore = "needs real Radiance: see tests/README.md")]
 fn adaptive_sampling_default_ps_matches_every_pixel_rpict() {
     check(&Case {
         dir: "",
@@ -161,6 +169,7 @@ fn adaptive_sampling_default_ps_matches_every_pixel_rpict() {
 /// colordata over a 2-D file, colorpict with a transform, texdata, mixdata and mixpict),
 /// at `-ab 0` and `-ab 1` (means measured within 0.01% and 0.07%).
 #[test]
+#[cfg_attr(not(radiance), ignore = "needs real Radiance: see tests/README.md")]
 fn patterns_textures_and_mixtures_with_functions_and_data() {
     for (ab, scene) in [
         ("0", "patterns.rad"),
@@ -187,6 +196,7 @@ fn patterns_textures_and_mixtures_with_functions_and_data() {
 /// indirect light the two caches' noise differs pixel by pixel in the sunlit room, so
 /// those pictures are compared after reducing to 32×32, the mean within 2%.
 #[test]
+#[cfg_attr(not(radiance), ignore = "needs real Radiance: see tests/README.md")]
 fn daylit_room_with_a_gensky_sky() {
     for ab in ["0", "1", "2"] {
         let tol = if ab == "0" {
@@ -217,6 +227,7 @@ fn daylit_room_with_a_gensky_sky() {
 /// at `-ab 1`, as the gensky room above). tpict's RAYPATH is the test's: without
 /// Radiance's library it uses its own skybright.cal and perezlum.cal.
 #[test]
+#[cfg_attr(not(radiance), ignore = "needs real Radiance: see tests/README.md")]
 fn daylit_room_with_builtin_gensky_and_gendaylit() {
     for sky in ["gensky.rad", "gendaylit.rad"] {
         for ab in ["0", "1"] {
@@ -248,6 +259,7 @@ fn daylit_room_with_builtin_gensky_and_gendaylit() {
 /// `src_theta`), placed by `xform -rz 30`, at `-ab 0` and `-ab 1` (means measured equal to
 /// 0.02%).
 #[test]
+#[cfg_attr(not(radiance), ignore = "needs real Radiance: see tests/README.md")]
 fn ies_luminaire_from_ies2rad() {
     for ab in ["0", "1"] {
         check(&Case {
@@ -267,6 +279,7 @@ fn ies_luminaire_from_ies2rad() {
 /// through glass, trans, dielectric and interface surfaces (before, tpict shaded them as
 /// white diffuse surfaces: a glass pane 0.462 against rpict's 0.265).
 #[test]
+#[cfg_attr(not(radiance), ignore = "needs real Radiance: see tests/README.md")]
 fn glassy_irradiance_passes_through_transparent_materials() {
     for ab in ["0", "1"] {
         check(&Case {
@@ -294,24 +307,28 @@ fn ambient_case(dir: &str, files: &[&str], view: &str, ab: &str) {
 }
 
 #[test]
+#[cfg_attr(not(radiance), ignore = "needs real Radiance: see tests/README.md")]
 fn ambient_interior_with_area_lights() {
     ambient_case("", &["spheres.rad"], "spheres.vf", "1");
     ambient_case("", &["spheres.rad"], "spheres.vf", "2");
 }
 
 #[test]
+#[cfg_attr(not(radiance), ignore = "needs real Radiance: see tests/README.md")]
 fn ambient_window_with_sun_and_glow_sky() {
     ambient_case("", &["glassy.rad"], "glassy.vf", "1");
     ambient_case("", &["glassy.rad"], "glassy.vf", "2");
 }
 
 #[test]
+#[cfg_attr(not(radiance), ignore = "needs real Radiance: see tests/README.md")]
 fn ambient_specular_mirror_and_spot() {
     ambient_case("", &["mirrors.rad"], "mirrors.vf", "1");
     ambient_case("", &["mirrors.rad"], "mirrors.vf", "2");
 }
 
 #[test]
+#[cfg_attr(not(radiance), ignore = "needs real Radiance: see tests/README.md")]
 fn ambient_curved_surfaces() {
     ambient_case("", &["curved.rad"], "curved.vf", "1");
     ambient_case("", &["curved.rad"], "curved.vf", "2");
@@ -321,6 +338,7 @@ fn ambient_curved_surfaces() {
 /// library) give the same pictures as Radiance's: the daylit room under gensky's clear,
 /// intermediate and overcast skies, and the IES room, rendered by tpict both ways.
 #[test]
+#[cfg_attr(not(radiance), ignore = "needs real Radiance: see tests/README.md")]
 fn builtin_library_files_match_radiances() {
     let Some(bin) = radiance_bin() else { return };
     let lib = bin.parent().unwrap().join("lib");

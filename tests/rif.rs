@@ -51,6 +51,7 @@ fn ours(dir: &Path, rif: &str) -> Vec<String> {
 /// zones, exposures, resolutions, UP directions, standard, labelled and unnamed views,
 /// REPORT, AMBFILE, render and rpict varied along), tplan prints what rad prints.
 #[test]
+#[cfg_attr(not(radiance), ignore = "needs real Radiance: see tests/README.md")]
 fn rpict_options_equal_rads() {
     let Some(bin) = radiance_bin() else { return };
     let t = tempfile::tempdir().unwrap();
@@ -267,6 +268,7 @@ fn bad_rif_files_name_file_and_line() {
 /// `illum` files (rad would run mkillum on them) are rendered as ordinary surfaces, with a
 /// warning; the options printed are rad's.
 #[test]
+#[cfg_attr(not(radiance), ignore = "needs real Radiance: see tests/README.md")]
 fn illum_files_render_as_surfaces() {
     let Some(bin) = radiance_bin() else { return };
     let t = tempfile::tempdir().unwrap();
@@ -303,6 +305,7 @@ fn illum_files_render_as_surfaces() {
 /// view and has no options, a missing view file and an invalid view are errors naming the
 /// view (rad renders nothing for them); a blank `view=` leaves rad's default X.
 #[test]
+#[cfg_attr(not(radiance), ignore = "needs real Radiance: see tests/README.md")]
 fn rif_views_from_files_and_bad_views() {
     let t = tempfile::tempdir().unwrap();
     let d = t.path();
@@ -393,6 +396,7 @@ fn rif_views_from_files_and_bad_views() {
 /// options printed are rad's (the zone and `-ar` come from the scene they make), and a job
 /// of the rif renders what rpict renders of the octree rad's own oconv command makes.
 #[test]
+#[cfg_attr(not(radiance), ignore = "needs real Radiance: see tests/README.md")]
 fn rif_scene_commands_run_built_in() {
     let Some(bin) = radiance_bin() else { return };
     let t = tempfile::tempdir().unwrap();
@@ -483,6 +487,7 @@ fn rif_scene_commands_run_built_in() {
 /// oconv, rpict and pfilt): same sizes and exposure, means within 1% (`-ab 0`), pictures
 /// within the suite's tolerance. Without Radiance only Tessera's side is checked.
 #[test]
+#[cfg_attr(not(radiance), ignore = "needs real Radiance: see tests/README.md")]
 fn trad_renders_a_rif_as_rad_does() {
     let t = tempfile::tempdir().unwrap();
     let d = t.path();

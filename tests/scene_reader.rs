@@ -296,6 +296,7 @@ fn commands_run_only_when_allowed() {
 }
 
 #[test]
+#[cfg_attr(not(radiance), ignore = "needs real Radiance: see tests/README.md")]
 fn genbox_matches_real_genbox() {
     let Some(bin) = skip() else { return };
     let d = scene_dir();
@@ -318,6 +319,7 @@ fn genbox_matches_real_genbox() {
 }
 
 #[test]
+#[cfg_attr(not(radiance), ignore = "needs real Radiance: see tests/README.md")]
 fn xform_matches_real_xform() {
     let Some(bin) = skip() else { return };
     let d = scene_dir();
@@ -362,6 +364,7 @@ fn xform_matches_real_xform() {
 }
 
 #[test]
+#[cfg_attr(not(radiance), ignore = "needs real Radiance: see tests/README.md")]
 fn nested_xform_of_nested_file() {
     let Some(bin) = skip() else { return };
     let d = scene_dir();
@@ -422,6 +425,7 @@ fn daffodil_reads_with_builtin_generators() {
 }
 
 #[test]
+#[cfg_attr(not(radiance), ignore = "needs real Radiance: see tests/README.md")]
 fn daffodil_with_commands_matches_flat_file() {
     let Some(bin) = skip() else { return };
     let d = tempfile::tempdir().unwrap();

@@ -159,6 +159,7 @@ fn sweep_text(bin: &Path, dir: &Path, strings: &str, frame: [f64; 9], spacing: O
 const FRAME: [f64; 9] = [0.0, 2.0, 0.0, 0.5, 0.0, 0.0, 0.0, -0.5, 0.0];
 
 #[test]
+#[cfg_attr(not(radiance), ignore = "needs real Radiance: see tests/README.md")]
 fn text_layout_matches_rtrace() {
     let Some(bin) = radiance_bin() else { return };
     let tmp = tempfile::tempdir().unwrap();
@@ -191,6 +192,7 @@ fn close(a: f64, b: f64) -> bool {
 }
 
 #[test]
+#[cfg_attr(not(radiance), ignore = "needs real Radiance: see tests/README.md")]
 fn data_interpolation_matches_rtrace() {
     let Some(bin) = radiance_bin() else { return };
     let tmp = tempfile::tempdir().unwrap();
@@ -269,6 +271,7 @@ fn oriented_picture(res: &str, w: usize, h: usize, extra_header: &str) -> Vec<u8
 }
 
 #[test]
+#[cfg_attr(not(radiance), ignore = "needs real Radiance: see tests/README.md")]
 fn picture_lookup_matches_rtrace() {
     let Some(bin) = radiance_bin() else { return };
     let tmp = tempfile::tempdir().unwrap();
@@ -447,24 +450,28 @@ fn render_case(k: usize, ab: &str) {
 }
 
 #[test]
+#[cfg_attr(not(radiance), ignore = "needs real Radiance: see tests/README.md")]
 fn brighttext_against_rpict() {
     render_case(0, "0");
     render_case(0, "1");
 }
 
 #[test]
+#[cfg_attr(not(radiance), ignore = "needs real Radiance: see tests/README.md")]
 fn colortext_squeezed_against_rpict() {
     render_case(1, "0");
     render_case(1, "1");
 }
 
 #[test]
+#[cfg_attr(not(radiance), ignore = "needs real Radiance: see tests/README.md")]
 fn mixtext_proportional_against_rpict() {
     render_case(2, "0");
     render_case(2, "1");
 }
 
 #[test]
+#[cfg_attr(not(radiance), ignore = "needs real Radiance: see tests/README.md")]
 fn mixtext_with_a_void_side_and_zero_spacing_against_rpict() {
     render_case(3, "0");
     render_case(3, "1");

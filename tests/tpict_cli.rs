@@ -481,6 +481,7 @@ fn options_after_scene_files_are_errors() {
 }
 
 #[test]
+#[cfg_attr(not(radiance), ignore = "needs real Radiance: see tests/README.md")]
 fn defaults_print_rpicts_layout_with_given_options() {
     let t = workdir();
     let o = output(tpict_in(t.path()).args(["-ab", "2", "-x", "300", "-vh", "30", "-defaults"]));
@@ -569,6 +570,7 @@ fn at_file_options_are_read() {
 }
 
 #[test]
+#[cfg_attr(not(radiance), ignore = "needs real Radiance: see tests/README.md")]
 fn view_file_with_view_and_rview_lines() {
     let t = workdir();
     let p = t.path();
@@ -610,6 +612,7 @@ fn oconv(bin: &Path, dir: &Path, files: &[&str]) -> PathBuf {
 }
 
 #[test]
+#[cfg_attr(not(radiance), ignore = "needs real Radiance: see tests/README.md")]
 fn resolution_is_a_maximum_fitted_to_the_view_aspect() {
     let t = workdir();
     let p = t.path();
@@ -1079,6 +1082,7 @@ fn threads_do_not_change_the_picture_with_jitter() {
 // Real Radiance reads tpict's pictures
 
 #[test]
+#[cfg_attr(not(radiance), ignore = "needs real Radiance: see tests/README.md")]
 fn radiance_reads_tpicts_pictures() {
     let Some(bin) = radiance_bin() else { return };
     let t = workdir();

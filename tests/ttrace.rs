@@ -184,6 +184,7 @@ fn formats_threads_flush_records_and_bad_input() {
 }
 
 #[test]
+#[cfg_attr(not(radiance), ignore = "needs real Radiance: see tests/README.md")]
 fn every_output_letter_matches_rtrace() {
     let Some(bin) = radiance_bin() else { return };
     let t = tempfile::tempdir().unwrap();
@@ -255,6 +256,7 @@ fn rel(a: &[f64], b: &[f64], floor: f64) -> (f64, f64) {
 }
 
 #[test]
+#[cfg_attr(not(radiance), ignore = "needs real Radiance: see tests/README.md")]
 fn irradiance_grids_match_rtrace() {
     let Some(bin) = radiance_bin() else { return };
     let t = tempfile::tempdir().unwrap();
@@ -449,6 +451,7 @@ fn lux(out: &[u8]) -> Vec<f64> {
 /// 1%); the room's daylight factors agree with real rtrace's on the same points (mean
 /// within 3%).
 #[test]
+#[cfg_attr(not(radiance), ignore = "needs real Radiance: see tests/README.md")]
 fn daylight_factors_with_tgrid_and_an_overcast_sky() {
     let t = tempfile::tempdir().unwrap();
     let d = t.path();

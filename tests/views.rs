@@ -76,6 +76,7 @@ const RADIANCE_VIEWS: &[&str] = &[
 ];
 
 #[test]
+#[cfg_attr(not(radiance), ignore = "needs real Radiance: see tests/README.md")]
 fn rays_match_vwrays() {
     let Some(bin) = radiance_bin() else {
         eprintln!("skipping: Radiance not found");
@@ -111,6 +112,7 @@ fn rays_match_vwrays() {
 }
 
 #[test]
+#[cfg_attr(not(radiance), ignore = "needs real Radiance: see tests/README.md")]
 fn normaspect_matches_vwrays() {
     let Some(bin) = radiance_bin() else {
         eprintln!("skipping: Radiance not found");
@@ -505,6 +507,7 @@ proptest! {
 }
 
 #[test]
+#[cfg_attr(not(radiance), ignore = "needs real Radiance: see tests/README.md")]
 fn view_from_real_rpict_picture() {
     let Some(bin) = radiance_bin() else {
         eprintln!("skipping: Radiance not found");

@@ -217,6 +217,7 @@ fn mean(p: &std::path::Path) -> f64 {
 }
 
 #[test]
+#[cfg_attr(not(radiance), ignore = "needs real Radiance: see tests/README.md")]
 fn later_generations_match_rpict() {
     let Some(bin) = radiance_bin() else { return };
     let t = tempfile::tempdir().unwrap();
@@ -278,6 +279,7 @@ fn later_generations_match_rpict() {
 /// the real spotlight toward the point folded through the mirror (it was tested from the
 /// image, and the floor stayed black). Against rpict at `-ab 0`.
 #[test]
+#[cfg_attr(not(radiance), ignore = "needs real Radiance: see tests/README.md")]
 fn a_spotlights_image_keeps_its_cone() {
     let Some(bin) = radiance_bin() else { return };
     let t = tempfile::tempdir().unwrap();

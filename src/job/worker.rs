@@ -215,8 +215,11 @@ fn start_session(job: &JobDir, m: &Manifest, owner: &str, wo: &WorkerOptions) ->
     let ro = ReadOptions {
         allow_commands: false,
         raypath,
-        // The flattened scene holds what the planner counted (its limit was applied there).
-        max_primitives: m.primitives.max(1),
+        // The flattened scene holds what the planner counted (its limit was applied there);
+        // an edited scene is refused by its fingerprint.
+        max_primitives: m
+            .primitives
+            .max(crate::scene::reader::DEFAULT_MAX_PRIMITIVES),
         ..ReadOptions::default()
     };
     let source = SceneSource::read(&[scene_path.display().to_string()], &ro, &m.params)?;

@@ -39,7 +39,20 @@ fn find_radiance() -> Option<PathBuf> {
         }
     }
     let p = PathBuf::from("/opt/radvenv/lib/python3.11/site-packages/pyradiance/bin");
-    p.join("rpict").exists().then_some(p)
+    if p.join("rpict").exists() {
+        return Some(p);
+    }
+    // The venv `.ci/run` makes (where build.rs looks too).
+    let venv = std::env::var_os("TESSERA_VENV")
+        .map(PathBuf::from)
+        .or_else(|| {
+            std::env::var_os("HOME").map(|h| PathBuf::from(h).join(".cache/tessera-venv"))
+        })?;
+    std::fs::read_dir(venv.join("lib"))
+        .ok()?
+        .flatten()
+        .map(|e| e.path().join("site-packages/pyradiance/bin"))
+        .find(|d| d.join("rpict").exists() && d.join("oconv").exists())
 }
 
 /// A Command for a Radiance program with PATH and RAYPATH set up.
