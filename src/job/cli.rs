@@ -49,72 +49,91 @@ fn command_line() -> String {
     after_help = "Example: tplan --workers 8 -o job -- -vf view.vf -x 1024 -y 768 -ab 2 scene.rad"
 )]
 struct TplanArgs {
-    /// Tiles per frame (default: as many as keep the per-tile overhead within 2% of the
-    /// frame's estimated cost, at most 80 per expected worker; see docs/batch.md).
-    #[arg(long, conflicts_with = "tile_size")]
+    /// Tiles per frame (default: as many as keep the per-tile overhead
+    /// within 2% of the frame's estimated cost, at most 80 per expected
+    /// worker; see docs/batch.md).
+    #[arg(long, conflicts_with = "tile_size", verbatim_doc_comment)]
     tiles: Option<usize>,
     /// Fixed tile size WxH (in reading order instead of largest first).
-    #[arg(long, value_name = "WxH")]
+    #[arg(long, value_name = "WxH", verbatim_doc_comment)]
     tile_size: Option<String>,
-    /// Cores the plan is made for: the tile loops of all the job's workers (default plan).
-    #[arg(long, default_value_t = 4)]
+    /// Cores the plan is made for: the tile loops of all the job's
+    /// workers (default plan).
+    #[arg(long, default_value_t = 4, verbatim_doc_comment)]
     workers: usize,
-    /// View file with one view per line: one frame per view (each on top of the previous).
-    #[arg(long, value_name = "VIEWFILE")]
+    /// View file with one view per line: one frame per view (each on
+    /// top of the previous).
+    #[arg(long, value_name = "VIEWFILE", verbatim_doc_comment)]
     frames: Option<PathBuf>,
-    /// A keyframed camera path: a file of key view lines (each on top of the previous);
-    /// with --path-frames N, N frames spread along it (docs/animation.md).
-    #[arg(long, value_name = "KEYFILE", requires = "path_frames", conflicts_with_all = ["frames", "rif"])]
+    /// A keyframed camera path: a file of key view lines (each on top
+    /// of the previous); with --path-frames N, N frames spread along it
+    /// (docs/animation.md).
+    #[arg(long, value_name = "KEYFILE", requires = "path_frames", conflicts_with_all = ["frames", "rif"], verbatim_doc_comment)]
     path: Option<PathBuf>,
     /// Frames along --path.
-    #[arg(long, value_name = "N", requires = "path")]
+    #[arg(long, value_name = "N", requires = "path", verbatim_doc_comment)]
     path_frames: Option<usize>,
-    /// Seconds a claimed tile's worker may stay silent before another worker takes it over.
-    #[arg(long, value_name = "SECONDS")]
-    lease: Option<f64>,
-    /// Seed the job's ambient store from a Tessera store/log or a Radiance ambient file.
-    #[arg(long, value_name = "FILE")]
+    /// Seconds a claimed tile's worker may stay silent before another
+    /// worker takes it over.
+    #[arg(long, value_name = "SECONDS", default_value_t = super::manifest::DEFAULT_LEASE, verbatim_doc_comment)]
+    lease: f64,
+    /// Seed the job's ambient store from a Tessera store/log or a
+    /// Radiance ambient file.
+    #[arg(long, value_name = "FILE", verbatim_doc_comment)]
     ambient: Option<PathBuf>,
     /// Accept an ambient store made for another scene or other options.
-    #[arg(long)]
+    #[arg(long, verbatim_doc_comment)]
     amb_force: bool,
-    /// Run a scene's inline commands other than xform and genbox through `sh` (as
-    /// `--allow-commands` after `--`).
-    #[arg(long)]
+    /// Run a scene's inline commands other than xform and genbox
+    /// through `sh` (as `--allow-commands` after `--`).
+    #[arg(long, verbatim_doc_comment)]
     allow_commands: bool,
-    /// A job over the rays of FILE (origin and direction per record, as ttrace reads them,
-    /// in the format of -f): its tasks are chunks of rays; the arguments after `--` are
-    /// rtrace's options and the scene (docs/ttrace.md).
-    #[arg(long, value_name = "FILE", conflicts_with_all = ["frames", "path", "rif", "tiles", "tile_size"])]
+    /// A job over the rays of FILE (origin and direction per record, as
+    /// ttrace reads them, in the format of -f): its tasks are chunks of
+    /// rays; the arguments after `--` are rtrace's options and the
+    /// scene (docs/ttrace.md).
+    #[arg(long, value_name = "FILE", conflicts_with_all = ["frames", "path", "rif", "tiles", "tile_size"], verbatim_doc_comment)]
     points: Option<PathBuf>,
-    /// With --points: rays per task (default: about sixteen tasks per worker, at most 4096
-    /// rays each).
-    #[arg(long, value_name = "N", requires = "points")]
+    /// With --points: rays per task (default: about sixteen tasks per
+    /// worker, at most 4096 rays each).
+    #[arg(long, value_name = "N", requires = "points", verbatim_doc_comment)]
     chunk: Option<usize>,
-    /// Make the job from a `rad` input file: its scene, materials, views and the rpict
-    /// options rad derives (docs/rif.md); scene files may follow after `--`.
-    #[arg(long, value_name = "FILE")]
+    /// Make the job from a `rad` input file: its scene, materials,
+    /// views and the rpict options rad derives (docs/rif.md); scene
+    /// files may follow after `--`.
+    #[arg(long, value_name = "FILE", verbatim_doc_comment)]
     rif: Option<PathBuf>,
-    /// With --rif: render only this view (a view name of the file or a standard view id);
-    /// default: every view of the file, one frame each.
-    #[arg(long, value_name = "NAME", requires = "rif")]
+    /// With --rif: render only this view (a view name of the file or a
+    /// standard view id); default: every view of the file, one frame
+    /// each.
+    #[arg(long, value_name = "NAME", requires = "rif", verbatim_doc_comment)]
     view: Option<String>,
-    /// With --rif: a `VAR=value` assignment applied after the file (as rad's arguments).
-    #[arg(long = "set", value_name = "VAR=VALUE", requires = "rif")]
+    /// With --rif: a `VAR=value` assignment applied after the file (as rad's
+    /// arguments).
+    #[arg(
+        long = "set",
+        value_name = "VAR=VALUE",
+        requires = "rif",
+        verbatim_doc_comment
+    )]
     set: Vec<String>,
-    /// With --rif: print the rpict options rad would use, one line per view, and make no job.
-    #[arg(long, requires = "rif")]
+    /// With --rif: print the rpict options rad would use, one line per
+    /// view, and make no job.
+    #[arg(long, requires = "rif", verbatim_doc_comment)]
     print: bool,
     /// The job directory to create (must not exist, or be empty).
     #[arg(
+        verbatim_doc_comment,
         short = 'o',
         long = "output",
         value_name = "JOBDIR",
         required_unless_present = "print"
     )]
     output: Option<PathBuf>,
-    /// rpict options and scene files (after `--`); with --rif, more scene files.
+    /// rpict options and scene files (after `--`); with --rif,
+    /// more scene files.
     #[arg(
+        verbatim_doc_comment,
         last = true,
         required_unless_present = "rif",
         value_name = "RPICT-OPTIONS-AND-SCENE"
@@ -173,7 +192,7 @@ fn tplan(a: TplanArgs) -> Result<i32> {
             .path
             .as_ref()
             .map(|p| (p.display().to_string(), a.path_frames.unwrap_or(0))),
-        lease: a.lease,
+        lease: Some(a.lease),
         ambient: a.ambient.map(|p| p.display().to_string()),
         amb_force: a.amb_force,
         args: if a.allow_commands {
@@ -308,22 +327,30 @@ fn rif_job_args(a: &TplanArgs) -> Result<RifJobArgs> {
 struct TpieceArgs {
     /// The job directory.
     job: PathBuf,
-    /// Worker id (default: $SLURM_ARRAY_JOB_ID-$SLURM_ARRAY_TASK_ID, else host-pid).
-    #[arg(long)]
+    /// Worker id (default: $SLURM_ARRAY_JOB_ID-$SLURM_ARRAY_TASK_ID,
+    /// else host-pid).
+    #[arg(long, verbatim_doc_comment)]
     worker_id: Option<String>,
-    /// Ambient values per log write (N_A), or `auto` to adapt it at run time.
-    #[arg(long, default_value = "auto", value_name = "N|auto")]
+    /// Ambient values per log write (N_A), or `auto` to adapt it at
+    /// run time.
+    #[arg(
+        long,
+        default_value = "auto",
+        value_name = "N|auto",
+        verbatim_doc_comment
+    )]
     amb_flush: String,
-    /// Tile loops, each rendering its own tiles on one thread over one shared scene and
-    /// ambient cache (default: $SLURM_CPUS_PER_TASK, else every core).
-    #[arg(long)]
+    /// Tile loops, each rendering its own tiles on one thread over one
+    /// shared scene and ambient cache (default: $SLURM_CPUS_PER_TASK,
+    /// else every core).
+    #[arg(long, verbatim_doc_comment)]
     threads: Option<usize>,
-    /// Exit when nothing is claimable instead of waiting for (and, if they die, re-claiming)
-    /// tiles other workers hold.
-    #[arg(long)]
+    /// Exit when nothing is claimable instead of waiting for (and, if
+    /// they die, re-claiming) tiles other workers hold.
+    #[arg(long, verbatim_doc_comment)]
     no_wait: bool,
     /// Print nothing but errors (no per-tile or waiting lines).
-    #[arg(long, short)]
+    #[arg(long, short, verbatim_doc_comment)]
     quiet: bool,
 }
 
@@ -372,11 +399,12 @@ fn tpiece(a: TpieceArgs) -> Result<i32> {
 struct TmergeArgs {
     /// The job directory.
     job: PathBuf,
-    /// Also write the merged values in Radiance's ambient format (for rpict -af).
-    #[arg(long, value_name = "FILE")]
+    /// Also write the merged values in Radiance's ambient format (for
+    /// rpict -af).
+    #[arg(long, value_name = "FILE", verbatim_doc_comment)]
     export_radiance: Option<PathBuf>,
     /// Print the report as JSON.
-    #[arg(long)]
+    #[arg(long, verbatim_doc_comment)]
     json: bool,
 }
 
@@ -449,35 +477,42 @@ struct TassembleArgs {
     /// The job directory.
     job: PathBuf,
     /// Frame number.
-    #[arg(long, default_value_t = 0, conflicts_with = "all_frames")]
+    #[arg(
+        long,
+        default_value_t = 0,
+        conflicts_with = "all_frames",
+        verbatim_doc_comment
+    )]
     frame: u32,
-    /// Assemble every frame; -o is then a pattern with a printf-style %d (e.g. f%04d.hdr).
-    #[arg(long)]
+    /// Assemble every frame; -o is then a pattern with a printf-style
+    /// %d (e.g. f%04d.hdr).
+    #[arg(long, verbatim_doc_comment)]
     all_frames: bool,
-    /// Output picture (format from the extension); default: Radiance picture on stdout.
-    #[arg(short = 'o', long = "output")]
+    /// Output picture (format from the extension); default: Radiance
+    /// picture on stdout.
+    #[arg(short = 'o', long = "output", verbatim_doc_comment)]
     output: Option<PathBuf>,
     /// Fill missing tiles with black (and say so) instead of failing.
-    #[arg(long)]
+    #[arg(long, verbatim_doc_comment)]
     partial: bool,
-    /// Also write a contact sheet of every frame (a PNG of thumbnails, each with the
-    /// temporal exposure).
-    #[arg(long, value_name = "PNG")]
+    /// Also write a contact sheet of every frame (a PNG of thumbnails,
+    /// each with the temporal exposure).
+    #[arg(long, value_name = "PNG", verbatim_doc_comment)]
     contact_sheet: Option<PathBuf>,
     /// Thumbnail width of the contact sheet, in pixels.
-    #[arg(long, default_value_t = 160, value_name = "PX")]
+    #[arg(long, default_value_t = 160, value_name = "PX", verbatim_doc_comment)]
     thumb_width: usize,
-    /// PNG frames get an exposure smoothed over the neighbouring frames (±3) instead of
-    /// their own.
-    #[arg(long)]
+    /// PNG frames get an exposure smoothed over the neighbouring frames
+    /// (±3) instead of their own.
+    #[arg(long, verbatim_doc_comment)]
     temporal_exposure: bool,
     /// Replace an existing output picture (refused otherwise).
-    #[arg(long)]
+    #[arg(long, verbatim_doc_comment)]
     force: bool,
-    /// For a job made from a rif file: write the rendered picture as it is, without rad's
-    /// last step (the reduction by the supersampling factor and the EXPOSURE) that is
-    /// otherwise applied.
-    #[arg(long)]
+    /// For a job made from a rif file: write the rendered picture as it
+    /// is, without rad's last step (the reduction by the supersampling
+    /// factor and the EXPOSURE) that is otherwise applied.
+    #[arg(long, verbatim_doc_comment)]
     raw: bool,
 }
 
@@ -666,13 +701,15 @@ struct TstatArgs {
     /// The job directory.
     job: PathBuf,
     /// JSON output.
-    #[arg(long)]
+    #[arg(long, verbatim_doc_comment)]
     json: bool,
-    /// A one-worker job of the same plan: report speed-up and efficiency against it.
-    #[arg(long, value_name = "JOBDIR")]
+    /// A one-worker job of the same plan: report speed-up and
+    /// efficiency against it.
+    #[arg(long, value_name = "JOBDIR", verbatim_doc_comment)]
     baseline: Option<PathBuf>,
-    /// Print the measured per-tile costs of a frame (JSON, for bench/tilesim).
-    #[arg(long, value_name = "FRAME")]
+    /// Print the measured per-tile costs of a frame (JSON, for
+    /// bench/tilesim).
+    #[arg(long, value_name = "FRAME", verbatim_doc_comment)]
     costs: Option<u32>,
 }
 

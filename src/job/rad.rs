@@ -16,39 +16,46 @@ use std::process::{Child, Command};
 #[command(
     name = "trad",
     version,
-    about = "Render a rad input file (.rif) on this machine: plan, local workers, merge, \
-             assemble, finish (rad's pfilt step); pictures go to rad's names"
+    about = "Render a rad input file (.rif) on this machine, as rad does.\n\
+             It plans, runs local workers, merges, assembles and finishes (rad's pfilt\n\
+             step); the pictures go to rad's names."
 )]
 pub struct TradArgs {
     /// The rad input file.
     rif: PathBuf,
-    /// Render only this view (a view name of the file or a standard view id).
-    #[arg(long, value_name = "NAME")]
+    /// Render only this view (a view name of the file or a standard
+    /// view id).
+    #[arg(long, value_name = "NAME", verbatim_doc_comment)]
     view: Option<String>,
-    /// A `VAR=value` assignment applied after the file (as rad's arguments).
-    #[arg(long = "set", value_name = "VAR=VALUE")]
+    /// A `VAR=value` assignment applied after the file (as rad's
+    /// arguments).
+    #[arg(long = "set", value_name = "VAR=VALUE", verbatim_doc_comment)]
     set: Vec<String>,
     /// Worker processes (each holds the scene once).
-    #[arg(long, default_value_t = 1, value_name = "N")]
+    #[arg(long, default_value_t = 1, value_name = "N", verbatim_doc_comment)]
     workers: usize,
-    /// Tile loops per worker (default: the cores divided among the workers).
-    #[arg(long, value_name = "T")]
+    /// Tile loops per worker (default: the cores divided among the
+    /// workers).
+    #[arg(long, value_name = "T", verbatim_doc_comment)]
     threads: Option<usize>,
-    /// The job directory (default: `<PICTURE>.job`, removed after a successful run unless
-    /// --keep-job); it must not exist.
-    #[arg(long, value_name = "DIR")]
+    /// The job directory (default: `<PICTURE>.job`, removed after a
+    /// successful run unless --keep-job); it must not exist.
+    #[arg(long, value_name = "DIR", verbatim_doc_comment)]
     job: Option<PathBuf>,
-    /// Keep the job directory (its tiles, logs and merged ambient store).
-    #[arg(long)]
+    /// Keep the job directory (its tiles, logs and merged ambient
+    /// store).
+    #[arg(long, verbatim_doc_comment)]
     keep_job: bool,
-    /// Write the rendered pictures without rad's last step (reduction and exposure).
-    #[arg(long)]
+    /// Write the rendered pictures without rad's last step (reduction
+    /// and exposure).
+    #[arg(long, verbatim_doc_comment)]
     raw: bool,
     /// Print each command before running it.
-    #[arg(long, short)]
+    #[arg(long, short, verbatim_doc_comment)]
     verbose: bool,
-    /// More scene files, added after the file's (as rad's octree inputs).
-    #[arg(last = true, value_name = "SCENE")]
+    /// More scene files, added after the file's (as rad's octree
+    /// inputs).
+    #[arg(last = true, value_name = "SCENE", verbatim_doc_comment)]
     rest: Vec<String>,
 }
 

@@ -35,37 +35,43 @@ pub enum Command {
 
 /// tpict's usage: rpict's options in brief and Tessera's own options in full.
 pub fn help_text() -> String {
-    let mut s = String::from(
-        "usage: tpict [rpict options] [Tessera options] scene.rad [more.rad ...]\n\
-         \n\
-         Renders Radiance scene files, octrees and Wavefront .obj files ('-' or none:\n\
-         stdin) with rpict's options: views (-vt? -vp -vd -vu -vh -vv -vo -va -vs -vl\n\
-         -vf), picture (-x -y\n\
-         -pa -pj -ps -pt), direct light (-dt -dc -dj -ds -dr -dp -dv), specular (-ss -st),\n\
-         limits (-lr -lw), ambient (-av -aw -ab -aa -ar -ad -as -ae -ai -aE -aI -af), -i -u\n\
-         -bv -w -t -e -o -S, @file and $VAR. 'tpict -defaults' prints every\n\
-         value, as rpict does.\n\
-         \n\
-         Tessera's own options:\n\
-           -n N                    render threads (default: every core, or SLURM_CPUS_PER_TASK)\n\
-           -o FILE                 output: .hdr (Radiance), .exr or .png; -S n: a pattern\n\
-           --allow-commands        run a scene's !commands other than xform and genbox\n\
-           --obj-material NAME     modifier of .obj triangles with no or an undefined name\n\
-           --max-primitives N      most primitives the scene may expand to (default 4194304)\n\
-           --stats FILE            write render statistics (JSON)\n\
-           --amb-log FILE          share ambient values through Tessera's append-only log\n\
-           --amb-flush N           values per log write (default 128)\n\
-           --amb-force             use a log made for another scene or other options\n\
-           --no-overture           no cache-filling pass before the picture's own\n\
-           --same-seeds            every frame samples each pixel as the first (less flicker)\n\
-           -ax START END STEP      -aa per frame: START, less STEP each frame, down to END\n\
-           -axg START END RATIO    -aa per frame: START, times RATIO each frame, down to END\n\
-           -axt SECS START END     -aa per frame (-S) keeping each frame near SECS of CPU\n\
-           -axm RELAX AHEAD        jobs: -aa x RELAX where the view is gone AHEAD frames on\n\
-           --help, -h              this text; --version, -version: the version\n\
-         \n\
-         The ambient calculation's additions to Radiance's (docs/ambient.md):\n",
-    );
+    // Each line is its own literal: a `\` line continuation would eat the indentation.
+    let mut s: String = [
+        "usage: tpict [rpict options] [Tessera options] scene.rad [more.rad ...]",
+        "",
+        "Renders Radiance scene files, octrees and Wavefront .obj files ('-' or none:",
+        "stdin) with rpict's options:",
+        "  views         -vt? -vp -vd -vu -vh -vv -vo -va -vs -vl -vf",
+        "  picture       -x -y -pa -pj -ps -pt",
+        "  direct light  -dt -dc -dj -ds -dr -dp -dv",
+        "  specular      -ss -st",
+        "  limits        -lr -lw",
+        "  ambient       -av -aw -ab -aa -ar -ad -as -ae -ai -aE -aI -af",
+        "  others        -i -u -bv -w -t -e -o -S, @file and $VAR",
+        "'tpict -defaults' prints every value, as rpict does.",
+        "",
+        "Tessera's own options:",
+        "  -n N                    render threads (default: every core, or SLURM_CPUS_PER_TASK)",
+        "  -o FILE                 output: .hdr (Radiance), .exr or .png; -S n: a pattern",
+        "  --allow-commands        run a scene's !commands other than xform and genbox",
+        "  --obj-material NAME     modifier of .obj triangles with no or an undefined name",
+        "  --max-primitives N      most primitives the scene may expand to (default 4194304)",
+        "  --stats FILE            write render statistics (JSON)",
+        "  --amb-log FILE          share ambient values through Tessera's append-only log",
+        "  --amb-flush N           values per log write (default 128)",
+        "  --amb-force             use a log made for another scene or other options",
+        "  --no-overture           no cache-filling pass before the picture's own",
+        "  --same-seeds            every frame samples each pixel as the first (less flicker)",
+        "  -ax START END STEP      -aa per frame: START, less STEP each frame, down to END",
+        "  -axg START END RATIO    -aa per frame: START, times RATIO each frame, down to END",
+        "  -axt SECS START END     -aa per frame (-S) keeping each frame near SECS of CPU",
+        "  -axm RELAX AHEAD        jobs: -aa x RELAX where the view is gone AHEAD frames on",
+        "  --help, -h              this text; --version, -version: the version",
+        "",
+        "The ambient calculation's additions to Radiance's (docs/ambient.md):",
+        "",
+    ]
+    .join("\n");
     for (name, what) in [
         (
             "--amb-share-max F",
@@ -221,6 +227,12 @@ mod tests {
             assert!(h.contains(name), "{name} missing from the help");
         }
         let w = |s: &str| vec![s.to_string()];
+        // Fits a terminal and keeps its columns: every line within 100 characters, every
+        // option line indented under its heading.
+        for line in h.lines() {
+            assert!(line.chars().count() <= 100, "too long: {line}");
+            assert!(!line.starts_with('-'), "not indented: {line}");
+        }
         assert_eq!(parse_rpict_args(&w("--help")).unwrap(), Command::PrintHelp);
         assert_eq!(parse_rpict_args(&w("-h")).unwrap(), Command::PrintHelp);
         assert_eq!(

@@ -125,22 +125,30 @@ pub enum TraceCommand {
 
 /// ttrace's usage.
 pub fn trace_help() -> String {
-    "usage: ttrace [rtrace options] [Tessera options] scene.rad|scene.oct ... < rays\n\
-     \n\
-     Traces the rays read on standard input (origin and direction per record) through\n\
-     Radiance scene files or octrees, as rtrace does, with rtrace's defaults. Options:\n\
-       -f[afd][afdc]  input and output format: a text, f 32-bit, d 64-bit floats;\n\
-                      c: the values as a Radiance picture of -x by -y pixels\n\
-       -o[vodpnNlLwmMs]  output per ray: v value, o origin, d direction, p hit point,\n\
-                      n normal facing the ray, N surface normal, l/L distance, w weight,\n\
-                      m modifier, M material, s surface name\n\
-       -I[+-]         irradiance at the origin (the direction is the surface normal)\n\
-       -i[+-]         irradiance at the first surface hit\n\
-       -h[+-]         header (default on)    -x N  flush every N records\n\
-       -y N           with -x, stop after x*y records    -ld[+-]  limit the distance\n\
-       -n N           threads (values do not depend on it at -ab 0)\n\
-       -af FILE, --amb-log FILE, -e FILE, -w[+-], and rtrace's -d* -s* -l* -a* -m* -u -bv.\n"
-        .to_string()
+    // Each line is its own literal: a `\` line continuation would eat the indentation.
+    let mut s = [
+        "usage: ttrace [rtrace options] [Tessera options] scene.rad|scene.oct ... < rays",
+        "",
+        "Traces the rays read on standard input (origin and direction per record) through",
+        "Radiance scene files or octrees, as rtrace does, with rtrace's defaults. Options:",
+        "  -f[afd][afdc]     input and output format: a text, f 32-bit, d 64-bit floats;",
+        "                    c: the values as a Radiance picture of -x by -y pixels",
+        "  -o[vodpnNlLwmMs]  output per ray: v value, o origin, d direction, p hit point,",
+        "                    n normal facing the ray, N surface normal, l/L distance,",
+        "                    w weight, m modifier, M material, s surface name",
+        "  -I[+-]            irradiance at the origin (the direction is the surface normal)",
+        "  -i[+-]            irradiance at the first surface hit",
+        "  -h[+-]            header (default on)",
+        "  -x N              flush every N records",
+        "  -y N              with -x, stop after x*y records",
+        "  -ld[+-]           limit the distance",
+        "  -n N              threads (values do not depend on it at -ab 0)",
+        "  -af FILE, --amb-log FILE, -e FILE, -w[+-], --max-primitives N, --allow-commands,",
+        "  --obj-material NAME, and rtrace's -d* -s* -l* -a* -m* -u -bv.",
+    ]
+    .join("\n");
+    s.push('\n');
+    s
 }
 
 fn apply_trace_option(t: &mut TraceParams, words: &[String]) -> Result<Option<usize>, OptError> {

@@ -13,8 +13,10 @@ use clap::Parser;
     about = "Sensor points on a work plane (x y z nx ny nz per line) for ttrace -I or tplan --points"
 )]
 pub struct GridArgs {
-    /// The outline in plan: x,y corners in order (at least three), e.g. "0,0 6,0 6,5 0,5".
+    /// The outline in plan: x,y corners in order (at least three),
+    /// e.g. "0,0 6,0 6,5 0,5".
     #[arg(
+        verbatim_doc_comment,
         long,
         value_name = "\"X,Y X,Y ...\"",
         conflicts_with = "rect",
@@ -22,19 +24,26 @@ pub struct GridArgs {
     )]
     polygon: Option<String>,
     /// A rectangle in plan: X0 Y0 X1 Y1.
-    #[arg(long, num_args = 4, value_names = ["X0", "Y0", "X1", "Y1"], allow_negative_numbers = true)]
+    #[arg(long, num_args = 4, value_names = ["X0", "Y0", "X1", "Y1"], allow_negative_numbers = true, verbatim_doc_comment)]
     rect: Option<Vec<f64>>,
     /// Distance between neighbouring points.
-    #[arg(long, default_value_t = 0.5)]
+    #[arg(long, default_value_t = 0.5, verbatim_doc_comment)]
     spacing: f64,
     /// Height of the work plane (z).
-    #[arg(long, default_value_t = 0.8, allow_negative_numbers = true)]
+    #[arg(
+        long,
+        default_value_t = 0.8,
+        allow_negative_numbers = true,
+        verbatim_doc_comment
+    )]
     height: f64,
-    /// Least distance from a point to the outline (default: half the spacing).
-    #[arg(long)]
+    /// Least distance from a point to the outline (default: half the
+    /// spacing).
+    #[arg(long, verbatim_doc_comment)]
     offset: Option<f64>,
-    /// The sensors' normal (the direction of each record).
-    #[arg(long, num_args = 3, value_names = ["NX", "NY", "NZ"], allow_negative_numbers = true, default_values_t = [0.0, 0.0, 1.0])]
+    /// The sensors' normal (the direction of each
+    /// record).
+    #[arg(long, num_args = 3, value_names = ["NX", "NY", "NZ"], allow_negative_numbers = true, default_values_t = [0.0, 0.0, 1.0], verbatim_doc_comment)]
     normal: Vec<f64>,
 }
 
