@@ -143,8 +143,39 @@ struct TplanArgs {
 
 /// Entry point of `tplan`.
 pub fn tplan_main() -> i32 {
-    let a = TplanArgs::parse();
+    let a = match TplanArgs::try_parse() {
+        Ok(a) => a,
+        Err(e) => return tplan_usage_error(e),
+    };
     finish("tplan", tplan(a))
+}
+
+/// clap's answer to a bad tplan command line, except for the common slip of giving rpict's
+/// options or the scene without `--` before them: one line saying so.
+fn tplan_usage_error(e: clap::Error) -> i32 {
+    use clap::error::{ContextKind, ContextValue, ErrorKind};
+    let arg = match e.get(ContextKind::InvalidArg) {
+        Some(ContextValue::String(s)) => Some(s.clone()),
+        _ => None,
+    };
+    let hint = "put rpict's options and the scene after `--`, e.g. tplan -o job -- -vf \
+                view.vf -ab 1 scene.rad";
+    match (e.kind(), arg) {
+        (ErrorKind::UnknownArgument, Some(a)) if a.starts_with('-') && !a.starts_with("--") => {
+            // clap names the first letter of `-vf`: show the word as given.
+            let word = std::env::args()
+                .skip(1)
+                .find(|w| w.starts_with(&a))
+                .unwrap_or(a);
+            eprintln!("tplan: error: '{word}' is an rpict option: {hint}");
+            2
+        }
+        (ErrorKind::UnknownArgument, Some(a)) if !a.starts_with('-') => {
+            eprintln!("tplan: error: '{a}': {hint}");
+            2
+        }
+        _ => e.exit(),
+    }
 }
 
 fn parse_size(s: &str) -> Result<(usize, usize)> {

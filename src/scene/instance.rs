@@ -47,7 +47,7 @@ impl Builder<'_> {
                 self.mods.files.note_input(name, path.clone());
                 path
             }
-            r => r.map_err(err)?,
+            r => r.map_err(|m| err(m + &super::reader::raypath_hint(name, &p.loc.file)))?,
         };
         let mut key = std::fs::canonicalize(&path).unwrap_or(path.clone());
         let obj = p.ptype == "mesh" && is_obj_name(name);

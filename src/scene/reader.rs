@@ -123,6 +123,26 @@ impl Default for ReadOptions {
     }
 }
 
+/// For a file `name` not found along the RAYPATH but next to the scene file `from` that
+/// names it: a hint to add that folder to the RAYPATH (Radiance finds files along the
+/// RAYPATH only, not beside the file naming them). Empty otherwise.
+pub fn raypath_hint(name: &str, from: &str) -> String {
+    let Some(dir) = Path::new(from)
+        .parent()
+        .filter(|d| !d.as_os_str().is_empty())
+    else {
+        return String::new();
+    };
+    if Path::new(name).is_relative() && dir.join(name).is_file() {
+        let d = dir.display();
+        format!(
+            " (it is in {d}, the folder of {from}: add that folder to RAYPATH, e.g. RAYPATH=.:{d})"
+        )
+    } else {
+        String::new()
+    }
+}
+
 /// Refuse a scene that expands to more than `opts.max_primitives` primitives: `n` would be
 /// held at once, made by what is at `loc`.
 fn check_count(n: usize, opts: &ReadOptions, loc: &Location) -> Result<(), SceneError> {
@@ -603,7 +623,11 @@ fn run_xform(
         let path = find_on_raypath(f, opts).ok_or_else(|| SceneError::Io {
             loc: loc.clone(),
             path: f.clone(),
-            reason: format!("not found on RAYPATH {:?}", opts.raypath),
+            reason: format!(
+                "not found on RAYPATH {:?}{}",
+                opts.raypath,
+                raypath_hint(f, &loc.file)
+            ),
         })?;
         let text = read_file(&path, f, loc)?;
         let mut prims = Vec::new();
