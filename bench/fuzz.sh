@@ -3,6 +3,7 @@
 # SECONDS each, one after another, under a memory limit so that an unbounded allocation is
 # a finding too (the process aborts; the input it was running is kept).
 # Usage: bash bench/fuzz.sh [SECONDS (default 600)] [TARGET ...]
+# The target special-files runs bench/fuzz_special.sh (special files in a job directory).
 # Environment: SEED (default: the clock), MEM_KB (virtual memory limit, default 8000000).
 # Findings (inputs that panicked, hung for more than 10 s or aborted) are saved under
 # target/fuzz-findings/; copy each into tests/fuzz-regressions/ with a test that refuses it.
@@ -10,7 +11,7 @@ set -uo pipefail
 ROOT=$(cd "$(dirname "$0")/.." && pwd)
 SECS=${1:-600}
 shift || true
-TARGETS=${*:-"scene options view rgbe exr amblog radambient manifest task-names cal octree mesh obj"}
+TARGETS=${*:-"scene options view rgbe exr amblog radambient manifest task-names cal octree mesh obj special-files"}
 SEED=${SEED:-$(date +%s%3N)}
 MEM_KB=${MEM_KB:-8000000}
 cd "$ROOT" || exit 1
@@ -26,6 +27,11 @@ FIND=$ROOT/target/fuzz-findings
 mkdir -p "$FIND"
 status=0
 for t in $TARGETS; do
+    if [[ $t == special-files ]]; then
+        # Special files in a job directory, against the tools themselves.
+        SEED=$SEED MEM_KB=$MEM_KB bash "$ROOT/bench/fuzz_special.sh" "$SECS" || status=1
+        continue
+    fi
     out=$( (ulimit -v "$MEM_KB"; "$BIN" --seconds "$SECS" --target "$t" --seed "$SEED") 2>&1)
     rc=$?
     line=$(grep "^fuzz $t " <<<"$out" | tail -1)

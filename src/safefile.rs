@@ -8,6 +8,15 @@ use std::io::{self, Read};
 use std::os::unix::fs::OpenOptionsExt;
 use std::path::Path;
 
+/// Open the directory `path` (for `fsync` after a rename): `O_DIRECTORY`, so a FIFO or
+/// anything else put in its place is refused at once instead of blocking the open.
+pub fn open_dir(path: &Path) -> io::Result<File> {
+    OpenOptions::new()
+        .read(true)
+        .custom_flags(libc::O_DIRECTORY | libc::O_NONBLOCK | libc::O_CLOEXEC)
+        .open(path)
+}
+
 /// Open `path` for reading if it is a regular file. `follow = false` refuses a symbolic
 /// link (`O_NOFOLLOW`); the open never blocks (`O_NONBLOCK`, so a FIFO opens at once and is
 /// then refused as not regular).

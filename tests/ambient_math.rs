@@ -380,9 +380,15 @@ fn gradients_reduce_interpolation_error() {
 
 /// The overture (a first pass that only fills the cache) lowers the error of the cached
 /// picture: every pixel then interpolates from the values on all its sides, not only from
-/// those made before it. It makes no more values than one pass. The gain grows with the
-/// pixels per value, so this needs 128×128 (curved scene, -ab 1 -st 1, pictures reduced 4×4
-/// against an `-aa 0 -ad 1024` reference; measured 1.44% → 1.29%).
+/// those made before it. The gain grows with the pixels per value, so this needs 128×128
+/// (curved scene, -ab 1 -st 1, pictures reduced 4×4 against an `-aa 0 -ad 1024` reference).
+///
+/// Spread, measured over 40 seeds (frames 0–39, `bench`-style, one render each way): the
+/// error ratio (with / without) has mean 0.833 and standard deviation 0.067 per frame,
+/// the value-count ratio mean 1.036 and deviation 0.018 (the overture makes about 4% more
+/// values). Over the 4 frames here the deviations are about 0.033 and 0.009, so the limits
+/// 0.96 and 1.075 sit 3.8 and 4.3 deviations above the means: a false failure less than
+/// once in 10,000 seeds (Radiance's suite's rule).
 #[test]
 fn overture_reduces_interpolation_error() {
     let s = load("curved.rad", "curved.vf");
@@ -394,7 +400,7 @@ fn overture_reduces_interpolation_error() {
         st: 1.0,
         ..Opts::default()
     };
-    let (without, n1) = mean_reduced_err(&s, &reference, base, 2, 4);
+    let (without, n1) = mean_reduced_err(&s, &reference, base, 4, 4);
     let (with, n2) = mean_reduced_err(
         &s,
         &reference,
@@ -402,17 +408,17 @@ fn overture_reduces_interpolation_error() {
             overture: 1,
             ..base
         },
-        2,
+        4,
         4,
     );
     eprintln!("overture off: rms {without:.4} ({n1} values); on: rms {with:.4} ({n2} values)");
     assert!(
-        with < 0.95 * without,
+        with < 0.96 * without,
         "the overture should help: {with} vs {without}"
     );
     assert!(
-        n2 <= n1 * 1.05,
-        "the overture made more values: {n2} vs {n1}"
+        n2 <= n1 * 1.075,
+        "the overture made too many values: {n2} vs {n1}"
     );
 }
 

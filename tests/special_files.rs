@@ -220,3 +220,62 @@ fn crafted_heartbeats_are_left_out() {
     let real_rays = v["rays"].as_u64().unwrap();
     assert!(all.contains(&format!("{real_rays} rays")), "{all}");
 }
+
+/// A FIFO (or a link to /dev/zero) in place of one of the job's folders never blocks a
+/// tool: the folder handle a worker keeps to sync its renames is opened as a directory
+/// (found by `bench/fuzz_special.sh`: `tiles/` as a FIFO blocked tpiece at its first tile).
+#[test]
+fn special_files_in_place_of_job_folders_never_block() {
+    let t = tempfile::tempdir().unwrap();
+    let d = t.path();
+    std::fs::write(d.join("s.rad"), SCENE).unwrap();
+    let mut n = 0;
+    for folder in ["tiles", "tasks", "workers", "amb", "merged"] {
+        for kind in ["fifo", "zero"] {
+            n += 1;
+            let job = d.join(format!("job{n}"));
+            let o = Command::new(bin("tplan"))
+                .current_dir(d)
+                .args(["--tiles", "2", "-o"])
+                .arg(&job)
+                .args([
+                    "--", "-vp", "0", "-5", "3", "-vd", "0", "1", "-.5", "-x", "16", "-y", "12",
+                    "s.rad",
+                ])
+                .output()
+                .unwrap();
+            assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+            let p = job.join(folder);
+            if p.exists() {
+                std::fs::remove_dir_all(&p).unwrap();
+            }
+            match kind {
+                "fifo" => mkfifo(&p),
+                _ => std::os::unix::fs::symlink("/dev/zero", &p).unwrap(),
+            }
+            let out = d.join(format!("out{n}.hdr"));
+            for (tool, args) in [
+                (
+                    "tpiece",
+                    vec![
+                        job.as_os_str(),
+                        "--threads".as_ref(),
+                        "1".as_ref(),
+                        "-q".as_ref(),
+                        "--no-wait".as_ref(),
+                    ],
+                ),
+                ("tmerge", vec![job.as_os_str()]),
+                ("tstat", vec![job.as_os_str()]),
+                (
+                    "tassemble",
+                    vec![job.as_os_str(), "-o".as_ref(), out.as_os_str()],
+                ),
+            ] {
+                let (done, _, err) = run(tool, &args);
+                assert!(done, "{tool} blocked on a {kind} as {folder}/");
+                assert!(!err.contains("panicked"), "{tool}, {kind} {folder}: {err}");
+            }
+        }
+    }
+}

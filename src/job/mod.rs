@@ -232,7 +232,7 @@ pub fn write_file_atomic(path: &Path, bytes: &[u8]) -> std::io::Result<()> {
 /// fsync a directory so that a rename in it is durable (best effort: some file systems
 /// refuse to open directories for this).
 pub fn sync_dir(dir: &Path) {
-    if let Ok(f) = std::fs::File::open(dir) {
+    if let Ok(f) = crate::safefile::open_dir(dir) {
         let _ = f.sync_all();
     }
 }

@@ -136,7 +136,7 @@ impl ResultDir {
     pub fn open(dir: &Path) -> Result<ResultDir> {
         Ok(ResultDir {
             dir: dir.to_path_buf(),
-            handle: File::open(dir).ok(),
+            handle: crate::safefile::open_dir(dir).ok(),
         })
     }
 }
