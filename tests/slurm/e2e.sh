@@ -8,7 +8,9 @@
 # Steps: start the cluster (stopped again on exit), tplan a 160x120 job, slurm/submit.sh it
 # with 4 workers, wait (wall-clock deadline), check the assembled picture and compare it with
 # `tpict` under the tests' tolerance (tests/slurm/picdiff.py: relative RMS <= 10% after
-# halving both pictures, max <= 1.5, mean luminance within 2%).
+# halving both pictures, max <= 1.5, mean luminance within 2%); then a point job (a tgrid
+# sensor grid, tplan --points, ttrace -I at -ab 0) through the same scripts, whose records
+# must be byte-identical to one ttrace run.
 #
 # Environment:
 #   TESSERA_BIN           folder with tplan, tpiece, tmerge, tassemble, tstat, tpict
@@ -44,7 +46,7 @@ die() {
 BIN="${TESSERA_BIN:-$REPO/target/release}"
 [ -d "$BIN" ] || die "TESSERA_BIN=$BIN is not a folder (build with: cargo build --release)"
 BIN="$(cd "$BIN" && pwd -P)"
-for t in tplan tpiece tmerge tassemble tstat tpict; do
+for t in tplan tpiece tmerge tassemble tstat tpict ttrace tgrid; do
   [ -x "$BIN/$t" ] || die "$BIN/$t missing (build with: cargo build --release)"
 done
 export TESSERA_BIN="$BIN"
@@ -175,27 +177,29 @@ timing "requeue" "$(secs "$t")"
 # --- wait ---------------------------------------------------------------------------------
 # squeue prints nothing both when the jobs are gone and when it fails (slurmctld down), so
 # its exit status decides; only "Invalid job id" (record purged) means gone.
-echo "== wait for jobs $RENDER_JOB (render array) and $ASSEMBLE_JOB (assembly), at most ${DEADLINE_S}s"
-deadline=$((SECONDS + DEADLINE_S))
-last=""
-while :; do
-  if q="$(timeout 20 squeue -h -j "$RENDER_JOB,$ASSEMBLE_JOB" -o '%i %T' 2>&1)"; then
-    [ -n "$q" ] || break
-  else
-    rc=$?
-    case "$q" in
-      *"Invalid job id"*) break ;;
-      *) die "squeue failed (exit $rc): $q" ;;
-    esac
-  fi
-  now="$(echo "$q" | tr '\n' ' ')"
-  if [ "$now" != "$last" ]; then
-    echo "  $((SECONDS - deadline + DEADLINE_S))s: $now"
-    last="$now"
-  fi
-  [ "$SECONDS" -lt "$deadline" ] || die "jobs not done after ${DEADLINE_S}s: $now"
-  sleep 1
-done
+wait_jobs() { # wait_jobs JOBIDS (comma-separated)
+  echo "== wait for jobs $1, at most ${DEADLINE_S}s"
+  local deadline=$((SECONDS + DEADLINE_S)) last="" q now rc
+  while :; do
+    if q="$(timeout 20 squeue -h -j "$1" -o '%i %T' 2>&1)"; then
+      [ -n "$q" ] || break
+    else
+      rc=$?
+      case "$q" in
+        *"Invalid job id"*) break ;;
+        *) die "squeue failed (exit $rc): $q" ;;
+      esac
+    fi
+    now="$(echo "$q" | tr '\n' ' ')"
+    if [ "$now" != "$last" ]; then
+      echo "  $((SECONDS - deadline + DEADLINE_S))s: $now"
+      last="$now"
+    fi
+    [ "$SECONDS" -lt "$deadline" ] || die "jobs not done after ${DEADLINE_S}s: $now"
+    sleep 1
+  done
+}
+wait_jobs "$RENDER_JOB,$ASSEMBLE_JOB"
 timing "submit -> jobs done" "$(secs "$t_submit")"
 
 states="$(timeout 20 squeue --states=all -h -j "$RENDER_JOB,$ASSEMBLE_JOB" -o '%i %T %e')" ||
@@ -230,3 +234,28 @@ t="$(now_ms)"
 python3 tests/slurm/picdiff.py "$PICTURE" "$REFERENCE" ||
   die "the SLURM picture differs from tpict's beyond the tests' tolerance"
 timing "compare" "$(secs "$t")"
+
+# --- a point job through the same scripts ---------------------------------------------------
+# A sensor grid (tgrid) as a job over rays (tplan --points), run by slurm/submit.sh
+# unchanged; at -ab 0 its records are byte-identical to one ttrace run.
+echo "== point job: tgrid, tplan --points, slurm/submit.sh; against one ttrace -I run"
+t="$(now_ms)"
+"$BIN/tgrid" --rect -1.5 -1.5 1.5 1.5 --spacing 0.1 --height 0.5 >"$WORK/points.txt"
+PJOB="$WORK/pjob"
+"$BIN/tplan" --points "$WORK/points.txt" --chunk 100 --workers 2 -o "$PJOB" -- -I -h- -ab 0 "$SCENE"
+ids="$(TESSERA_CPUS_PER_TASK=1 TESSERA_OUTPUT="$WORK/out/points.dat" bash slurm/submit.sh "$PJOB" 2)" ||
+  die "slurm/submit.sh failed on the point job"
+echo "$ids"
+[[ "$ids" =~ $re ]] || die "cannot parse submit.sh output: $ids"
+RENDER_JOB="${BASH_REMATCH[1]}"
+ASSEMBLE_JOB="${BASH_REMATCH[2]}"
+JOB="$PJOB"
+wait_jobs "$RENDER_JOB,$ASSEMBLE_JOB"
+assemble_state="$(timeout 20 squeue --states=all -h -j "$ASSEMBLE_JOB" -o %T)" ||
+  die "squeue --states=all -j $ASSEMBLE_JOB failed"
+[ "$assemble_state" = COMPLETED ] || die "point assembly job $ASSEMBLE_JOB is $assemble_state"
+"$BIN/ttrace" -I -h- -ab 0 "$SCENE" <"$WORK/points.txt" >"$WORK/points.ref" || die "ttrace failed"
+cmp "$WORK/out/points.dat" "$WORK/points.ref" ||
+  die "the point job's records differ from ttrace's"
+echo "$(wc -l <"$WORK/points.ref") records, byte-identical to ttrace's"
+timing "point job" "$(secs "$t")"
