@@ -1,9 +1,9 @@
 //! `ttrace`, rtrace's drop-in: rays on standard input, results in input order. Against real
 //! rtrace: every output letter byte-identical on a scene of mirrors and shades at `-ab 0`;
 //! `-I` work-plane grids in a daylit room (sky, sun through glass) and a room lit by an
-//! ies2rad luminaire within 0.5% per point at `-ab 0`, and at `-ab 2` (both) and `-ab 5` (the daylit room) within rtrace's own
-//! spread (the same grid in reverse order). Without Radiance: formats, threads, the flush
-//! record and bad records.
+//! ies2rad luminaire within 0.5% per point at `-ab 0`, and at `-ab 2` (both) and `-ab 5`
+//! (the daylit room) within rtrace's own spread (the same grid in reverse order). Without
+//! Radiance: formats, threads, the flush record and bad records.
 
 mod common;
 
