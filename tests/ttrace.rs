@@ -108,6 +108,20 @@ fn formats_threads_flush_records_and_bad_input() {
     let grid = grid((-4.0, 4.0), (-3.0, 3.0), 0.1, 0.5);
     let one = run(&["-h-", "-I", "-n", "1"], grid.as_bytes());
     assert_eq!(run(&["-h-", "-I", "-n", "2"], grid.as_bytes()), one);
+    // With indirect light too: the rays go in waves whose values are filed in input order,
+    // so the cache, and every value, is the same whatever the threads.
+    let ab2 = [
+        "-h-", "-I", "-ab", "2", "-ad", "128", "-as", "32", "-aa", ".2",
+    ];
+    let with = |n: &str| {
+        let mut a = ab2.to_vec();
+        a.extend(["-n", n]);
+        run(&a, grid.as_bytes())
+    };
+    let ab2_one = with("1");
+    assert_ne!(ab2_one, one, "-ab 2 adds indirect light");
+    assert_eq!(with("2"), ab2_one, "-ab 2: -n 2 differs from -n 1");
+    assert_eq!(with("3"), ab2_one, "-ab 2: -n 3 differs from -n 1");
     let mut bin = Vec::new();
     for l in grid.lines() {
         for w in l.split_whitespace() {

@@ -10,15 +10,49 @@
 //! The grid is split into shards, each behind its own `RwLock`: lookups only take short read
 //! locks on the shards they touch (no global lock), inserts write locks on the shards of
 //! their cells, one at a time. A shard holds blocks of 8×8×8 cells of a level.
+//!
+//! A thread may make its values **privately** ([`begin_private`] … [`end_private`]): they
+//! are then kept in a thread-local list that only its own lookups see (after the shared
+//! cells), and the caller files them later with [`AmbientCache::commit`], in an order of
+//! its choosing. `ttrace` traces each ray so and commits a wave's values in input order,
+//! which makes its values independent of the thread count.
 
 use super::ValueId;
 use crate::color::Color;
 use crate::hash::fx_mix;
 use glam::DVec3;
+use std::cell::RefCell;
 use std::collections::HashMap;
 use std::hash::{BuildHasherDefault, Hasher};
 use std::sync::atomic::{AtomicU32, AtomicU64, Ordering};
 use std::sync::{Arc, OnceLock, RwLock};
+
+/// Values a thread made privately, filed like the shared cells (by level and cell) so
+/// that a lookup reads one cell per level.
+#[derive(Default)]
+struct Private {
+    vals: Vec<CachedValue>,
+    /// Per cell: each value's position and squared reach, and its index in `vals`.
+    cells: HashMap<Key, Vec<([f64; 4], u32)>>,
+    /// Levels in use (bit l).
+    levels: u64,
+}
+
+thread_local! {
+    /// The values this thread made privately ([`begin_private`]), None when it is not.
+    static PRIVATE: RefCell<Option<Private>> = const { RefCell::new(None) };
+}
+
+/// From now on this thread's new values are its own ([`end_private`] hands them over).
+pub fn begin_private() {
+    PRIVATE.with(|p| *p.borrow_mut() = Some(Private::default()));
+}
+
+/// The values this thread made since [`begin_private`], in the order it made them; the
+/// thread files values in the shared cells again.
+pub fn end_private() -> Vec<CachedValue> {
+    PRIVATE.with(|p| p.borrow_mut().take().map(|p| p.vals).unwrap_or_default())
+}
 
 /// Receives every value this process computes (e.g. to append it to a shared log).
 pub trait ValueSink: Send + Sync {
@@ -269,8 +303,27 @@ impl AmbientCache {
         let pad = rr * (1.0 + 1e-6) + 1e-9 * s;
         let lo = ((v.pos - DVec3::splat(pad)) / s).floor();
         let hi = ((v.pos + DVec3::splat(pad)) / s).floor();
-        let shared = Arc::new(v);
         let entry = [v.pos.x, v.pos.y, v.pos.z, rr * rr];
+        let kept = PRIVATE.with(|p| match p.try_borrow_mut().ok().as_deref_mut() {
+            Some(Some(own)) => {
+                let k = own.vals.len() as u32;
+                own.vals.push(v);
+                own.levels |= 1u64 << l;
+                for x in lo.x as i64..=hi.x as i64 {
+                    for y in lo.y as i64..=hi.y as i64 {
+                        for z in lo.z as i64..=hi.z as i64 {
+                            own.cells.entry((l, x, y, z)).or_default().push((entry, k));
+                        }
+                    }
+                }
+                true
+            }
+            _ => false,
+        });
+        if kept {
+            return;
+        }
+        let shared = Arc::new(v);
         for x in lo.x as i64..=hi.x as i64 {
             for y in lo.y as i64..=hi.y as i64 {
                 for z in lo.z as i64..=hi.z as i64 {
@@ -328,6 +381,31 @@ impl AmbientCache {
                     }
                 }
             }
+        }
+        // This thread's private values, filed and tested the same way.
+        PRIVATE.with(|pv| {
+            let Ok(own) = pv.try_borrow() else { return };
+            let Some(own) = own.as_ref() else { return };
+            for l in 0..64 {
+                if own.levels & (1u64 << l) == 0 {
+                    continue;
+                }
+                if let Some(cell) = own.cells.get(&self.key_at(l, p)) {
+                    for (r, k) in cell {
+                        let d = [p.x - r[0], p.y - r[1], p.z - r[2]];
+                        if d[0] * d[0] + d[1] * d[1] + d[2] * d[2] < r[3] {
+                            f(&own.vals[*k as usize]);
+                        }
+                    }
+                }
+            }
+        });
+    }
+
+    /// File values made privately ([`end_private`]) in the shared cells, in the order given.
+    pub fn commit(&self, values: Vec<CachedValue>) {
+        for v in values {
+            self.insert(v);
         }
     }
 

@@ -122,13 +122,27 @@ struct VisCache {
 
 thread_local! {
     static VIS: RefCell<VisCache> = RefCell::default();
+    /// The current epoch of this thread's table (0: none, the tags as they are).
+    static EPOCH: std::cell::Cell<u64> = const { std::cell::Cell::new(0) };
+}
+
+/// Start a new epoch of this thread's table: no cube learnt before answers after (the
+/// tags of a new epoch differ), without clearing its 8 MiB. `ttrace` starts one per ray, so
+/// that a ray's shadow answers do not depend on which rays its thread traced before.
+pub fn new_epoch(epoch: u64) {
+    EPOCH.with(|e| e.set(epoch));
 }
 
 /// The transmission toward source `src` for a query: reused from its cube when the cube is
 /// trusted, else `trace()` (a real shadow ray), whose answer the cube learns. Returns the
 /// transmission and whether a ray was traced.
 pub fn shadow(q: &VisQuery, src: usize, trace: impl FnOnce() -> Color) -> (Color, bool) {
-    let tag = q.tag(src);
+    let epoch = EPOCH.with(|e| e.get());
+    let tag = if epoch == 0 {
+        q.tag(src)
+    } else {
+        fx_mix(q.tag(src), epoch).max(1)
+    };
     VIS.with(|v| {
         // A shadow ray never shades, so it never comes back here; if it ever did, the
         // nested query would simply trace.

@@ -5,10 +5,10 @@
 //! (`-o` specifiers) are written in input order. `-I` gives the irradiance at each ray's
 //! origin, the direction taken as the surface normal; `-i` the irradiance at the first
 //! surface a ray hits. Rays are traced in batches on the session's threads; each ray's
-//! random numbers depend only on its record number, so at `-ab 0` the values are the same
-//! whatever `-n` (with `-ab` > 0 the shared irradiance cache fills in the threads' order,
-//! as in tpict). A record whose direction is zero is rtrace's flush request: it gets a
-//! record of zeros and the output is flushed.
+//! random numbers depend only on its record number, and with `-ab` > 0 the rays go in
+//! waves whose new irradiance values are filed in input order ([`trace_batch`]), so the
+//! values are the same whatever `-n`. A record whose direction is zero is rtrace's flush
+//! request: it gets a record of zeros and the output is flushed.
 //!
 //! Output is kept until a flush (`-x N` records, a zero-direction record, 64 MiB of
 //! results) or the end of the input, so a run that fails on a bad record before then writes
@@ -173,6 +173,7 @@ pub fn run(
     };
     let batch = if t.flush > 0 { t.flush } else { BATCH };
     let mut reader = RayReader::new(input, t.input);
+    let mut waves = 0u32;
     let mut done = 0u64;
     let mut last: Option<InRay> = None;
     loop {
@@ -194,13 +195,7 @@ pub fn run(
             }
         }
         let first = done;
-        let traced: Vec<Traced> = session.install(|| {
-            rays.par_iter()
-                .enumerate()
-                .with_max_len(16)
-                .map(|(k, r)| trace_one(&session, o, r, first + k as u64))
-                .collect()
-        });
+        let traced = trace_batch(&session, o, &rays, first, &mut waves);
         if let Some(e) = session.scene.fatal_error() {
             bail!("{e}");
         }
@@ -328,6 +323,63 @@ pub fn ray_value(tr: &Tracer, kind: ValueKind, r: &InRay, index: u64) -> DVec3 {
         }
     };
     crate::color::sanitize(v)
+}
+
+/// Largest wave of rays traced side by side with a cached ambient calculation.
+const MAX_WAVE: usize = 256;
+
+/// Trace a batch of rays (the first is record `first`) on the session's threads, results in
+/// input order. With a cached ambient calculation the rays go in **waves** of 1, 2, 4, …
+/// up to [`MAX_WAVE`] rays (counted by `waves` across batches): every ray of a wave sees
+/// the values of the waves before it and its own (made privately, its shadow-reuse table
+/// in an epoch of its own), and the wave's values are filed in input order when it ends.
+/// No ray sees what another ray of its wave makes, so the values do not depend on the
+/// thread count (`-n`), only on the input; the first waves are small because the cache is
+/// empty and rays of one wave would compute the same values side by side.
+fn trace_batch(
+    session: &Session,
+    o: &RtraceOptions,
+    rays: &[InRay],
+    first: u64,
+    waves: &mut u32,
+) -> Vec<Traced> {
+    let Some(amb) = session.cached_ambient() else {
+        return session.install(|| {
+            rays.par_iter()
+                .enumerate()
+                .with_max_len(16)
+                .map(|(k, r)| trace_one(session, o, r, first + k as u64))
+                .collect()
+        });
+    };
+    let mut out = Vec::with_capacity(rays.len());
+    let mut start = 0;
+    while start < rays.len() {
+        let size = (1usize << (*waves).min(8)).min(MAX_WAVE);
+        *waves = waves.saturating_add(1);
+        let end = (start + size).min(rays.len());
+        let made: Vec<(Traced, Vec<crate::ambient::cache::CachedValue>)> = session.install(|| {
+            rays[start..end]
+                .par_iter()
+                .enumerate()
+                .with_max_len(1)
+                .map(|(k, r)| {
+                    let index = first + (start + k) as u64;
+                    crate::ambient::cache::begin_private();
+                    crate::light::viscache::new_epoch(index.wrapping_add(1));
+                    let t = trace_one(session, o, r, index);
+                    crate::light::viscache::new_epoch(0);
+                    (t, crate::ambient::cache::end_private())
+                })
+                .collect()
+        });
+        for (t, values) in made {
+            amb.cache.commit(values);
+            out.push(t);
+        }
+        start = end;
+    }
+    out
 }
 
 fn trace_one(session: &Session, o: &RtraceOptions, r: &InRay, index: u64) -> Traced {
