@@ -328,14 +328,19 @@ pub fn ray_value(tr: &Tracer, kind: ValueKind, r: &InRay, index: u64) -> DVec3 {
 /// Largest wave of rays traced side by side with a cached ambient calculation.
 const MAX_WAVE: usize = 256;
 
+/// Rays of a batch that go into waves one after the other are this far apart in the input.
+const STRIDE: usize = 64;
+
 /// Trace a batch of rays (the first is record `first`) on the session's threads, results in
 /// input order. With a cached ambient calculation the rays go in **waves** of 1, 2, 4, …
 /// up to [`MAX_WAVE`] rays (counted by `waves` across batches): every ray of a wave sees
 /// the values of the waves before it and its own (made privately, its shadow-reuse table
-/// in an epoch of its own), and the wave's values are filed in input order when it ends.
+/// in an epoch of its own), and the wave's values are filed in a fixed order when it ends.
 /// No ray sees what another ray of its wave makes, so the values do not depend on the
-/// thread count (`-n`), only on the input; the first waves are small because the cache is
-/// empty and rays of one wave would compute the same values side by side.
+/// thread count (`-n`), only on the input. Rays of one wave would compute the same values
+/// side by side where they are neighbours, so the waves take the batch's rays [`STRIDE`]
+/// apart (every 64th, then the ones after those, …: neighbours on a grid fall in different
+/// waves), and the first waves are small while the cache is empty.
 fn trace_batch(
     session: &Session,
     o: &RtraceOptions,
@@ -352,34 +357,38 @@ fn trace_batch(
                 .collect()
         });
     };
-    let mut out = Vec::with_capacity(rays.len());
+    // The rays in a fixed order that puts neighbours of the input (neighbours on a grid)
+    // in different waves: every STRIDE-th ray first, then the ones after them, ...
+    let n = rays.len();
+    let stride = STRIDE.min(n).max(1);
+    let order: Vec<usize> = (0..stride).flat_map(|r| (r..n).step_by(stride)).collect();
+    let mut out: Vec<Option<Traced>> = (0..n).map(|_| None).collect();
     let mut start = 0;
-    while start < rays.len() {
+    while start < n {
         let size = (1usize << (*waves).min(8)).min(MAX_WAVE);
         *waves = waves.saturating_add(1);
-        let end = (start + size).min(rays.len());
+        let end = (start + size).min(n);
         let made: Vec<(Traced, Vec<crate::ambient::cache::CachedValue>)> = session.install(|| {
-            rays[start..end]
+            order[start..end]
                 .par_iter()
-                .enumerate()
                 .with_max_len(1)
-                .map(|(k, r)| {
-                    let index = first + (start + k) as u64;
+                .map(|&k| {
+                    let index = first + k as u64;
                     crate::ambient::cache::begin_private();
                     crate::light::viscache::new_epoch(index.wrapping_add(1));
-                    let t = trace_one(session, o, r, index);
+                    let t = trace_one(session, o, &rays[k], index);
                     crate::light::viscache::new_epoch(0);
                     (t, crate::ambient::cache::end_private())
                 })
                 .collect()
         });
-        for (t, values) in made {
+        for (&k, (t, values)) in order[start..end].iter().zip(made) {
             amb.cache.commit(values);
-            out.push(t);
+            out[k] = Some(t);
         }
         start = end;
     }
-    out
+    out.into_iter().flatten().collect()
 }
 
 fn trace_one(session: &Session, o: &RtraceOptions, r: &InRay, index: u64) -> Traced {
