@@ -49,16 +49,9 @@ pub fn available_memory() -> Option<u64> {
         .min()
 }
 
-/// A small text file of the system (at most 64 KiB read).
+/// A small text file of the system (at most 64 KiB).
 fn small_text(path: &str) -> Option<String> {
-    use std::io::Read;
-    let mut s = String::new();
-    std::fs::File::open(path)
-        .ok()?
-        .take(64 << 10)
-        .read_to_string(&mut s)
-        .ok()?;
-    Some(s)
+    crate::safefile::read_text_bounded(std::path::Path::new(path), 64 << 10).ok()
 }
 
 /// `key:  N kB` of a `/proc` status file, in bytes.

@@ -51,7 +51,16 @@ pub fn open_regular(path: &Path, follow: bool) -> io::Result<File> {
 
 /// Read a whole regular file (not through a symbolic link) of at most `limit` bytes.
 pub fn read_bounded(path: &Path, limit: u64) -> io::Result<Vec<u8>> {
-    let f = open_regular(path, false)?;
+    read_regular(path, limit, false)
+}
+
+/// [`read_bounded`], following a symbolic link (a user's own input files).
+pub fn read_bounded_following(path: &Path, limit: u64) -> io::Result<Vec<u8>> {
+    read_regular(path, limit, true)
+}
+
+fn read_regular(path: &Path, limit: u64, follow: bool) -> io::Result<Vec<u8>> {
+    let f = open_regular(path, follow)?;
     let len = f.metadata()?.len();
     let too_big = || {
         io::Error::new(

@@ -62,6 +62,26 @@ fn copy_dir(from: &Path, to: &Path) {
     }
 }
 
+/// Each tool of the job directory with its arguments on `job` (tassemble writing `out`).
+fn tools_on<'a>(job: &'a Path, out: &'a Path) -> [(&'static str, Vec<&'a std::ffi::OsStr>); 4] {
+    let w = |s: &'static str| std::ffi::OsStr::new(s);
+    [
+        (
+            "tpiece",
+            vec![
+                job.as_os_str(),
+                w("--threads"),
+                w("1"),
+                w("-q"),
+                w("--no-wait"),
+            ],
+        ),
+        ("tmerge", vec![job.as_os_str()]),
+        ("tstat", vec![job.as_os_str()]),
+        ("tassemble", vec![job.as_os_str(), w("-o"), out.as_os_str()]),
+    ]
+}
+
 /// A lamp over a floor.
 const SCENE: &str = "void light l 0 0 3 5 5 5\nl sphere b 0 0 4 0 0 2 .2\n\
      void plastic w 0 0 5 .5 .5 .5 0 0\nw polygon f 0 0 12 -2 -2 0 2 -2 0 2 2 0 -2 2 0\n";
@@ -131,24 +151,7 @@ fn special_files_in_a_job_never_block_or_get_read() {
                 _ => std::os::unix::fs::symlink(d.join("outside.txt"), &p).unwrap(),
             }
             let out = d.join(format!("out{n}.hdr"));
-            for (tool, args) in [
-                (
-                    "tpiece",
-                    vec![
-                        job.as_os_str(),
-                        "--threads".as_ref(),
-                        "1".as_ref(),
-                        "-q".as_ref(),
-                        "--no-wait".as_ref(),
-                    ],
-                ),
-                ("tmerge", vec![job.as_os_str()]),
-                ("tstat", vec![job.as_os_str()]),
-                (
-                    "tassemble",
-                    vec![job.as_os_str(), "-o".as_ref(), out.as_os_str()],
-                ),
-            ] {
+            for (tool, args) in tools_on(&job, &out) {
                 let (done, ok, err) = run(tool, &args);
                 assert!(done, "{tool} blocked on a {kind} as the {what}");
                 assert!(!err.contains("panicked"), "{tool}, {kind} {what}: {err}");
@@ -254,24 +257,7 @@ fn special_files_in_place_of_job_folders_never_block() {
                 _ => std::os::unix::fs::symlink("/dev/zero", &p).unwrap(),
             }
             let out = d.join(format!("out{n}.hdr"));
-            for (tool, args) in [
-                (
-                    "tpiece",
-                    vec![
-                        job.as_os_str(),
-                        "--threads".as_ref(),
-                        "1".as_ref(),
-                        "-q".as_ref(),
-                        "--no-wait".as_ref(),
-                    ],
-                ),
-                ("tmerge", vec![job.as_os_str()]),
-                ("tstat", vec![job.as_os_str()]),
-                (
-                    "tassemble",
-                    vec![job.as_os_str(), "-o".as_ref(), out.as_os_str()],
-                ),
-            ] {
+            for (tool, args) in tools_on(&job, &out) {
                 let (done, _, err) = run(tool, &args);
                 assert!(done, "{tool} blocked on a {kind} as {folder}/");
                 assert!(!err.contains("panicked"), "{tool}, {kind} {folder}: {err}");

@@ -27,6 +27,21 @@ use std::hash::{BuildHasherDefault, Hasher};
 use std::sync::atomic::{AtomicU32, AtomicU64, Ordering};
 use std::sync::{Arc, OnceLock, RwLock};
 
+/// The cells of level `l` from cell `lo` to cell `hi` (corners, in cell units).
+fn cells(l: u32, lo: DVec3, hi: DVec3) -> impl Iterator<Item = Key> {
+    let (lo, hi) = (lo.as_i64vec3(), hi.as_i64vec3());
+    (lo.x..=hi.x).flat_map(move |x| {
+        (lo.y..=hi.y).flat_map(move |y| (lo.z..=hi.z).map(move |z| (l, x, y, z)))
+    })
+}
+
+/// Whether `p` is inside the reach sphere `r` (centre and squared radius).
+#[inline(always)]
+fn within(p: DVec3, r: &[f64; 4]) -> bool {
+    let d = [p.x - r[0], p.y - r[1], p.z - r[2]];
+    d[0] * d[0] + d[1] * d[1] + d[2] * d[2] < r[3]
+}
+
 /// Values a thread made privately, filed like the shared cells (by level and cell) so
 /// that a lookup reads one cell per level.
 #[derive(Default)]
@@ -309,12 +324,8 @@ impl AmbientCache {
                 let k = own.vals.len() as u32;
                 own.vals.push(v);
                 own.levels |= 1u64 << l;
-                for x in lo.x as i64..=hi.x as i64 {
-                    for y in lo.y as i64..=hi.y as i64 {
-                        for z in lo.z as i64..=hi.z as i64 {
-                            own.cells.entry((l, x, y, z)).or_default().push((entry, k));
-                        }
-                    }
+                for key in cells(l, lo, hi) {
+                    own.cells.entry(key).or_default().push((entry, k));
                 }
                 true
             }
@@ -324,16 +335,11 @@ impl AmbientCache {
             return;
         }
         let shared = Arc::new(v);
-        for x in lo.x as i64..=hi.x as i64 {
-            for y in lo.y as i64..=hi.y as i64 {
-                for z in lo.z as i64..=hi.z as i64 {
-                    let key = (l, x, y, z);
-                    if let Ok(mut shard) = self.shards[shard_of(&key)].0.write() {
-                        let cell = shard.entry(key).or_default();
-                        cell.reach.push(entry);
-                        cell.vals.push(Arc::clone(&shared));
-                    }
-                }
+        for key in cells(l, lo, hi) {
+            if let Ok(mut shard) = self.shards[shard_of(&key)].0.write() {
+                let cell = shard.entry(key).or_default();
+                cell.reach.push(entry);
+                cell.vals.push(Arc::clone(&shared));
             }
         }
         // Written only when they change: every lookup reads them.
@@ -374,8 +380,7 @@ impl AmbientCache {
             if let Ok(grid) = self.shards[shard_of(&key)].0.read() {
                 if let Some(cell) = grid.get(&key) {
                     for (k, r) in cell.reach.iter().enumerate() {
-                        let d = [p.x - r[0], p.y - r[1], p.z - r[2]];
-                        if d[0] * d[0] + d[1] * d[1] + d[2] * d[2] < r[3] {
+                        if within(p, r) {
                             f(&cell.vals[k]);
                         }
                     }
@@ -392,8 +397,7 @@ impl AmbientCache {
                 }
                 if let Some(cell) = own.cells.get(&self.key_at(l, p)) {
                     for (r, k) in cell {
-                        let d = [p.x - r[0], p.y - r[1], p.z - r[2]];
-                        if d[0] * d[0] + d[1] * d[1] + d[2] * d[2] < r[3] {
+                        if within(p, r) {
                             f(&own.vals[*k as usize]);
                         }
                     }

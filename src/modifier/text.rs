@@ -195,21 +195,9 @@ impl MixCoefficient for TextMix {
 
 /// The bytes of a text file (found along the RAYPATH), at most [`MAX_TEXT_BYTES`].
 pub fn read_text_file(files: &SceneFiles, name: &str) -> Result<Vec<u8>, String> {
-    use std::io::Read;
     let path = files.find(name)?;
-    let f = crate::safefile::open_regular(&path, true)
-        .map_err(|e| format!("{}: cannot read text file: {e}", path.display()))?;
-    let mut bytes = Vec::new();
-    f.take(MAX_TEXT_BYTES as u64 + 1)
-        .read_to_end(&mut bytes)
-        .map_err(|e| format!("{}: cannot read text file: {e}", path.display()))?;
-    if bytes.len() > MAX_TEXT_BYTES {
-        return Err(format!(
-            "{}: text file of more than {MAX_TEXT_BYTES} bytes",
-            path.display()
-        ));
-    }
-    Ok(bytes)
+    crate::safefile::read_bounded_following(&path, MAX_TEXT_BYTES as u64)
+        .map_err(|e| format!("{}: cannot read text file: {e}", path.display()))
 }
 
 /// A text file's lines: one per line, newline stripped, lines longer than [`MAX_LINE`]
