@@ -14,7 +14,8 @@ use crate::FTINY;
 /// Relative tolerance for the non-planar-vertex warning (Radiance's `VERTEPS`).
 const VERTEPS: f64 = 1e-5;
 
-/// Per-edge data of the 2-D projection.
+/// Per-edge data of the 2-D projection (made on the fly from the vertices; only each
+/// edge's length is stored, in [`Vertex::len`]).
 #[derive(Clone, Copy, Debug)]
 struct Edge2 {
     /// Start vertex.
@@ -27,43 +28,62 @@ struct Edge2 {
     len: f64,
 }
 
-/// A planar polygon, stored in the relative frame.
+/// A vertex with the projected length of the edge that starts at it (its square root is
+/// the one costly part of an edge: the rest is made again at each test, bit for bit).
+#[derive(Clone, Copy, Debug)]
+struct Vertex {
+    p: DVec3,
+    len: f64,
+}
+
+/// The vertices: a triangle's in place (most polygons of large scenes are triangles), the
+/// others in one allocation of their own.
+#[derive(Clone, Debug)]
+enum Vertices {
+    Three([Vertex; 3]),
+    Many(Box<[Vertex]>),
+}
+
+impl Vertices {
+    #[inline]
+    fn as_slice(&self) -> &[Vertex] {
+        match self {
+            Vertices::Three(v) => v,
+            Vertices::Many(v) => v,
+        }
+    }
+}
+
+/// A planar polygon, stored in the relative frame: about 190 bytes for a triangle (with its
+/// box, one allocation), 112 more and 32 per vertex for the others. What only set-up and
+/// light sources read (bounds, centroid) is computed when asked.
 #[derive(Clone, Debug)]
 pub struct Polygon {
     /// Vertices (relative frame), without a duplicated closing vertex.
-    pub verts: Vec<DVec3>,
+    verts: Vertices,
     /// Unit normal, or the zero vector when the area is zero (then it is never hit).
     pub normal: DVec3,
     /// Plane offset: the plane is `normal · x = offset` (average over the vertices).
     pub offset: f64,
     /// Area (of the even–odd region, holes excluded).
     pub area: f64,
-    /// Area-weighted centroid (vertex average when the area is zero).
-    pub centroid: DVec3,
-    /// Index of the first kept coordinate of the 2-D projection.
-    iu: usize,
-    /// Index of the second kept coordinate of the 2-D projection.
-    iv: usize,
-    /// Edges in the projection.
-    edges: Vec<Edge2>,
-    /// For a convex polygon, the sign of its turn in the projection (+1 counter-clockwise):
-    /// the inside test is then one half-plane test per edge. None for concave polygons,
-    /// polygons with holes and degenerate ones (the general crossing test).
-    convex: Option<f64>,
-    /// A convex polygon whose projection is an axis-aligned rectangle: its edge tests are
-    /// the bounding-box test.
-    is_box: bool,
-    /// 2-D bounding box of the projection, grown by `FTINY`.
+    /// 2-D bounding box of the projection, grown by the length tolerance.
     lo2: [f64; 2],
     hi2: [f64; 2],
-    /// The projected bounds before that padding.
-    raw2: [[f64; 2]; 2],
-    /// 3-D bounds.
-    lo: DVec3,
-    hi: DVec3,
     /// The scene's length tolerance: hits at `t <= eps` are ignored and points within `eps`
     /// of an edge are inside.
     pub(crate) eps: f64,
+    /// Index of the first kept coordinate of the 2-D projection.
+    iu: u8,
+    /// Index of the second kept coordinate of the 2-D projection.
+    iv: u8,
+    /// For a convex polygon, the sign of its turn in the projection (+1 counter-clockwise,
+    /// −1 clockwise): the inside test is then one half-plane test per edge. 0 for concave
+    /// polygons, polygons with holes and degenerate ones (the general crossing test).
+    convex: i8,
+    /// A convex polygon whose projection is an axis-aligned rectangle: its edge tests are
+    /// the bounding-box test.
+    is_box: bool,
 }
 
 impl Polygon {
@@ -114,12 +134,8 @@ impl Polygon {
         for i in 1..n - 1 {
             sum += (verts[i] - v0).cross(verts[i + 1] - v0);
         }
-        let mut lo = DVec3::splat(f64::INFINITY);
-        let mut hi = DVec3::splat(f64::NEG_INFINITY);
         let mut size: f64 = 0.0;
         for v in &verts {
-            lo = lo.min(*v);
-            hi = hi.max(*v);
             size = size.max(v.distance(v0));
         }
         let slen = sum.length();
@@ -130,26 +146,7 @@ impl Polygon {
             warn = Some("zero area".to_string());
             (DVec3::ZERO, 0.0)
         };
-        let vavg = verts.iter().copied().sum::<DVec3>() / n as f64;
         let offset = verts.iter().map(|v| normal.dot(*v)).sum::<f64>() / n as f64;
-        // Area-weighted centroid: signed weights along the normal so holes subtract.
-        let centroid = if area > 0.0 {
-            let mut acc = DVec3::ZERO;
-            let mut wsum = 0.0;
-            for i in 1..n - 1 {
-                let c = (verts[i] - v0).cross(verts[i + 1] - v0);
-                let w = c.dot(normal);
-                acc += (v0 + verts[i] + verts[i + 1]) * (w / 3.0);
-                wsum += w;
-            }
-            if wsum != 0.0 {
-                acc / wsum
-            } else {
-                vavg
-            }
-        } else {
-            vavg
-        };
         if warn.is_none()
             && verts
                 .iter()
@@ -167,60 +164,81 @@ impl Polygon {
             2
         };
         let (iu, iv) = match drop {
-            0 => (1, 2),
+            0 => (1u8, 2u8),
             1 => (2, 0),
             _ => (0, 1),
         };
-        let p2 = |v: DVec3| [v[iu], v[iv]];
-        let mut edges = Vec::with_capacity(n);
-        let mut lo2 = [f64::INFINITY; 2];
-        let mut hi2 = [f64::NEG_INFINITY; 2];
-        for i in 0..n {
-            let a = p2(verts[i]);
-            let b = p2(verts[(i + 1) % n]);
-            let e = [b[0] - a[0], b[1] - a[1]];
-            let len2 = e[0] * e[0] + e[1] * e[1];
-            edges.push(Edge2 {
-                a,
-                e,
-                len2,
-                len: len2.sqrt(),
-            });
-            for k in 0..2 {
-                lo2[k] = lo2[k].min(a[k]);
-                hi2[k] = hi2[k].max(a[k]);
-            }
-        }
-        let raw2 = [lo2, hi2];
-        for k in 0..2 {
-            lo2[k] -= FTINY;
-            hi2[k] += FTINY;
-        }
+        let edges: Vec<Edge2> = (0..n)
+            .map(|i| edge_of(verts[i], verts[(i + 1) % n], iu, iv, None))
+            .collect();
         let convex = convex_turn(&edges);
         let is_box = convex.is_some()
             && edges.len() == 4
             && edges.iter().all(|ed| (ed.e[0] == 0.0) != (ed.e[1] == 0.0));
-        Ok((
-            Polygon {
-                verts,
-                normal,
-                offset,
-                area,
-                centroid,
-                iu,
-                iv,
-                edges,
-                convex,
-                is_box,
-                lo2,
-                hi2,
-                raw2,
-                lo,
-                hi,
-                eps: FTINY,
-            },
-            warn,
-        ))
+        let vertex = |i: usize| Vertex {
+            p: verts[i],
+            len: edges[i].len,
+        };
+        let verts = if n == 3 {
+            Vertices::Three([vertex(0), vertex(1), vertex(2)])
+        } else {
+            Vertices::Many((0..n).map(vertex).collect())
+        };
+        let mut poly = Polygon {
+            verts,
+            normal,
+            offset,
+            area,
+            lo2: [0.0; 2],
+            hi2: [0.0; 2],
+            eps: FTINY,
+            iu,
+            iv,
+            convex: convex.map_or(0, |s| s as i8),
+            is_box,
+        };
+        poly.set_eps(FTINY);
+        Ok((poly, warn))
+    }
+
+    /// The number of vertices.
+    pub fn len(&self) -> usize {
+        self.verts.as_slice().len()
+    }
+
+    /// False: a polygon has at least 3 vertices.
+    pub fn is_empty(&self) -> bool {
+        false
+    }
+
+    /// The vertices (relative frame), without a duplicated closing vertex.
+    pub fn verts(&self) -> impl ExactSizeIterator<Item = DVec3> + Clone + '_ {
+        self.verts.as_slice().iter().map(|v| v.p)
+    }
+
+    /// Area-weighted centroid (vertex average when the area is zero).
+    pub fn centroid(&self) -> DVec3 {
+        let verts = self.verts.as_slice();
+        let n = verts.len();
+        let vavg = verts.iter().map(|v| v.p).sum::<DVec3>() / n as f64;
+        if self.area <= 0.0 {
+            return vavg;
+        }
+        // Signed weights along the normal, so that holes subtract.
+        let v0 = verts[0].p;
+        let mut acc = DVec3::ZERO;
+        let mut wsum = 0.0;
+        for i in 1..n - 1 {
+            let c = (verts[i].p - v0).cross(verts[i + 1].p - v0);
+            let w = c.dot(self.normal);
+            acc += (v0 + verts[i].p + verts[i + 1].p) * (w / 3.0);
+            wsum += w;
+        }
+        if wsum != 0.0 {
+            acc / wsum
+        } else {
+            vavg
+        }
     }
 
     /// Nearest intersection distance in `(FTINY, tmax)`; `|n·d| <= FTINY` is a miss (and so is
@@ -236,25 +254,48 @@ impl Polygon {
             return None;
         }
         let p = org + dir * t;
-        if self.contains_projected([p[self.iu], p[self.iv]]) {
+        if self.contains_projected(self.project(p)) {
             Some(t)
         } else {
             None
         }
     }
 
+    /// A point's coordinates in the projection.
+    #[inline]
+    fn project(&self, p: DVec3) -> [f64; 2] {
+        [p[self.iu as usize], p[self.iv as usize]]
+    }
+
     /// Use the scene's length tolerance `eps` (instead of `FTINY`).
     pub(crate) fn set_eps(&mut self, eps: f64) {
         self.eps = eps;
+        let mut lo2 = [f64::INFINITY; 2];
+        let mut hi2 = [f64::NEG_INFINITY; 2];
+        for v in self.verts.as_slice() {
+            let a = self.project(v.p);
+            for k in 0..2 {
+                lo2[k] = lo2[k].min(a[k]);
+                hi2[k] = hi2[k].max(a[k]);
+            }
+        }
         for k in 0..2 {
-            self.lo2[k] = self.raw2[0][k] - eps;
-            self.hi2[k] = self.raw2[1][k] + eps;
+            self.lo2[k] = lo2[k] - eps;
+            self.hi2[k] = hi2[k] + eps;
         }
     }
 
     /// Inside test for a point assumed to lie in the plane (even–odd, edges inclusive).
     pub fn contains(&self, p: DVec3) -> bool {
-        self.area > 0.0 && self.contains_projected([p[self.iu], p[self.iv]])
+        self.area > 0.0 && self.contains_projected(self.project(p))
+    }
+
+    /// The edges in the projection, each made from its two vertices.
+    #[inline]
+    fn edges(&self) -> impl Iterator<Item = Edge2> + '_ {
+        let v = self.verts.as_slice();
+        let n = v.len();
+        (0..n).map(move |i| edge_of(v[i].p, v[(i + 1) % n].p, self.iu, self.iv, Some(v[i].len)))
     }
 
     /// Inside test in the projection; points within `FTINY` of an edge are inside. Convex
@@ -269,19 +310,21 @@ impl Polygon {
         if self.is_box {
             return true;
         }
-        match self.convex {
-            Some(s) => self.edges.iter().all(|ed| {
+        if self.convex != 0 {
+            let s = f64::from(self.convex);
+            self.edges().all(|ed| {
                 let cross = ed.e[0] * (p[1] - ed.a[1]) - ed.e[1] * (p[0] - ed.a[0]);
                 s * cross >= -self.eps * ed.len
-            }),
-            None => self.contains_crossing(p),
+            })
+        } else {
+            self.contains_crossing(p)
         }
     }
 
     /// Even–odd crossing test in the projection; points within `FTINY` of an edge are inside.
     fn contains_crossing(&self, p: [f64; 2]) -> bool {
         let mut inside = false;
-        for ed in &self.edges {
+        for ed in self.edges() {
             let rx = p[0] - ed.a[0];
             let ry = p[1] - ed.a[1];
             // On-edge test: projection parameter within the segment, distance <= FTINY.
@@ -312,7 +355,26 @@ impl Polygon {
 
     /// Axis-aligned bounds of the vertices.
     pub fn bounds(&self) -> (DVec3, DVec3) {
-        (self.lo, self.hi)
+        self.verts().fold(
+            (DVec3::splat(f64::INFINITY), DVec3::splat(f64::NEG_INFINITY)),
+            |(lo, hi), v| (lo.min(v), hi.max(v)),
+        )
+    }
+}
+
+/// The projected edge from `a` to `b`; `len`, when given, is its length as computed before.
+#[inline]
+fn edge_of(a: DVec3, b: DVec3, iu: u8, iv: u8, len: Option<f64>) -> Edge2 {
+    let (iu, iv) = (iu as usize, iv as usize);
+    let a = [a[iu], a[iv]];
+    let b = [b[iu], b[iv]];
+    let e = [b[0] - a[0], b[1] - a[1]];
+    let len2 = e[0] * e[0] + e[1] * e[1];
+    Edge2 {
+        a,
+        e,
+        len2,
+        len: len.unwrap_or_else(|| len2.sqrt()),
     }
 }
 
@@ -366,13 +428,47 @@ mod tests {
         let p = sq();
         assert_eq!(p.normal, DVec3::Z);
         assert!((p.area - 1.0).abs() < 1e-15);
-        assert!((p.centroid - DVec3::new(0.5, 0.5, 0.0)).length() < 1e-15);
+        assert!((p.centroid() - DVec3::new(0.5, 0.5, 0.0)).length() < 1e-15);
         assert!(p.contains(DVec3::new(0.5, 0.5, 0.0)));
         assert!(p.contains(DVec3::new(1.0, 0.5, 0.0)));
         assert!(p.contains(DVec3::new(1.0 + 0.5e-6, 0.5, 0.0)));
         assert!(!p.contains(DVec3::new(1.0 + 2e-6, 0.5, 0.0)));
         assert!(p.contains(DVec3::new(1.0, 1.0, 0.0)));
         assert!(!p.contains(DVec3::new(-0.5, 0.5, 0.0)));
+    }
+
+    /// A triangle is one allocation of at most 200 bytes (with the box that holds it); a
+    /// polygon keeps its vertices in order, and its bounds are theirs.
+    #[test]
+    fn compact_storage_keeps_vertices() {
+        assert!(
+            std::mem::size_of::<Polygon>() <= 200,
+            "{}",
+            std::mem::size_of::<Polygon>()
+        );
+        for n in [3usize, 4, 7] {
+            let verts: Vec<DVec3> = (0..n)
+                .map(|i| {
+                    let t = i as f64 * std::f64::consts::TAU / n as f64;
+                    DVec3::new(t.cos(), 2.0 * t.sin(), 0.1 * t.cos() + 3.0)
+                })
+                .collect();
+            let (p, _) = Polygon::new(verts.clone()).unwrap();
+            assert_eq!(p.len(), n);
+            assert_eq!(p.verts().collect::<Vec<_>>(), verts);
+            let lo = verts.iter().fold(DVec3::INFINITY, |a, v| a.min(*v));
+            let hi = verts.iter().fold(DVec3::NEG_INFINITY, |a, v| a.max(*v));
+            assert_eq!(p.bounds(), (lo, hi));
+            // Each stored edge length is the projection's.
+            for (ed, k) in p.edges().zip(0..) {
+                let a = p.project(verts[k]);
+                let b = p.project(verts[(k + 1) % n]);
+                assert_eq!(
+                    ed.len,
+                    ((b[0] - a[0]).powi(2) + (b[1] - a[1]).powi(2)).sqrt()
+                );
+            }
+        }
     }
 
     #[test]
@@ -384,7 +480,7 @@ mod tests {
             DVec3::new(0.0, 0.0, 0.0),
         ])
         .unwrap();
-        assert_eq!(p.verts.len(), 3);
+        assert_eq!(p.len(), 3);
         assert!(w.is_none());
         assert!((p.area - 0.5).abs() < 1e-15);
     }
@@ -436,7 +532,7 @@ mod tests {
             let Ok((p, _)) = Polygon::new(verts.clone()) else {
                 continue;
             };
-            if p.area <= 1e-3 || p.convex.is_none() {
+            if p.area <= 1e-3 || p.convex == 0 {
                 continue;
             }
             tested += 1;
@@ -452,7 +548,7 @@ mod tests {
                     DVec3::new(rnd() * 6.0 - 3.0, rnd() * 6.0 - 3.0, 0.0)
                 };
                 let q = q - p.normal * (p.normal.dot(q) - p.offset);
-                let pp = [q[p.iu], q[p.iv]];
+                let pp = p.project(q);
                 let in_box =
                     !(pp[0] < p.lo2[0] || pp[0] > p.hi2[0] || pp[1] < p.lo2[1] || pp[1] > p.hi2[1]);
                 let fast = p.contains_projected(pp);
@@ -477,14 +573,14 @@ mod tests {
         ])
         .unwrap()
         .0;
-        assert!(chevron.convex.is_none());
+        assert_eq!(chevron.convex, 0);
         let star: Vec<DVec3> = (0..5)
             .map(|i| {
                 let t = i as f64 * 4.0 * std::f64::consts::PI / 5.0;
                 DVec3::new(t.cos(), t.sin(), 0.0)
             })
             .collect();
-        assert!(Polygon::new(star).unwrap().0.convex.is_none());
-        assert!(sq().convex.is_some());
+        assert_eq!(Polygon::new(star).unwrap().0.convex, 0);
+        assert_ne!(sq().convex, 0);
     }
 }

@@ -207,16 +207,17 @@ impl LightSet {
                     }
                     let n = p.normal;
                     let eu0 = p
-                        .verts
-                        .windows(2)
-                        .map(|w| w[1] - w[0])
+                        .verts()
+                        .zip(p.verts().skip(1))
+                        .map(|(a, b)| b - a)
                         .find(|d| d.length_squared() > scene.eps * scene.eps)
                         .unwrap_or_else(|| any_perpendicular(n));
                     let u = (eu0 - eu0.dot(n) * n).normalize();
                     let v = n.cross(u);
                     let (mut u0, mut u1, mut v0, mut v1) = (f64::MAX, f64::MIN, f64::MAX, f64::MIN);
-                    for q in &p.verts {
-                        let d = *q - p.centroid;
+                    let centroid = p.centroid();
+                    for q in p.verts() {
+                        let d = q - centroid;
                         u0 = u0.min(d.dot(u));
                         u1 = u1.max(d.dot(u));
                         v0 = v0.min(d.dot(v));
@@ -224,7 +225,7 @@ impl LightSet {
                     }
                     SourceShape::Polygon {
                         normal: n,
-                        corner: p.centroid + u * u0 + v * v0,
+                        corner: centroid + u * u0 + v * v0,
                         eu: u * (u1 - u0),
                         ev: v * (v1 - v0),
                     }
@@ -413,7 +414,7 @@ impl LightSet {
                 // A quadrilateral with the area of its bounding rectangle IS that rectangle:
                 // every sample lies on it, so the per-sample inside test is skipped.
                 let fills_rect = matches!(obj, Some(Surface::Polygon(pg))
-                    if pg.verts.len() == 4 && (pg.area - rect_area).abs() <= 1e-9 * pg.area);
+                    if pg.len() == 4 && (pg.area - rect_area).abs() <= 1e-9 * pg.area);
                 let obj = if fills_rect { None } else { obj };
                 for i in 0..nu {
                     for j in 0..nv {

@@ -49,7 +49,7 @@ fn mirror_point(x: DVec3, normal: DVec3, offset: f64) -> DVec3 {
 /// points 2%, 35% and 70% of the way from the vertex to the centre.
 fn probes(s: &Surface) -> Vec<DVec3> {
     let (center, rim): (DVec3, Vec<DVec3>) = match s {
-        Surface::Polygon(p) => (p.centroid, p.verts.iter().take(64).copied().collect()),
+        Surface::Polygon(p) => (p.centroid(), p.verts().take(64).collect()),
         Surface::Ring(r) => {
             let u = crate::geometry::any_perpendicular(r.normal);
             let v = r.normal.cross(u);
@@ -231,7 +231,7 @@ impl LightSet {
                 continue;
             };
             let (normal, point) = match &o.surface {
-                Surface::Polygon(p) if p.area > 0.0 => (p.normal, p.centroid),
+                Surface::Polygon(p) if p.area > 0.0 => (p.normal, p.centroid()),
                 Surface::Ring(r) => (r.normal, r.center),
                 _ => {
                     self.warnings.push(format!(

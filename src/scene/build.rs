@@ -313,7 +313,10 @@ pub(super) struct Level {
 impl Builder<'_> {
     /// Objects, distant sources and instances of `prims` (names bound in the current name
     /// space), relative to the centre of their bounds.
-    pub(super) fn level(&mut self, prims: &[Primitive]) -> Result<Level, SceneError> {
+    ///
+    /// The real and string arguments of each finite surface are freed once it is built (the
+    /// text of a large mesh or `gensurf` would otherwise be held until the whole scene is).
+    pub(super) fn level(&mut self, prims: &mut [Primitive]) -> Result<Level, SceneError> {
         let err = |p: &Primitive, msg: String| SceneError::syntax(p.loc.clone(), msg);
         // Pass 1: bounds of finite geometry, to choose the origin. Surfaces are parsed once
         // with a zero origin for bounds, then re-parsed relative to the chosen origin.
@@ -322,7 +325,7 @@ impl Builder<'_> {
         let mut hi = DVec3::splat(f64::NEG_INFINITY);
         let mut pending: Vec<(usize, Transform)> = Vec::new();
         let mut nsurf = 0;
-        for p in prims {
+        for p in prims.iter() {
             if p.ptype == "instance" || p.ptype == "mesh" {
                 let (set, xf) = self.child_set(p)?;
                 if let Some(full) = self.sets[set].full {
@@ -437,6 +440,10 @@ impl Builder<'_> {
                         &p.modifier,
                         &p.loc,
                     );
+                    p.rargs = Vec::new();
+                    p.sargs = Vec::new();
+                    p.name = String::new();
+                    p.modifier = String::new();
                 }
             } else if MATERIAL_TYPES.contains(&t) {
                 let chain = mods
@@ -579,6 +586,13 @@ impl Scene {
         Scene::build_opts(prims, &ModifierTypes::standard(), opts)
     }
 
+    /// [`Scene::build_read`] that frees the arguments and names of the finite surfaces as it
+    /// builds them, and the primitives before the BVH is built: what renderers use, which
+    /// need the primitives no more once the scene is built.
+    pub fn build_taking(prims: Vec<Primitive>, opts: &ReadOptions) -> Result<Scene, SceneError> {
+        Scene::build_opts_taking(prims, &ModifierTypes::standard(), opts)
+    }
+
     /// [`Scene::build`] with the modifier types `types`.
     pub fn build_with(prims: &[Primitive], types: &ModifierTypes) -> Result<Scene, SceneError> {
         Scene::build_in(prims, types, &[])
@@ -605,6 +619,15 @@ impl Scene {
         types: &ModifierTypes,
         opts: &ReadOptions,
     ) -> Result<Scene, SceneError> {
+        Scene::build_opts_taking(prims.to_vec(), types, opts)
+    }
+
+    /// [`Scene::build_opts`] freeing the primitives as it goes ([`Scene::build_taking`]).
+    fn build_opts_taking(
+        mut prims: Vec<Primitive>,
+        types: &ModifierTypes,
+        opts: &ReadOptions,
+    ) -> Result<Scene, SceneError> {
         let mut b = Builder {
             mods: Modifiers {
                 current: HashMap::new(),
@@ -620,14 +643,18 @@ impl Scene {
             set_ids: HashMap::new(),
             loading: Vec::new(),
         };
-        let level = b.level(prims)?;
+        let level = b.level(&mut prims)?;
+        let first = prims.first().map(|p| p.loc.clone());
+        drop(prims);
         let bounds: Vec<(DVec3, DVec3)> =
             level.objects.iter().map(|o| o.surface.bounds()).collect();
         let (bvh, placements) = if level.children.is_empty() {
             (Bvh::build(&bounds, level.eps), Vec::new())
         } else {
-            let placements = flatten(&b.sets, &level.children, level.origin)
-                .map_err(|m| SceneError::syntax(prims[0].loc.clone(), m))?;
+            let placements = flatten(&b.sets, &level.children, level.origin).map_err(|m| {
+                let loc = first.unwrap_or_else(|| Location::new("<scene>", 0));
+                SceneError::syntax(loc, m)
+            })?;
             let mut all = bounds;
             for p in &placements {
                 let set = &b.sets[p.set];

@@ -100,11 +100,11 @@ impl Builder<'_> {
     }
 
     fn octree_set(&mut self, name: &str, path: &std::path::Path) -> Result<ObjectSet, SceneError> {
-        let (prims, used) = super::octree::octree_primitives(path, name, &self.opts)?;
+        let (mut prims, used) = super::octree::octree_primitives(path, name, &self.opts)?;
         for (n, p) in used {
             self.mods.files.note_input(&n, p);
         }
-        let level = self.in_own_namespace(|b| b.level(&prims))?;
+        let level = self.in_own_namespace(|b| b.level(&mut prims))?;
         // The primitives' text is not needed any more: free it before the BVH build, the
         // peak of a set's memory.
         drop(prims);
@@ -148,10 +148,10 @@ impl Builder<'_> {
             path: name.to_string(),
             reason: e.to_string(),
         })?;
-        let file =
+        let mut file =
             super::rtm::parse_mesh(&bytes, name).map_err(|m| SceneError::syntax(loc.clone(), m))?;
         drop(bytes);
-        let level = self.in_own_namespace(|b| b.level(&file.prims))?;
+        let level = self.in_own_namespace(|b| b.level(&mut file.prims))?;
         let mods: Vec<Option<MeshModifier>> = level
             .defined
             .iter()

@@ -16,7 +16,7 @@ use glam::DVec3;
 
 use super::binio::BinReader;
 use super::error::SceneError;
-use super::primitive::{Location, Primitive};
+use super::primitive::{append_prims, Location, Primitive};
 use super::reader::{parse_scene_text, read_text_files, ReadOptions};
 
 /// Scene files read for an unfrozen octree: the name in its header and the path found.
@@ -303,7 +303,7 @@ pub fn read_scene_files(
     for p in paths {
         if p.starts_with('!') {
             // A command in place of a file (`'!xform ... chair.obj'` is no OBJ file).
-            out.extend(read_text_files(std::slice::from_ref(p), opts)?);
+            append_prims(&mut out, read_text_files(std::slice::from_ref(p), opts)?);
             continue;
         }
         if super::sets::is_obj_name(p) {
@@ -322,10 +322,10 @@ pub fn read_scene_files(
         }
         if p != "-" && is_octree(Path::new(p), p) {
             let (prims, _) = octree_primitives(Path::new(p), p, opts)?;
-            out.extend(prims);
+            append_prims(&mut out, prims);
             continue;
         }
-        out.extend(read_text_files(std::slice::from_ref(p), opts)?);
+        append_prims(&mut out, read_text_files(std::slice::from_ref(p), opts)?);
     }
     Ok(out)
 }

@@ -50,3 +50,49 @@ pub struct Primitive {
     /// Where the primitive starts.
     pub loc: Location,
 }
+
+/// Append `more` to `out` without holding both lists twice: when `out` is the shorter one
+/// (a material before a large `gensurf`), its few primitives go in front of `more`, whose
+/// storage is kept.
+pub fn append_prims(out: &mut Vec<Primitive>, mut more: Vec<Primitive>) {
+    if out.len() < more.len() {
+        let head = std::mem::take(out);
+        more.reserve_exact(head.len());
+        more.splice(0..0, head);
+        *out = more;
+    } else {
+        out.extend(more);
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn prim(name: &str) -> Primitive {
+        Primitive {
+            modifier: "void".into(),
+            ptype: "sphere".into(),
+            name: name.into(),
+            sargs: Vec::new(),
+            iargs: Vec::new(),
+            rargs: vec![0.0, 0.0, 0.0, 1.0],
+            loc: Location::new("t.rad", 1),
+        }
+    }
+
+    /// Appending keeps the order, whichever list is the longer.
+    #[test]
+    fn append_keeps_order() {
+        let names = |v: &[Primitive]| v.iter().map(|p| p.name.clone()).collect::<Vec<_>>();
+        let mut out = vec![prim("a")];
+        append_prims(&mut out, vec![prim("b"), prim("c")]);
+        assert_eq!(names(&out), ["a", "b", "c"]);
+        append_prims(&mut out, vec![prim("d")]);
+        assert_eq!(names(&out), ["a", "b", "c", "d"]);
+        append_prims(&mut out, Vec::new());
+        let mut empty = Vec::new();
+        append_prims(&mut empty, out);
+        assert_eq!(names(&empty), ["a", "b", "c", "d"]);
+    }
+}

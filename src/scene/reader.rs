@@ -482,7 +482,7 @@ fn expand_command(
         match builtin_pipeline(stages, loc, opts, depth)? {
             Builtin::Done(prims) => {
                 check_count(out.len().saturating_add(prims.len()), opts, loc)?;
-                out.extend(prims);
+                super::primitive::append_prims(out, prims);
                 return Ok(());
             }
             Builtin::Unsupported(r) => unsupported = Some(r),

@@ -118,7 +118,7 @@ impl Session {
             raypath: source.raypath.clone(),
             ..ReadOptions::default()
         };
-        let scene = Scene::build_read(&source.prims, &ro)?;
+        let scene = Scene::build_taking(source.prims, &ro)?;
         let fingerprint =
             crate::ambient::fingerprint::with_inputs(source.fingerprint, &scene.inputs)
                 .map_err(|e| anyhow::anyhow!("cannot read a scene input: {e}"))?;

@@ -220,7 +220,10 @@ impl SurfArgs {
             ));
         }
         let loc = cx.loc;
-        let mut out = Vec::new();
+        // At most two triangles a cell (reserved, then shrunk in place: a growing list
+        // would hold up to three times its size while it moves).
+        let cells = g.m.saturating_mul(g.n);
+        let mut out = Vec::with_capacity(cells.saturating_mul(2).min(cx.max_primitives) + 4);
         let mut k = 0usize;
         for i in 0..g.m as isize {
             for j in 0..g.n as isize {
@@ -312,6 +315,7 @@ impl SurfArgs {
             }
             cx.check_made("gensurf", out.len())?;
         }
+        out.shrink_to_fit();
         Ok(out)
     }
 }
