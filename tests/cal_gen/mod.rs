@@ -51,6 +51,17 @@ pub fn has_zero(e: &E) -> bool {
     }
 }
 
+/// Whether `e` calls a noise function: their high octaves make a value depend on the last
+/// bits of its arguments, which folding may round differently (`x / c` is `x * (1/c)`).
+pub fn has_noise(e: &E) -> bool {
+    match e {
+        E::Num(..) | E::Var(_) => false,
+        E::Neg(a) | E::Pos(a) | E::Paren(a) | E::Pass(_, a) => has_noise(a),
+        E::Bin(_, a, b) => has_noise(a) || has_noise(b),
+        E::Call(f, args) => NOISE.contains(f) || args.iter().any(has_noise),
+    }
+}
+
 /// The definitions every generated expression may use.
 pub const DEFS: &str = "a = 0.7; b = -2.3; c = a*b + 1;
 f(x) = x*x - 1; g(x,y) = if(x, y, -y); l(x,y,z) = if(x, y, z);
