@@ -11,8 +11,9 @@ use tessera::ambient::hessian::{hessian, hessian_radii};
 use tessera::ambient::settings::AmbientSettings;
 use tessera::light::LightSet;
 use tessera::options::RenderParams;
+use tessera::render::world::Scene;
 use tessera::render::{render_region, FrameSetup, RenderProgress, Tracer};
-use tessera::scene::{read_scene_files, ReadOptions, Scene};
+use tessera::scene::{read_scene_files, ReadOptions};
 use tessera::view::{normaspect, read_view_file, View};
 
 fn scenes() -> PathBuf {

@@ -184,7 +184,8 @@ fn scratch(dir: &Path, name: &str, data: &[u8]) -> PathBuf {
 
 /// Build a scene of one instance (`text`) whose file is in `dir`, and trace a few rays.
 fn instance_scene(dir: &Path, text: &str) {
-    use tessera::scene::{parse_scene_text, ReadOptions, Scene};
+    use tessera::render::world::Scene;
+    use tessera::scene::{parse_scene_text, ReadOptions};
     let opts = ReadOptions {
         allow_commands: false,
         raypath: vec![dir.to_path_buf()],
@@ -202,7 +203,8 @@ fn instance_scene(dir: &Path, text: &str) {
 }
 
 fn targets(dir: Arc<tempfile::TempDir>) -> Vec<Target> {
-    use tessera::scene::{parse_scene_text, ReadOptions, Scene};
+    use tessera::render::world::Scene;
+    use tessera::scene::{parse_scene_text, ReadOptions};
     let mut v = Vec::new();
     v.push(Target {
         name: "scene",

@@ -5,8 +5,9 @@ use std::path::Path;
 use std::sync::atomic::Ordering;
 use tessera::light::LightSet;
 use tessera::options::RenderParams;
+use tessera::render::world::Scene;
 use tessera::render::{cell_size, render_region, FrameSetup, RenderProgress, Tracer};
-use tessera::scene::{read_scene_files, ReadOptions, Scene};
+use tessera::scene::{read_scene_files, ReadOptions};
 use tessera::view::{normaspect, read_view_file, View};
 
 /// Renders regions of the `curved` scene at `-ab 0`.

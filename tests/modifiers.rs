@@ -14,8 +14,9 @@ use tessera::options::RenderParams;
 use tessera::render::ray::Ray;
 use tessera::render::sampler::Sampler;
 use tessera::render::shading::ShadingPoint;
+use tessera::render::world::Scene;
 use tessera::render::Tracer;
-use tessera::scene::{parse_scene_text, Primitive, ReadOptions, Scene};
+use tessera::scene::{parse_scene_text, Primitive, ReadOptions};
 
 #[derive(Debug)]
 struct Constant(Color);

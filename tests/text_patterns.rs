@@ -613,7 +613,8 @@ fn helvet_values_of_the_reference() {
 
 #[test]
 fn scenes_with_text_patterns_report_bad_files_and_arguments() {
-    use tessera::scene::{parse_scene_text, ReadOptions, Scene};
+    use tessera::render::world::Scene;
+    use tessera::scene::{parse_scene_text, ReadOptions};
     let tmp = tempfile::tempdir().unwrap();
     let dir = tmp.path();
     write_inputs(dir);

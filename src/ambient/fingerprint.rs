@@ -57,7 +57,7 @@ impl Hasher {
 }
 
 /// `fp` extended by the contents of the files the scene reads by relative name (function
-/// files, data files, pictures, fonts: [`crate::scene::Scene::inputs`]), so that a changed
+/// files, data files, pictures, fonts: [`crate::render::world::Scene::inputs`]), so that a changed
 /// `.cal` or data file refuses stored values. Unchanged when there are none.
 pub fn with_inputs(
     fp: [u8; 32],

@@ -8,8 +8,22 @@
 
 use glam::{DVec3, Vec3};
 
-use crate::scene::rtm::{MeshTri, HAS_NORMAL, HAS_UV};
 use crate::FTINY;
+
+/// A vertex has a normal.
+pub const HAS_NORMAL: u8 = 2;
+/// A vertex has (u,v).
+pub const HAS_UV: u8 = 4;
+
+/// A triangle: three vertex indices (counter-clockwise seen from the front) and its
+/// modifier (an object index into the mesh's scene, −1 for void).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct MeshTri {
+    /// Vertex indices.
+    pub v: [u32; 3],
+    /// Modifier object index, −1 = void.
+    pub modifier: i16,
+}
 
 /// A triangle mesh.
 #[derive(Debug, Default)]

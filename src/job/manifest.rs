@@ -3,7 +3,8 @@
 use super::plan::{check_cover, default_tiles, pixel_cost_floor, plan_fixed, plan_tiles, TileRect};
 use super::{check_plain_name, hex32, parse_hex32, task_name, JobDir};
 use crate::options::{parse_rpict_args, Command, PictureParams, RenderParams, RpictOptions};
-use crate::scene::{read_scene_files, Primitive, ReadOptions, Scene};
+use crate::render::world::Scene;
+use crate::scene::{read_scene_files, Primitive, ReadOptions};
 use crate::view::{normaspect, parse_view_line, View};
 use anyhow::{anyhow, bail, Context, Result};
 use serde::{Deserialize, Serialize};
@@ -18,8 +19,7 @@ pub const VERSION: u32 = 1;
 pub const DEFAULT_LEASE: f64 = 180.0;
 /// Longest lease accepted (30 days): a worker's clocks and timers hold it as a duration.
 pub const MAX_LEASE: f64 = 30.0 * 86400.0;
-/// Largest picture side accepted.
-pub const MAX_RES: usize = 1 << 15;
+pub use super::MAX_RES;
 /// Most frames and tiles per frame (task names have five digits).
 const MAX_INDEX: usize = 99_999;
 

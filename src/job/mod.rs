@@ -136,6 +136,9 @@ pub fn parse_task_name(name: &str) -> Option<(u32, usize)> {
 /// Longest worker id.
 pub const MAX_ID_LEN: usize = 64;
 
+/// Largest picture side accepted (a frame's, a point job's rows).
+pub const MAX_RES: usize = 1 << 15;
+
 /// Check a worker id: 1–64 characters of `A-Z a-z 0-9 _ -` (no path separators, dots or
 /// `..`, so ids can never name a file outside the job).
 pub fn check_worker_id(id: &str) -> Result<()> {

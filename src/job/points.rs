@@ -61,11 +61,11 @@ impl PointsPlan {
         let per_row = chunk.min(MAX_PER_ROW as u64) as usize;
         let rows_per_task = chunk.div_ceil(per_row as u64) as usize;
         let rows = count.div_ceil(per_row as u64);
-        if rows > super::manifest::MAX_RES as u64 {
+        if rows > super::MAX_RES as u64 {
             bail!(
                 "{count} rays in rows of {per_row} need {rows} rows (at most {}): \
                  use a larger --chunk",
-                super::manifest::MAX_RES
+                super::MAX_RES
             );
         }
         Ok(PointsPlan {
@@ -100,7 +100,7 @@ impl PointsPlan {
         {
             bail!("points: an invalid plan");
         }
-        if self.count.div_ceil(self.per_row as u64) > super::manifest::MAX_RES as u64 {
+        if self.count.div_ceil(self.per_row as u64) > super::MAX_RES as u64 {
             bail!("points: too many rows");
         }
         Ok(())

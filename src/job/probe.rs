@@ -19,9 +19,9 @@
 use crate::ambient::Ambient;
 use crate::light::LightSet;
 use crate::options::RenderParams;
+use crate::render::world::Scene;
 use crate::render::{render_region, FrameSetup, RenderProgress, Tracer};
 use crate::runinfo::{process_origin_id, thread_cpu_nanos};
-use crate::scene::Scene;
 use crate::session::Session;
 use anyhow::Result;
 use std::time::Instant;

@@ -223,7 +223,7 @@ impl ResultDir {
 
 /// The largest tile result read: a tile of the largest picture a job may plan, with its
 /// header.
-pub const MAX_TILE_BYTES: u64 = (super::manifest::MAX_RES as u64).pow(2) * 12 + (1 << 16);
+pub const MAX_TILE_BYTES: u64 = (super::MAX_RES as u64).pow(2) * 12 + (1 << 16);
 
 /// Read and check a tile result file.
 pub fn read(path: &Path) -> Result<(TileMeta, Vec<[f32; 3]>)> {

@@ -7,7 +7,7 @@ use crate::geometry::Surface;
 use crate::material::emitter::{Emitter, EmitterKind};
 use crate::material::Material;
 use crate::render::sampler::Sampler;
-use crate::scene::build::Scene;
+use crate::render::world::Scene;
 use crate::FTINY;
 use glam::DVec3;
 use std::f64::consts::PI;

@@ -21,7 +21,7 @@ use super::source::{LightSet, Relay, Source, SourceShape};
 use crate::color::Color;
 use crate::geometry::Surface;
 use crate::material::{reflect, Material};
-use crate::scene::build::Scene;
+use crate::render::world::Scene;
 use crate::FTINY;
 use glam::DVec3;
 

@@ -26,8 +26,7 @@ use crate::color::Color;
 use crate::scene::primitive::Primitive;
 use glam::DVec3;
 
-/// Index of a material in [`crate::scene::Scene::materials`].
-pub type MatId = usize;
+pub use crate::scene::object::MatId;
 
 /// A parsed material.
 #[derive(Clone, Debug)]

@@ -31,21 +31,7 @@ pub mod text;
 
 pub use files::SceneFiles;
 
-/// Index of a modifier in [`crate::scene::Scene::modifiers`].
-pub type ModId = usize;
-
-/// What a modifier name refers to at the point of use (Radiance resolves names to the
-/// latest definition before the user).
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum ModRef {
-    /// `void`: the end of a chain (no material: the surface is invisible).
-    Void,
-    /// A material: its index in the scene's materials (a [`crate::material::MatId`]; the
-    /// plain index keeps this module independent of the materials that use it).
-    Material(usize),
-    /// A pattern, texture or mixture.
-    Modifier(ModId),
-}
+pub use crate::scene::object::{ModId, ModRef};
 
 /// A pattern: a colour that multiplies the shading point's pattern colour.
 pub trait Pattern: Send + Sync + Debug {

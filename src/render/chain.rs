@@ -12,8 +12,8 @@ use crate::color::{sanitize, Color};
 use crate::light::SourceSample;
 use crate::material::MatId;
 use crate::modifier::{MixCoefficient, ModRef, ModifierKind};
-use crate::scene::build::DistantObject;
 use crate::scene::transform::Transform;
+use crate::scene::world::DistantObject;
 use crate::{FHUGE, FTINY};
 use glam::DVec3;
 

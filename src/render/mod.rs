@@ -6,6 +6,7 @@ pub mod ray;
 pub mod sampler;
 pub mod shading;
 pub mod trace;
+pub mod world;
 
 pub use picture::{cell_size, render_region, FrameSetup, RenderProgress};
 pub use trace::Tracer;

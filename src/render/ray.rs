@@ -1,6 +1,7 @@
 //! Rays and hits.
 
 use crate::material::MatId;
+pub use crate::scene::sets::{HitRef, NO_INST};
 use glam::DVec3;
 
 /// What a ray is for. Radiance's `crtype` bits, reduced to what the shading rules need.
@@ -150,10 +151,10 @@ impl Hit {
 /// A ray–surface hit.
 #[derive(Clone, Copy, Debug)]
 pub struct Hit {
-    /// Index of the object in [`crate::scene::Scene::objects`], or in the set of placement
+    /// Index of the object in [`crate::render::world::Scene::objects`], or in the set of placement
     /// `inst`.
     pub obj: usize,
-    /// The placement of an instanced surface ([`crate::scene::Scene::placements`]), or
+    /// The placement of an instanced surface ([`crate::render::world::Scene::placements`]), or
     /// [`NO_INST`] for the scene's own surfaces.
     pub inst: u32,
     /// Distance from the ray origin.
@@ -172,30 +173,5 @@ pub struct Hit {
     pub antimatter: [Option<MatId>; MAX_ANTIMATTER],
 }
 
-/// `Hit::inst` of a surface of the scene itself.
-pub const NO_INST: u32 = u32::MAX;
-
 /// `Hit::obj` of a point that is no surface of the scene (the ray origin of `ttrace -I`).
 pub const NO_OBJECT: usize = usize::MAX;
-
-/// A surface the tracer hit: an object of the scene (`inst == NO_INST`) or object `obj` of
-/// placement `inst`'s set.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub struct HitRef {
-    /// Placement index, or [`NO_INST`].
-    pub inst: u32,
-    /// Object (or triangle) index.
-    pub obj: usize,
-}
-
-impl HitRef {
-    /// An object of the scene itself.
-    pub fn top(obj: usize) -> HitRef {
-        HitRef { inst: NO_INST, obj }
-    }
-
-    /// A total order key (scene objects first, in index order).
-    pub fn key(&self) -> (u32, usize) {
-        (self.inst.wrapping_add(1), self.obj)
-    }
-}

@@ -11,7 +11,7 @@ use crate::material::emitter::EmitterKind;
 use crate::material::{MatId, Material};
 use crate::options::render::RenderParams;
 use crate::render::ray::HitRef;
-use crate::scene::build::Scene;
+use crate::render::world::Scene;
 use glam::DVec3;
 
 /// Everything a ray needs to be traced.

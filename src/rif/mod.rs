@@ -314,7 +314,7 @@ pub fn scene_cube(
     ro: &crate::scene::ReadOptions,
 ) -> anyhow::Result<([f64; 3], f64)> {
     let prims = crate::scene::read_scene_files(files, ro)?;
-    let scene = crate::scene::Scene::build_on(&prims, &ro.raypath)?;
+    let scene = crate::render::world::Scene::build_on(&prims, &ro.raypath)?;
     let mut lo = glam::DVec3::splat(f64::INFINITY);
     let mut hi = glam::DVec3::splat(f64::NEG_INFINITY);
     for o in &scene.objects {

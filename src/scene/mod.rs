@@ -1,5 +1,6 @@
 //! The scene language: lexer → primitives (with inline commands, `xform` and the built-in
-//! generators of [`gen`]) → [`Scene`].
+//! generators of [`gen`]) → the scene's geometry ([`world`]), under its materials
+//! ([`crate::render::world`]).
 pub mod primitive;
 pub use primitive::{Location, Primitive};
 pub mod error;
@@ -15,11 +16,11 @@ pub use octree::read_scene_files;
 pub use reader::{parse_scene_text, ReadOptions};
 pub use transform::{parse_transform, Transform};
 pub mod binio;
-pub mod build;
 pub mod instance;
 pub mod obj;
 pub mod object;
 pub mod octree;
 pub mod rtm;
 pub mod sets;
-pub use build::Scene;
+pub mod world;
+pub use world::SceneGeometry;

@@ -27,13 +27,7 @@
 use glam::{DVec3, Vec3};
 use std::collections::HashMap;
 
-use super::build::{Builder, Modifiers};
-use super::error::SceneError;
-use super::instance::mesh_object_set;
-use super::primitive::Location;
-use super::rtm::{MeshTri, HAS_NORMAL, HAS_UV};
-use super::sets::{MeshModifier, ObjectSet, SetGeom};
-use crate::modifier::{ModRef, ModifierLookup};
+use crate::geometry::trimesh::{MeshTri, HAS_NORMAL, HAS_UV};
 
 /// Cosine within which a triangle's vertex normals count as its face normal.
 const COSTOL: f64 = 0.999995;
@@ -386,104 +380,11 @@ pub fn parse_obj(text: &str, file: &str) -> Result<ObjMesh, (u32, String)> {
 #[derive(Debug)]
 pub struct ObjNames {
     /// The file as named.
-    file: String,
+    pub(crate) file: String,
     /// The names triangles use and the line that set each first.
-    names: Vec<(String, u32)>,
+    pub(crate) names: Vec<(String, u32)>,
     /// The default modifier (`-m`, `--obj-material`), the last entry of the set's modifiers.
-    default: Option<String>,
-}
-
-impl Builder<'_> {
-    /// The set of a mesh primitive naming an OBJ file, its names not yet bound
-    /// ([`bind_names`] binds them where the mesh is placed). Triangles without a name use
-    /// `default` (when given).
-    pub(super) fn obj_set(
-        &mut self,
-        name: &str,
-        path: &std::path::Path,
-        default: Option<&str>,
-    ) -> Result<ObjectSet, SceneError> {
-        let loc = Location::new(name, 0);
-        let text = std::fs::read(path).map_err(|e| SceneError::Io {
-            loc: loc.clone(),
-            path: name.to_string(),
-            reason: e.to_string(),
-        })?;
-        let text = String::from_utf8_lossy(&text);
-        let obj = parse_obj(&text, name)
-            .map_err(|(line, m)| SceneError::syntax(Location::new(name, line), m))?;
-        self.warnings.extend(obj.warnings);
-        let mut tris = obj.tris;
-        if default.is_some() {
-            let k = obj.names.len() as i16;
-            for t in tris.iter_mut().filter(|t| t.modifier < 0) {
-                t.modifier = k;
-            }
-        }
-        let mut set = mesh_object_set(
-            name,
-            obj.pos,
-            obj.normal,
-            obj.uv,
-            obj.flags,
-            tris,
-            Vec::new(),
-        );
-        set.unbound = Some(ObjNames {
-            file: name.to_string(),
-            names: obj.names,
-            default: default.map(str::to_string),
-        });
-        Ok(set)
-    }
-}
-
-/// Bind an OBJ set's modifier names in the name space where it is first placed (what is
-/// defined before the mesh primitive, as obj2mesh's `-a` files): `void` is void, an
-/// undefined name takes the default or is an error naming the line that set it.
-pub(super) fn bind_names(mods: &Modifiers, set: &mut ObjectSet) -> Result<(), SceneError> {
-    let Some(b) = set.unbound.take() else {
-        return Ok(());
-    };
-    let resolve = |n: &str| -> Result<Option<MeshModifier>, String> {
-        let chain = mods.modref(n)?;
-        Ok((chain != ModRef::Void).then(|| MeshModifier {
-            chain,
-            material: mods.terminal(chain),
-            name: n.to_string(),
-        }))
-    };
-    let fallback = match &b.default {
-        Some(d) => Some(resolve(d).map_err(|m| {
-            SceneError::syntax(
-                Location::new(b.file.as_str(), 0),
-                format!("default modifier: {m}"),
-            )
-        })?),
-        None => None,
-    };
-    let mut out = Vec::with_capacity(b.names.len() + 1);
-    for (n, line) in &b.names {
-        let at = |m: String| SceneError::syntax(Location::new(b.file.as_str(), *line), m);
-        out.push(match resolve(n) {
-            Ok(m) => m,
-            Err(e) if e.starts_with("unknown modifier") => match &fallback {
-                Some(f) => f.clone(),
-                None => {
-                    return Err(at(format!(
-                        "undefined modifier '{n}' (define it before the OBJ file, or give \
-                         a default with --obj-material)"
-                    )))
-                }
-            },
-            Err(e) => return Err(at(e)),
-        });
-    }
-    out.extend(fallback);
-    if let SetGeom::Mesh { mods, .. } = &mut set.geom {
-        *mods = out;
-    }
-    Ok(())
+    pub(crate) default: Option<String>,
 }
 
 #[cfg(test)]

@@ -12,8 +12,25 @@ use std::sync::Arc;
 
 use super::primitive::Location;
 use crate::geometry::Surface;
-use crate::material::MatId;
-use crate::modifier::ModRef;
+
+/// Index of a material in [`crate::render::world::Scene::materials`] (defined here, below the
+/// materials, so that the scene's structures need not know them).
+pub type MatId = usize;
+
+/// Index of a modifier in [`crate::render::world::Scene::modifiers`].
+pub type ModId = usize;
+
+/// What a modifier name refers to at the point of use (Radiance resolves names to the
+/// latest definition before the user).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum ModRef {
+    /// `void`: the end of a chain (no material: the surface is invisible).
+    Void,
+    /// A material: its index in the scene's materials (a [`MatId`]).
+    Material(usize),
+    /// A pattern, texture or mixture.
+    Modifier(ModId),
+}
 
 /// A finite surface with its material.
 #[derive(Clone, Debug)]

@@ -12,20 +12,7 @@ use super::binio::BinReader;
 use super::octree::{read_frozen_scene, skip_tree};
 use super::primitive::Primitive;
 
-/// A vertex has a normal.
-pub const HAS_NORMAL: u8 = 2;
-/// A vertex has (u,v).
-pub const HAS_UV: u8 = 4;
-
-/// A triangle: three vertex indices (counter-clockwise seen from the front) and its
-/// modifier (an object index into the mesh's scene, −1 for void).
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct MeshTri {
-    /// Vertex indices.
-    pub v: [u32; 3],
-    /// Modifier object index, −1 = void.
-    pub modifier: i16,
-}
+pub use crate::geometry::trimesh::{MeshTri, HAS_NORMAL, HAS_UV};
 
 /// A mesh file, decoded.
 #[derive(Debug, Default)]

@@ -5,12 +5,11 @@
 use glam::{DAffine3, DMat3, DMat4, DVec3};
 
 use super::object::Objects;
+use super::object::{MatId, ModRef};
 use super::primitive::Primitive;
 use super::transform::{parse_transform, Transform};
 use crate::geometry::bvh::Bvh;
 use crate::geometry::trimesh::TriMesh;
-use crate::material::MatId;
-use crate::modifier::ModRef;
 
 /// Most placements (expanded instances) a scene may have.
 pub const MAX_PLACEMENTS: usize = 1 << 22;
@@ -147,6 +146,31 @@ pub struct Placement {
     pub frame: Transform,
     /// The outermost non-void instance modifier on the path, if any.
     pub over: Option<Override>,
+}
+
+/// [`HitRef::inst`] of a surface of the scene itself.
+pub const NO_INST: u32 = u32::MAX;
+
+/// A surface the tracer hit: an object of the scene (`inst == NO_INST`) or object `obj` of
+/// placement `inst`'s set.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct HitRef {
+    /// Placement index, or [`NO_INST`].
+    pub inst: u32,
+    /// Object (or triangle) index.
+    pub obj: usize,
+}
+
+impl HitRef {
+    /// An object of the scene itself.
+    pub fn top(obj: usize) -> HitRef {
+        HitRef { inst: NO_INST, obj }
+    }
+
+    /// A total order key (scene objects first, in index order).
+    pub fn key(&self) -> (u32, usize) {
+        (self.inst.wrapping_add(1), self.obj)
+    }
 }
 
 /// What shading needs of a hit surface.

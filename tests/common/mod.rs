@@ -182,8 +182,9 @@ pub fn assert_finite(img: &Image) {
 
 /// A scene built from Radiance scene text (written to a temporary file and read back as the
 /// renderer reads its input).
-pub fn scene_from_text(text: &str) -> tessera::scene::Scene {
-    use tessera::scene::{read_scene_files, ReadOptions, Scene};
+pub fn scene_from_text(text: &str) -> tessera::render::world::Scene {
+    use tessera::render::world::Scene;
+    use tessera::scene::{read_scene_files, ReadOptions};
     let t = tempfile::tempdir().unwrap();
     let path = t.path().join("scene.rad");
     std::fs::write(&path, text).unwrap();

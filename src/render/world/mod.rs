@@ -1,10 +1,11 @@
 //! From primitives to a renderable scene: modifiers resolved to materials, surfaces to
-//! geometry in f64 relative to the scene origin, and the BVH over them.
+//! geometry in f64 relative to the scene origin ([`crate::scene::world`]), and the BVH over
+//! them. The builder lives here, above the scene's geometry, because it parses materials
+//! and modifiers; [`Scene`] is the geometry with them.
 
-use super::error::SceneError;
-pub use super::object::{Object, Objects};
-use super::primitive::{Location, Primitive};
-use super::sets::{flatten, map_box, placement_count, Child, ObjectSet, Placement, MAX_PLACEMENTS};
+mod obj;
+mod sets;
+
 use crate::geometry::bvh::Bvh;
 use crate::geometry::source::DistantSource;
 use crate::geometry::Surface;
@@ -12,32 +13,45 @@ use crate::material::{MatId, Material, MaterialLookup, MATERIAL_TYPES};
 use crate::modifier::{
     func::FuncShared, ModRef, ModifierDef, ModifierKind, ModifierLookup, ModifierTypes, SceneFiles,
 };
+use crate::scene::error::SceneError;
+pub use crate::scene::object::{Object, Objects};
+use crate::scene::primitive::{Location, Primitive};
 use crate::scene::reader::{ReadOptions, KNOWN_TYPES};
+use crate::scene::sets::{flatten, map_box, placement_count, Child, ObjectSet, MAX_PLACEMENTS};
 use crate::scene::transform::Transform;
-use crate::FTINY;
+use crate::scene::world::surface_counts_ok;
+pub use crate::scene::world::{length_tolerance, DistantObject, SceneGeometry, SURFACE_TYPES};
 use glam::DVec3;
 use std::collections::HashMap;
 use std::path::PathBuf;
 use std::sync::Arc;
 
-/// Surface primitive types (finite ones go into the BVH; `source` is distant).
-pub const SURFACE_TYPES: &[&str] = &[
-    "polygon", "sphere", "bubble", "cone", "cup", "cylinder", "tube", "ring", "source",
-];
+/// A scene ready for rendering: its geometry ([`SceneGeometry`], which it dereferences to)
+/// with the materials, modifiers and functions its surfaces refer to.
+pub struct Scene {
+    /// Surfaces, sources, instances and the BVH.
+    pub geom: SceneGeometry,
+    /// Materials, indexed by [`MatId`].
+    pub materials: Vec<MaterialDef>,
+    /// Patterns, textures and mixtures, indexed by [`crate::modifier::ModId`].
+    pub modifiers: Vec<ModifierDef>,
+    /// The function language program of the scene's patterns and materials, None when
+    /// no primitive uses functions.
+    pub functions: Option<Arc<FuncShared>>,
+}
 
-/// A distant `source` with its material.
-#[derive(Clone, Debug)]
-pub struct DistantObject {
-    /// Direction and size.
-    pub source: DistantSource,
-    /// The material its modifier chain ends in.
-    pub material: Option<MatId>,
-    /// Its modifier: the start of its chain.
-    pub chain: ModRef,
-    /// Identifier.
-    pub name: String,
-    /// Modifier name as written.
-    pub modifier: String,
+impl std::ops::Deref for Scene {
+    type Target = SceneGeometry;
+
+    fn deref(&self) -> &SceneGeometry {
+        &self.geom
+    }
+}
+
+impl std::ops::DerefMut for Scene {
+    fn deref_mut(&mut self) -> &mut SceneGeometry {
+        &mut self.geom
+    }
 }
 
 /// A material together with its name and where it was defined.
@@ -53,68 +67,6 @@ pub struct MaterialDef {
     pub order: usize,
     /// Where it was defined.
     pub loc: Location,
-}
-
-/// Whether a surface primitive has the argument counts its type needs (a wrong count is a
-/// fatal error; degenerate geometry with the right counts is dropped with a warning, as
-/// oconv does).
-fn surface_counts_ok(p: &Primitive) -> bool {
-    if !p.sargs.is_empty() || !p.iargs.is_empty() {
-        return false;
-    }
-    let n = p.rargs.len();
-    match p.ptype.as_str() {
-        "polygon" => n >= 9 && n.is_multiple_of(3),
-        "sphere" | "bubble" | "source" => n == 4,
-        "cone" | "cup" | "ring" => n == 8,
-        "cylinder" | "tube" => n == 7,
-        _ => false,
-    }
-}
-
-/// The length tolerance of a scene of size `size`: Radiance's `FTINY` for scenes of a unit
-/// and larger, `FTINY · size` below, so that a scene scaled down renders the same picture
-/// (an absolute 1e-6 is a tenth of a scene of 1e-5).
-pub fn length_tolerance(size: f64) -> f64 {
-    if size.is_finite() && size > 0.0 {
-        FTINY * size.min(1.0)
-    } else {
-        FTINY
-    }
-}
-
-/// A scene ready for rendering.
-pub struct Scene {
-    /// Scene origin: every coordinate in geometry is relative to it.
-    pub origin: DVec3,
-    /// Size of the scene's bounding cube (like the octree cube of oconv).
-    pub size: f64,
-    /// The scene's length tolerance ([`length_tolerance`]): the minimum hit distance, the
-    /// polygons' edge tolerance and the slack of shadow rays.
-    pub eps: f64,
-    /// Materials, indexed by [`MatId`].
-    pub materials: Vec<MaterialDef>,
-    /// Patterns, textures and mixtures, indexed by [`crate::modifier::ModId`].
-    pub modifiers: Vec<ModifierDef>,
-    /// Finite surfaces, indexed as in the BVH.
-    pub objects: Objects,
-    /// Distant sources.
-    pub distant: Vec<DistantObject>,
-    /// Acceleration structure over `objects`.
-    pub bvh: Bvh,
-    /// Warnings (degenerate geometry dropped, zero areas), each naming file:line.
-    pub warnings: Vec<String>,
-    /// The function language program of the scene's patterns and materials, None when
-    /// no primitive uses functions.
-    pub functions: Option<Arc<FuncShared>>,
-    /// The files its primitives read by relative name (data files, pictures, fonts, text
-    /// and function files, instanced octrees and meshes and the scene files of unfrozen
-    /// ones): the name as given and the path found along the RAYPATH.
-    pub inputs: Vec<(String, PathBuf)>,
-    /// The octrees and meshes its instances place, each read and built once.
-    pub sets: Vec<ObjectSet>,
-    /// Every placement of a set (nested instances flattened; [`crate::scene::instance`]).
-    pub placements: Vec<Placement>,
 }
 
 impl Scene {
@@ -389,7 +341,7 @@ impl Builder<'_> {
                             ),
                         ));
                     }
-                    super::obj::bind_names(mods, &mut self.sets[set])?;
+                    obj::bind_names(mods, &mut self.sets[set])?;
                     children.push(Child {
                         set,
                         xf,
@@ -666,19 +618,21 @@ impl Scene {
         let functions = b.mods.files.functions().finish();
         let inputs = b.mods.files.relative_inputs();
         Ok(Scene {
-            origin: level.origin,
-            size: level.size,
-            eps: level.eps,
+            geom: SceneGeometry {
+                origin: level.origin,
+                size: level.size,
+                eps: level.eps,
+                objects: level.objects,
+                distant: level.distant,
+                bvh,
+                warnings: b.warnings,
+                inputs,
+                sets: b.sets,
+                placements,
+            },
             materials: b.materials,
             modifiers: b.mods.defs,
-            objects: level.objects,
-            distant: level.distant,
-            bvh,
-            warnings: b.warnings,
             functions,
-            inputs,
-            sets: b.sets,
-            placements,
         })
     }
 
