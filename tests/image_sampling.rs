@@ -90,13 +90,88 @@ fn border_samples_are_traced_once() {
     // Rendered whole, the picture traces fewer rays than as single-cell-row strips (each
     // strip traces its top and bottom rows itself), and less than half of tracing every pixel.
     let c = Curved::load();
-    let (_, every, w, h) = c.region(96, 1, [0, 0, usize::MAX, usize::MAX]);
-    let (_, whole, _, _) = c.region(96, 4, [0, 0, w, h]);
+    // (At 160 pixels: at 96 the scene's disk and tube lights are small enough to be sampled
+    // at every pixel, small_light_sources_are_never_interpolated_away.)
+    let (_, every, w, h) = c.region(160, 1, [0, 0, usize::MAX, usize::MAX]);
+    let (_, whole, _, _) = c.region(160, 4, [0, 0, w, h]);
     let side = cell_size(4);
     let strips: u64 = (0..h)
         .step_by(side)
-        .map(|y| c.region(96, 4, [0, y, w, y + side]).1)
+        .map(|y| c.region(160, 4, [0, y, w, y + side]).1)
         .sum();
     assert!(whole < strips, "whole {whole}, strips {strips}");
     assert!(2 * whole < every, "whole {whole}, every pixel {every}");
+}
+
+/// Pixels of a whole `res`-wide picture of `scene` at `-ps ps` (`-ab 0`).
+fn picture(scene: &Scene, view: &View, res: usize, ps: usize) -> Vec<[f32; 3]> {
+    let params = RenderParams::default();
+    let lights = LightSet::collect(scene, params.dr);
+    let vf = view.frame().unwrap();
+    let (mut x, mut y, mut pa) = (res, res, 1.0);
+    normaspect(vf.aspect(), &mut pa, &mut x, &mut y);
+    let tracer = Tracer::new(scene, &params, &lights);
+    let fs = FrameSetup {
+        view: &vf,
+        xres: x,
+        yres: y,
+        pj: 0.67,
+        ps,
+        pt: 0.05,
+        frame: 0,
+        irradiance: false,
+        overture: 0,
+        aa: None,
+    };
+    render_region(&tracer, &fs, 0, 0, x, y, &RenderProgress::default())
+}
+
+/// Downlights a pixel or two wide across a dark hall, and a sun disc of 0.5° low in a dark
+/// sky: at `-ps 4` their pixels are the ones every pixel traced shows (before, the
+/// first samples 4 pixels apart found one downlight in eight and the picture was half as
+/// bright as rpict's).
+#[test]
+fn small_light_sources_are_never_interpolated_away() {
+    let mut text = String::from(
+        "void plastic grey 0 0 5 .3 .3 .3 0 0\n\
+         grey polygon ceiling 0 0 12 -40 -5 8 40 -5 8 40 40 8 -40 40 8\n\
+         grey polygon floor 0 0 12 -40 -5 0 -40 40 0 40 40 0 40 -5 0\n\
+         void light lamp 0 0 3 500 500 500\n\
+         void light sunlight 0 0 3 1e5 1e5 1e5\n\
+         sunlight source sun 0 0 4 .3 1 .12 .5\n",
+    );
+    for i in 0..12 {
+        let (x, y) = (-8.0 + 1.5 * i as f64, 15.0 + 1.5 * i as f64);
+        text.push_str(&format!(
+            "lamp polygon d{i} 0 0 12 {x} {y} 7.99 {x} {y1} 7.99 {x1} {y1} 7.99 {x1} {y} 7.99\n",
+            y1 = y + 0.2,
+            x1 = x + 0.2
+        ));
+    }
+    let prims =
+        tessera::scene::parse_scene_text(&text, "hall.rad", &ReadOptions::default()).unwrap();
+    let scene = Scene::build(&prims).unwrap();
+    let mut view = View::default();
+    view.apply_words(
+        &"-vp 0 0 1.6 -vd 0 1 .1 -vu 0 0 1 -vh 70 -vv 50"
+            .split(' ')
+            .map(String::from)
+            .collect::<Vec<_>>(),
+    )
+    .unwrap();
+    let every = picture(&scene, &view, 320, 1);
+    let adaptive = picture(&scene, &view, 320, 4);
+    let bright = |p: &[[f32; 3]]| p.iter().filter(|c| c[0] > 100.0).count();
+    let lamps = every.iter().filter(|c| c[0] > 100.0 && c[0] < 1e4).count();
+    let suns = every.iter().filter(|c| c[0] >= 1e4).count();
+    assert!(
+        lamps >= 12 && suns >= 1,
+        "{lamps} lamp and {suns} sun pixels"
+    );
+    assert_eq!(bright(&adaptive), bright(&every));
+    for (a, e) in adaptive.iter().zip(&every) {
+        if e[0] > 100.0 {
+            assert_eq!(a, e);
+        }
+    }
 }

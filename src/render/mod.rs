@@ -1,6 +1,7 @@
 //! The renderer: rays, per-pixel deterministic sampling, the tracer and the pixel loop.
 
 pub mod chain;
+pub mod lightcells;
 pub mod picture;
 pub mod ray;
 pub mod sampler;

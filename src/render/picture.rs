@@ -249,6 +249,8 @@ pub fn render_region(
     }
     let cx0 = x0 / ps;
     let cx1 = x1.div_ceil(ps);
+    // Cells where a small light source appears are sampled at every pixel.
+    let full = super::lightcells::source_cells(tr, fs.view, fs.xres, fs.yres, ps);
     // Samples on the cell borders are shared: a cell takes its left column from the cell
     // before it in its band, and its top and bottom rows from the band lines it shares with
     // the bands above and below. Even bands run first (in parallel, their lines disjoint),
@@ -280,7 +282,7 @@ pub fn render_region(
             render_cell(
                 tr,
                 fs,
-                (cx, cy, ps),
+                (cx, cy, ps, full.contains(&(cx, cy))),
                 &mut edges,
                 &mut scratch,
                 &mut rays,
@@ -434,7 +436,7 @@ fn to_f32(c: Color) -> [f32; 3] {
 fn render_cell(
     tr: &Tracer,
     fs: &FrameSetup,
-    (cx, cy, ps): (usize, usize, usize),
+    (cx, cy, ps, full): (usize, usize, usize, bool),
     edges: &mut CellEdges,
     scratch: &mut CellScratch,
     rays: &mut u64,
@@ -494,7 +496,8 @@ fn render_cell(
     // corners disagree among themselves) passes `probe = false` to its parts: a part whose
     // own corners agree lies beside the edge and is interpolated without a centre sample. A
     // region whose corners agree but whose centre does not holds something smaller than
-    // itself (a thin light, a highlight): all its parts are probed.
+    // itself (a thin light, a highlight): all its parts are probed. A `full` cell (a small
+    // light source appears in it: [`super::lightcells`]) is split down to its pixels.
     stack.clear();
     stack.push((xa, xb, ya, yb, true));
     while let Some((x0, x1, y0, y1, probe)) = stack.pop() {
@@ -523,18 +526,20 @@ fn render_cell(
         };
         let corners = [c00, c10, c01, c11];
         let agree = (0..4).all(|i| (i + 1..4).all(|j| !bigdiff(&corners[i], &corners[j], fs.pt)));
-        let refine = !small && (probe || !agree) && {
-            let centre = get(xm, ym, grid, rays);
-            let predicted = Sample {
-                color: bilinear(xm, ym),
-                dist: if corners.iter().all(|c| c.dist.is_finite()) {
-                    centre.dist
-                } else {
-                    f64::INFINITY
-                },
-            };
-            bigdiff(&centre, &predicted, fs.pt)
-        };
+        let refine = !small
+            && (full
+                || (probe || !agree) && {
+                    let centre = get(xm, ym, grid, rays);
+                    let predicted = Sample {
+                        color: bilinear(xm, ym),
+                        dist: if corners.iter().all(|c| c.dist.is_finite()) {
+                            centre.dist
+                        } else {
+                            f64::INFINITY
+                        },
+                    };
+                    bigdiff(&centre, &predicted, fs.pt)
+                });
         if !refine {
             for y in y0..=y1 {
                 for x in x0..=x1 {
