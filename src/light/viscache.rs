@@ -41,7 +41,7 @@ pub const RECHECK: u16 = 8;
 /// Slots of the per-thread table (a power of two; 32 bytes each, so 2 MiB per thread). The
 /// table is direct-mapped: a cube whose slot another cube takes starts afresh. 2^16 rather
 /// than 2^18: the same pictures within their noise (means within 0.02% on the three scenes
-/// of `bench/realscenes.sh`), 5–8% less CPU (fewer cache misses) and 6 MiB less a thread.
+/// of `bench/realscenes.sh`), the same CPU within the runs' spread and 6 MiB less a thread.
 pub const SLOTS_LOG2: u32 = 16;
 
 /// Where a shadow query comes from: the cube around the hit of an ambient sample ray.
