@@ -41,27 +41,49 @@ impl Curved {
     /// Pixels of region `[x0, x1) × [y0, y1)` of a `res`-wide picture at `-ps ps`, and the
     /// rays traced.
     fn region(&self, res: usize, ps: usize, r: [usize; 4]) -> (Vec<[f32; 3]>, u64, usize, usize) {
-        let vf = self.view.frame().unwrap();
-        let (mut x, mut y, mut pa) = (res, res, 1.0);
-        normaspect(vf.aspect(), &mut pa, &mut x, &mut y);
-        let tracer = Tracer::new(&self.scene, &self.params, &self.lights);
-        let fs = FrameSetup {
-            view: &vf,
-            xres: x,
-            yres: y,
-            pj: 0.67,
+        render(
+            &self.scene,
+            &self.lights,
+            &self.params,
+            &self.view,
+            res,
             ps,
-            pt: 0.05,
-            frame: 0,
-            irradiance: false,
-            overture: 0,
-            aa: None,
-        };
-        let progress = RenderProgress::default();
-        let [x0, y0, x1, y1] = r;
-        let px = render_region(&tracer, &fs, x0, y0, x1.min(x), y1.min(y), &progress);
-        (px, progress.rays.load(Ordering::Relaxed), x, y)
+            r,
+        )
     }
+}
+
+/// Pixels of region `[x0, x1) × [y0, y1)` of a `res`-wide picture of `scene` at `-ps ps`
+/// (`-pj .67 -pt .05`), the rays traced and the picture's size.
+fn render(
+    scene: &Scene,
+    lights: &LightSet,
+    params: &RenderParams,
+    view: &View,
+    res: usize,
+    ps: usize,
+    r: [usize; 4],
+) -> (Vec<[f32; 3]>, u64, usize, usize) {
+    let vf = view.frame().unwrap();
+    let (mut x, mut y, mut pa) = (res, res, 1.0);
+    normaspect(vf.aspect(), &mut pa, &mut x, &mut y);
+    let tracer = Tracer::new(scene, params, lights);
+    let fs = FrameSetup {
+        view: &vf,
+        xres: x,
+        yres: y,
+        pj: 0.67,
+        ps,
+        pt: 0.05,
+        frame: 0,
+        irradiance: false,
+        overture: 0,
+        aa: None,
+    };
+    let progress = RenderProgress::default();
+    let [x0, y0, x1, y1] = r;
+    let px = render_region(&tracer, &fs, x0, y0, x1.min(x), y1.min(y), &progress);
+    (px, progress.rays.load(Ordering::Relaxed), x, y)
 }
 
 #[test]
@@ -107,23 +129,8 @@ fn border_samples_are_traced_once() {
 fn picture(scene: &Scene, view: &View, res: usize, ps: usize) -> Vec<[f32; 3]> {
     let params = RenderParams::default();
     let lights = LightSet::collect(scene, params.dr);
-    let vf = view.frame().unwrap();
-    let (mut x, mut y, mut pa) = (res, res, 1.0);
-    normaspect(vf.aspect(), &mut pa, &mut x, &mut y);
-    let tracer = Tracer::new(scene, &params, &lights);
-    let fs = FrameSetup {
-        view: &vf,
-        xres: x,
-        yres: y,
-        pj: 0.67,
-        ps,
-        pt: 0.05,
-        frame: 0,
-        irradiance: false,
-        overture: 0,
-        aa: None,
-    };
-    render_region(&tracer, &fs, 0, 0, x, y, &RenderProgress::default())
+    let all = [0, 0, usize::MAX, usize::MAX];
+    render(scene, &lights, &params, view, res, ps, all).0
 }
 
 /// Downlights a pixel or two wide across a dark hall, and a sun disc of 0.5° low in a dark

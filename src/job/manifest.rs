@@ -383,16 +383,16 @@ pub fn create_job(dir: &Path, req: &PlanRequest) -> Result<Manifest> {
         ro.max_primitives = n;
     }
     let prims = read_scene_files(&opts.scene_files, &ro)?;
-    let scene = Scene::build_read(&prims, &ro)?;
+    // What the job keeps of the primitives, before the build frees them.
+    let scene_fingerprint = crate::ambient::fingerprint::fingerprint(&prims, &opts.params);
+    let text = scene_text(&prims, &opts.scene_files);
+    let primitives = prims.len();
+    let scene = Scene::build_taking(prims, &ro)?;
     for w in &scene.warnings {
         eprintln!("tplan: warning - {w}");
     }
-    let fingerprint = crate::ambient::fingerprint::with_inputs(
-        crate::ambient::fingerprint::fingerprint(&prims, &opts.params),
-        &scene.inputs,
-    )
-    .map_err(|e| anyhow!("cannot read a scene input: {e}"))?;
-    let text = scene_text(&prims, &opts.scene_files);
+    let fingerprint = crate::ambient::fingerprint::with_inputs(scene_fingerprint, &scene.inputs)
+        .map_err(|e| anyhow!("cannot read a scene input: {e}"))?;
     // Frames.
     let mut views: Vec<View> = Vec::new();
     match &req.frames {
@@ -502,7 +502,7 @@ pub fn create_job(dir: &Path, req: &PlanRequest) -> Result<Manifest> {
         picture,
         scene_file: "scene.rad".into(),
         scene_sources: sources,
-        primitives: prims.len(),
+        primitives,
         fingerprint: hex32(&fingerprint),
         lease_seconds: lease,
         workers_expected: workers,

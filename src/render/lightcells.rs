@@ -41,16 +41,15 @@ pub fn source_cells(
     if cell <= 1 || xres == 0 || yres == 0 {
         return out;
     }
-    for pts in source_outlines(tr.scene, tr.lights, view.view.vp) {
-        mark(&mut out, view, &pts, xres, yres, cell);
-    }
+    for_each_outline(tr.scene, tr.lights, view.view.vp, |pts| {
+        mark(&mut out, view, pts, xres, yres, cell);
+    });
     out
 }
 
-/// World points outlining each real source: a local source's bounding box corners, a small
-/// distant source's disc seen from the view point.
-fn source_outlines(scene: &Scene, lights: &LightSet, vp: DVec3) -> Vec<Vec<DVec3>> {
-    let mut out = Vec::new();
+/// Call `f` with world points outlining each real source: a local source's bounding box
+/// corners, a small distant source's disc seen from the view point.
+fn for_each_outline(scene: &Scene, lights: &LightSet, vp: DVec3, mut f: impl FnMut(&[DVec3])) {
     for s in &lights.sources {
         if s.relay.is_some() {
             continue;
@@ -61,17 +60,13 @@ fn source_outlines(scene: &Scene, lights: &LightSet, vp: DVec3) -> Vec<Vec<DVec3
             };
             let (lo, hi) = o.surface.bounds();
             let (lo, hi) = (lo + scene.origin, hi + scene.origin);
-            out.push(
-                (0..8)
-                    .map(|k| {
-                        DVec3::new(
-                            if k & 1 == 0 { lo.x } else { hi.x },
-                            if k & 2 == 0 { lo.y } else { hi.y },
-                            if k & 4 == 0 { lo.z } else { hi.z },
-                        )
-                    })
-                    .collect(),
-            );
+            f(&std::array::from_fn::<_, 8, _>(|k| {
+                DVec3::new(
+                    if k & 1 == 0 { lo.x } else { hi.x },
+                    if k & 2 == 0 { lo.y } else { hi.y },
+                    if k & 4 == 0 { lo.z } else { hi.z },
+                )
+            }));
         } else if let Some(d) = s.distant.and_then(|i| scene.distant.get(i)) {
             let src = &d.source;
             if !(src.angle_deg > 0.0 && src.angle_deg <= MAX_DISTANT_DEG) {
@@ -80,15 +75,12 @@ fn source_outlines(scene: &Scene, lights: &LightSet, vp: DVec3) -> Vec<Vec<DVec3
             let r = (0.5 * src.angle_deg).to_radians().tan();
             let u = crate::geometry::any_perpendicular(src.dir);
             let v = src.dir.cross(u);
-            out.push(
-                [(1.0, 0.0), (-1.0, 0.0), (0.0, 1.0), (0.0, -1.0), (0.0, 0.0)]
-                    .iter()
-                    .map(|(a, b)| vp + src.dir + (u * *a + v * *b) * r)
-                    .collect(),
+            f(
+                &[(1.0, 0.0), (-1.0, 0.0), (0.0, 1.0), (0.0, -1.0), (0.0, 0.0)]
+                    .map(|(a, b)| vp + src.dir + (u * a + v * b) * r),
             );
         }
     }
-    out
 }
 
 /// Mark the cells under the projection of `pts` when it is small; nothing when any point

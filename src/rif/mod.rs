@@ -314,7 +314,12 @@ pub fn scene_cube(
     ro: &crate::scene::ReadOptions,
 ) -> anyhow::Result<([f64; 3], f64)> {
     let prims = crate::scene::read_scene_files(files, ro)?;
-    let scene = crate::render::world::Scene::build_on(&prims, &ro.raypath)?;
+    let build = crate::scene::ReadOptions {
+        allow_commands: false,
+        raypath: ro.raypath.clone(),
+        ..crate::scene::ReadOptions::default()
+    };
+    let scene = crate::render::world::Scene::build_taking(prims, &build)?;
     let mut lo = glam::DVec3::splat(f64::INFINITY);
     let mut hi = glam::DVec3::splat(f64::NEG_INFINITY);
     for o in &scene.objects {
