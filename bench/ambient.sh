@@ -16,6 +16,8 @@
 #
 # Environment:
 #   SCENES="spheres curved glassy mirrors"   AB_LIST="1"   RES=128   RED=64
+#   SCENE_DIR=tests/scenes  where each scene's NAME.rad and view file NAME.vf are (e.g. the
+#                          real-style scenes: KEEP=DIR BUILD_ONLY=1 bash bench/realscenes.sh)
 #   AA_LIST="0.3 0.2 0.15 0.1"  AD_LIST="128 512 1024"  AS_LIST="0 128"
 #                          (AA_LIST="" renders only the references, e.g. to fill REF_DIR)
 #   REF_AD=2048            divisions of the references
@@ -59,6 +61,8 @@ REPEAT=${REPEAT:-1}
 AS_MAX_FRACTION=${AS_MAX_FRACTION:-0.5}
 RENDERERS=${RENDERERS:-"rpict tpict"}
 REF_DIR=${REF_DIR:-}
+SCENE_DIR=${SCENE_DIR:-"$ROOT/tests/scenes"}
+[[ $SCENE_DIR == /* ]] || SCENE_DIR="$PWD/$SCENE_DIR"
 REF_EXTRA=${REF_EXTRA:-}
 EXTRA=${EXTRA:-}
 FLOOR=${FLOOR:-0.01}
@@ -98,7 +102,7 @@ printf 'scene\tab\trpict_ref_cpu\ttpict_ref_cpu\trpict_ref_mean\ttpict_ref_mean\
 printf 'scene\tab\trenderer\taa\tad\tas\tcpu_s\terr_avgref\terr_rpictref\terr_tpictref\tmean\n' >"$RUNS"
 
 for s in $SCENES; do
-    sdir="$ROOT/tests/scenes"
+    sdir=$SCENE_DIR
     oct="$TMP/$s.oct"
     (cd "$sdir" && oconv "$s.rad" >"$oct")
     for ab in $AB_LIST; do

@@ -22,6 +22,8 @@
 #   RES=256          picture width (the height follows the view)
 #   OPTS="-ad 512 -as 128 -aa .15 -ar 64 -dt .07 -ps 1 -pj 0"   the shared render options
 #   KEEP=DIR         build the scenes in DIR and keep them (default: a temporary folder)
+#   BUILD_ONLY=1     with KEEP: only build the scenes (NAME.rad, NAME.view with the view's
+#                    options, NAME.vf as a view file), e.g. for bench/ambient.sh's SCENE_DIR
 #   TSV=FILE         also write the figures as tab-separated values
 #   NO_BUILD=1 / TPICT=path   as bench/run.sh
 #
@@ -230,6 +232,15 @@ best() {
     echo "$bc $bm"
 }
 
+if [[ -n "${BUILD_ONLY:-}" ]]; then
+    [[ -n "${KEEP:-}" ]] || { echo "$NAME: BUILD_ONLY needs KEEP=DIR" >&2; exit 1; }
+    for s in $SCENES; do
+        "make_$s"
+        echo "rview $(cat "$s.view")" >"$s.vf"
+    done
+    echo "$NAME: built $SCENES in $W" >&2
+    exit 0
+fi
 [[ -n "${TSV:-}" ]] && printf 'scene\tab\ttpict_cpu\trpict_cpu\toconv_cpu\tratio\ttpict_mb\trpict_mb\n' >"$TSV"
 printf '%-9s %3s %9s %9s %9s %6s %6s %8s %8s %6s\n' scene ab "tpict" "rpict" "+oconv" ratio "+oconv" "tpict MB" "rpict MB" "MB ×"
 for s in $SCENES; do

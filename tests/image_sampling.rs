@@ -5,6 +5,7 @@ use std::path::Path;
 use std::sync::atomic::Ordering;
 use tessera::light::LightSet;
 use tessera::options::RenderParams;
+use tessera::render::lightcells::CellMemo;
 use tessera::render::world::Scene;
 use tessera::render::{cell_size, render_region, FrameSetup, RenderProgress, Tracer};
 use tessera::scene::{read_scene_files, ReadOptions};
@@ -64,10 +65,27 @@ fn render(
     ps: usize,
     r: [usize; 4],
 ) -> (Vec<[f32; 3]>, u64, usize, usize) {
+    render_with(scene, lights, params, view, res, ps, r, None)
+}
+
+/// [`render`] with a memo of the small sources' cells shared between calls (as a session's
+/// tiles share it).
+#[allow(clippy::too_many_arguments)]
+fn render_with(
+    scene: &Scene,
+    lights: &LightSet,
+    params: &RenderParams,
+    view: &View,
+    res: usize,
+    ps: usize,
+    r: [usize; 4],
+    memo: Option<&CellMemo>,
+) -> (Vec<[f32; 3]>, u64, usize, usize) {
     let vf = view.frame().unwrap();
     let (mut x, mut y, mut pa) = (res, res, 1.0);
     normaspect(vf.aspect(), &mut pa, &mut x, &mut y);
-    let tracer = Tracer::new(scene, params, lights);
+    let mut tracer = Tracer::new(scene, params, lights);
+    tracer.cells = memo;
     let fs = FrameSetup {
         view: &vf,
         xres: x,
@@ -158,14 +176,7 @@ fn small_light_sources_are_never_interpolated_away() {
     let prims =
         tessera::scene::parse_scene_text(&text, "hall.rad", &ReadOptions::default()).unwrap();
     let scene = Scene::build(&prims).unwrap();
-    let mut view = View::default();
-    view.apply_words(
-        &"-vp 0 0 1.6 -vd 0 1 .1 -vu 0 0 1 -vh 70 -vv 50"
-            .split(' ')
-            .map(String::from)
-            .collect::<Vec<_>>(),
-    )
-    .unwrap();
+    let view = hall_view("-vp 0 0 1.6 -vd 0 1 .1 -vu 0 0 1 -vh 70 -vv 50");
     let every = picture(&scene, &view, 320, 1);
     let adaptive = picture(&scene, &view, 320, 4);
     let bright = |p: &[[f32; 3]]| p.iter().filter(|c| c[0] > 100.0).count();
@@ -179,6 +190,46 @@ fn small_light_sources_are_never_interpolated_away() {
     for (a, e) in adaptive.iter().zip(&every) {
         if e[0] > 100.0 {
             assert_eq!(a, e);
+        }
+    }
+    tiles_share_the_cells(&scene, &view, &adaptive);
+}
+
+fn hall_view(words: &str) -> View {
+    let mut view = View::default();
+    view.apply_words(&words.split(' ').map(String::from).collect::<Vec<_>>())
+        .unwrap();
+    view
+}
+
+/// Tiles of the hall rendered through one memo of the cells (computed on the first tile,
+/// as a session does once per frame) are the whole picture's pixels, also when the memo
+/// saw another view first.
+fn tiles_share_the_cells(scene: &Scene, view: &View, whole: &[[f32; 3]]) {
+    let params = RenderParams::default();
+    let lights = LightSet::collect(scene, params.dr);
+    let memo = CellMemo::default();
+    let other = hall_view("-vp 0 0 1.6 -vd .3 1 .1 -vu 0 0 1 -vh 70 -vv 50");
+    let (_, _, w, h) = render_with(scene, &lights, &params, view, 320, 4, [0, 0, 1, 1], None);
+    render_with(
+        scene,
+        &lights,
+        &params,
+        &other,
+        320,
+        4,
+        [0, 0, 9, 9],
+        Some(&memo),
+    );
+    for (x, y) in [(0, 0), (137, 0), (0, 61), (137, 61)] {
+        let x1 = if x == 0 { 137 } else { w };
+        let y1 = if y == 0 { 61 } else { h };
+        let r = [x, y, x1, y1];
+        let (tile, _, _, _) = render_with(scene, &lights, &params, view, 320, 4, r, Some(&memo));
+        let tw = x1 - x;
+        for (i, p) in tile.iter().enumerate() {
+            let (px, py) = (x + i % tw, y + i / tw);
+            assert_eq!(*p, whole[py * w + px], "pixel ({px}, {py})");
         }
     }
 }

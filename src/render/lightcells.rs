@@ -8,16 +8,18 @@
 //! whose image is at most [`SMALL`] cells across in one direction, and every distant source
 //! of at most [`MAX_DISTANT_DEG`], has the cells its projected bounds touch (and their
 //! neighbours) sampled at every pixel. The cells depend on the frame alone (view, scene,
-//! sources), never on the region rendered, so tiles and threads keep their pixels.
+//! sources), never on the region rendered, so tiles and threads keep their pixels; a
+//! session computes them once per frame ([`CellMemo`]), not once per tile.
 
 use std::collections::HashSet;
+use std::sync::{Arc, Mutex};
 
 use glam::DVec3;
 
 use super::trace::Tracer;
 use crate::light::source::LightSet;
 use crate::render::world::Scene;
-use crate::view::ViewFrame;
+use crate::view::{View, ViewFrame};
 
 /// A source at most this many cells across (in its narrower direction) is small.
 const SMALL: f64 = 2.0;
@@ -27,6 +29,54 @@ const MAX_CELLS: usize = 4096;
 
 /// Largest distant source treated as small, in degrees (the sun is 0.5; skies are 180).
 const MAX_DISTANT_DEG: f64 = 5.0;
+
+/// Frames whose cells a [`CellMemo`] keeps (the tile loops of a worker may be on as many
+/// frames at once).
+const MEMO_FRAMES: usize = 8;
+
+/// What the cells depend on besides the scene and its sources: the view, the picture's size
+/// and the cell side.
+type CellKey = (View, usize, usize, usize);
+
+/// A frame's cells sampled at every pixel, shared by its tiles.
+pub type Cells = Arc<HashSet<(usize, usize)>>;
+
+/// The cells of the frames a session rendered last: one computation per frame, however
+/// many tiles it is cut into. Only for one scene and one set of sources (a session's).
+#[derive(Default)]
+pub struct CellMemo {
+    frames: Mutex<Vec<(CellKey, Cells)>>,
+}
+
+impl CellMemo {
+    /// [`source_cells`] for this frame, computed on its first tile.
+    pub fn cells(
+        &self,
+        tr: &Tracer,
+        view: &ViewFrame,
+        xres: usize,
+        yres: usize,
+        cell: usize,
+    ) -> Cells {
+        let key = (view.view.clone(), xres, yres, cell);
+        let found =
+            |f: &Vec<(CellKey, Cells)>| f.iter().find(|(k, _)| *k == key).map(|(_, c)| c.clone());
+        if let Some(c) = self.frames.lock().ok().and_then(|f| found(&f)) {
+            return c;
+        }
+        // Computed without the lock (another thread may compute the same: the same set).
+        let c = Arc::new(source_cells(tr, view, xres, yres, cell));
+        if let Ok(mut f) = self.frames.lock() {
+            if found(&f).is_none() {
+                if f.len() >= MEMO_FRAMES {
+                    f.remove(0);
+                }
+                f.push((key, c.clone()));
+            }
+        }
+        c
+    }
+}
 
 /// The cells (column, row of the grid of side `cell` pixels, rows from the top) to sample at
 /// every pixel in a picture of `xres × yres`.

@@ -250,7 +250,12 @@ pub fn render_region(
     let cx0 = x0 / ps;
     let cx1 = x1.div_ceil(ps);
     // Cells where a small light source appears are sampled at every pixel.
-    let full = super::lightcells::source_cells(tr, fs.view, fs.xres, fs.yres, ps);
+    let full = match tr.cells {
+        Some(memo) => memo.cells(tr, fs.view, fs.xres, fs.yres, ps),
+        None => std::sync::Arc::new(super::lightcells::source_cells(
+            tr, fs.view, fs.xres, fs.yres, ps,
+        )),
+    };
     // Samples on the cell borders are shared: a cell takes its left column from the cell
     // before it in its band, and its top and bottom rows from the band lines it shares with
     // the bands above and below. Even bands run first (in parallel, their lines disjoint),

@@ -29,6 +29,9 @@ pub struct Tracer<'a> {
     /// ([`IndirectLight::direct_plan`]). Points inside a new value's sampling (level > 0)
     /// are lit as always: the value needs their light.
     pub fill_only: bool,
+    /// The session's memo of the cells its frames sample at every pixel (None: computed
+    /// for each region rendered).
+    pub cells: Option<&'a super::lightcells::CellMemo>,
 }
 
 /// How far a shadow ray toward a sample at distance `dist` needs to look: the sample lies on
@@ -107,6 +110,7 @@ impl<'a> Tracer<'a> {
             lights,
             ambient: None,
             fill_only: false,
+            cells: None,
         }
     }
 

@@ -104,6 +104,8 @@ pub struct Session {
     origin_id: u64,
     pool: rayon::ThreadPool,
     store: Option<Arc<AmbientStore>>,
+    /// The cells each frame samples at every pixel (small light sources), once per frame.
+    cells: crate::render::lightcells::CellMemo,
 }
 
 impl Session {
@@ -153,6 +155,7 @@ impl Session {
             origin_id,
             pool,
             store: None,
+            cells: Default::default(),
         })
     }
 
@@ -225,7 +228,10 @@ impl Session {
 
     /// A tracer over the session's scene, lights and ambient calculation.
     pub fn tracer(&self) -> Tracer<'_> {
-        Tracer::new(&self.scene, &self.params, &self.lights).with_ambient(self.ambient.as_deref())
+        let mut t = Tracer::new(&self.scene, &self.params, &self.lights)
+            .with_ambient(self.ambient.as_deref());
+        t.cells = Some(&self.cells);
+        t
     }
 
     /// Render a region of a frame on the session's threads. Fails when a function
