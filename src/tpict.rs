@@ -370,9 +370,7 @@ impl Run<'_> {
                 wall_seconds: start.elapsed().as_secs_f64(),
             });
         }
-        let mut img = Image::new(x, y);
-        img.pixels = pixels;
-        img.header = Header {
+        let header = Header {
             software: Some(SOFTWARE.to_string()),
             view: Some(view.to_radiance_string()),
             pixaspect: if (0.995..=1.005).contains(&pa) {
@@ -384,6 +382,13 @@ impl Run<'_> {
             format: "32-bit_rle_rgbe".to_string(),
             extra: session.ambient_header(),
             ..Header::default()
+        };
+        // The pixels move into the picture (no second buffer of the frame's size).
+        let mut img = Image {
+            width: x,
+            height: y,
+            pixels,
+            header,
         };
         if let (Some(aa), true) = (fs.aa, session.cached_ambient().is_some()) {
             // The frame's own -aa when it varies (-ax, -axg, -axt).

@@ -38,7 +38,7 @@ pub const TRUST: u16 = 8;
 /// A trusted cube still traces every `RECHECK`-th query it answers.
 pub const RECHECK: u16 = 8;
 
-/// Slots of the per-thread table (a power of two; 32 bytes each, so 2 MiB per thread). The
+/// Slots of the per-thread table (a power of two; 24 bytes each, so 1.5 MiB per thread). The
 /// table is direct-mapped: a cube whose slot another cube takes starts afresh. 2^16 rather
 /// than 2^18: the same pictures within their noise (means within 0.02% on the three scenes
 /// of `bench/realscenes.sh`), the same CPU within the runs' spread and 6 MiB less a thread.
@@ -105,16 +105,27 @@ fn floor_i64(x: f64) -> i64 {
     }
 }
 
+/// One cube's answers: 24 bytes. The slot's index is the tag's top bits and the slot keeps
+/// its low 32 bits, so two cubes share a slot unnoticed only when 48 bits of their tags
+/// agree.
 #[derive(Clone, Copy, Default)]
 struct Slot {
-    /// Hash of the cube's key (0: empty).
-    tag: u64,
+    /// The low bits of the cube's tag ([`VisQuery::tag`]; a fresh slot's state is that of an
+    /// empty one, so 0 needs no meaning of its own).
+    tag: u32,
     sum: [f32; 3],
     traced: u16,
     uses: u16,
-    lit: bool,
-    dark: bool,
+    /// [`LIT`] | [`DARK`]: what its shadow rays found.
+    seen: u8,
 }
+
+/// A shadow ray of the cube reached the source.
+const LIT: u8 = 1;
+/// A shadow ray of the cube was blocked.
+const DARK: u8 = 2;
+
+const _: () = assert!(std::mem::size_of::<Slot>() == 24);
 
 #[derive(Default)]
 struct VisCache {
@@ -129,7 +140,7 @@ thread_local! {
 }
 
 /// Start a new epoch of this thread's table: no cube learnt before answers after (the
-/// tags of a new epoch differ), without clearing its 2 MiB. `ttrace` starts one per ray, so
+/// tags of a new epoch differ), without clearing its 1.5 MiB. `ttrace` starts one per ray, so
 /// that a ray's shadow answers do not depend on which rays its thread traced before.
 pub fn new_epoch(epoch: u64) {
     EPOCH.with(|e| e.set(epoch));
@@ -157,13 +168,14 @@ pub fn shadow(q: &VisQuery, src: usize, trace: impl FnOnce() -> Color) -> (Color
             v.slots.resize(1 << SLOTS_LOG2, Slot::default());
         }
         let e = &mut v.slots[(tag >> (64 - SLOTS_LOG2)) as usize];
-        if e.tag != tag {
+        let low = tag as u32;
+        if e.tag != low {
             *e = Slot {
-                tag,
+                tag: low,
                 ..Slot::default()
             };
         }
-        if e.traced >= TRUST && !(e.lit && e.dark) {
+        if e.traced >= TRUST && e.seen != LIT | DARK {
             e.uses = e.uses.wrapping_add(1);
             if e.uses % RECHECK != 0 {
                 let n = e.traced as f32;
@@ -178,11 +190,7 @@ pub fn shadow(q: &VisQuery, src: usize, trace: impl FnOnce() -> Color) -> (Color
             }
         }
         let t = trace();
-        if bright(t) > 0.0 {
-            e.lit = true;
-        } else {
-            e.dark = true;
-        }
+        e.seen |= if bright(t) > 0.0 { LIT } else { DARK };
         if e.traced < u16::MAX && t.is_finite() {
             e.sum[0] += t.x as f32;
             e.sum[1] += t.y as f32;

@@ -248,8 +248,12 @@ pub fn run(
                 picture.len()
             );
         }
-        let mut img = crate::image::Image::new(w, h);
-        img.pixels = picture;
+        let mut img = crate::image::Image {
+            width: w,
+            height: h,
+            pixels: picture,
+            header: Default::default(),
+        };
         img.header.software = Some(SOFTWARE.to_string());
         img.header
             .commands
