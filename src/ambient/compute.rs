@@ -96,6 +96,8 @@ pub struct Ambient {
     pub(super) log_sum: std::sync::Mutex<(f64, u64)>,
     exclude: HashSet<String>,
     include: Option<HashSet<String>>,
+    /// The shadow answers its threads share (made on first use).
+    vis: std::sync::OnceLock<crate::light::viscache::VisTable>,
 }
 
 /// New ambient values the calling thread has made so far (every calculation, all levels)
@@ -166,6 +168,7 @@ impl Ambient {
             } else {
                 Some(params.ai.iter().cloned().collect())
             },
+            vis: std::sync::OnceLock::new(),
         })
     }
 
@@ -372,6 +375,10 @@ impl IndirectLight for Ambient {
             None
         };
         DirectPlan::Full(reuse)
+    }
+
+    fn shadow_table(&self) -> Option<&crate::light::viscache::VisTable> {
+        Some(self.vis.get_or_init(Default::default))
     }
 
     fn count_reused_shadows(&self, n: u64) {

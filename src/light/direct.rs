@@ -120,6 +120,10 @@ fn direct_with(
     stats.resize(lights.sources.len(), (0.0, 0));
     // Shadow answers reused from the sample's footprint (one counter update per call).
     let mut reused = 0u64;
+    let table = match vis {
+        Some(_) => tr.ambient.and_then(|a| a.shadow_table()),
+        None => None,
+    };
     let mut untested_from = n;
     for (tested, i) in (0..n).enumerate() {
         if thresh > 0.0 && tested >= MIN_SHADOW_TESTS {
@@ -133,7 +137,7 @@ fn direct_with(
         let s = &samples[k];
         let t = match vis {
             Some(q) => {
-                let (t, traced) = viscache::shadow(q, s.src, || {
+                let (t, traced) = viscache::shadow(table, q, s.src, || {
                     tr.shadow((p, s.dir, s.dist), s.src, hit.antimatter, rng)
                 });
                 reused += u64::from(!traced);

@@ -21,11 +21,19 @@
 //! Other rays (eye rays and their specular rays, every ray of the uncached `-aa 0`
 //! calculation) always trace their shadow rays.
 //!
-//! The grid lives in a thread-local, direct-mapped table of 2^[`SLOTS_LOG2`] slots tied to
-//! one calculation (an owner id) and cleared when another calculation uses the thread; a cube
-//! whose slot another cube takes over starts afresh.
+//! The grid lives in a direct-mapped table of 2^[`SLOTS_LOG2`] slots ([`VisTable`]) that
+//! the render threads of one calculation share: a process holds one table however many
+//! threads render (a worker's tile loops, `tpict -n`), and a cube one thread learnt
+//! answers the others. A slot is three words updated with relaxed atomic loads and stores,
+//! no locks: two threads updating one slot at once may lose one shadow ray's answer from
+//! the mean, which holds a running mean (so a slot read between two of its words' stores
+//! still gives a mean of answers it saw). A cube whose slot another cube takes over starts
+//! afresh. `ttrace`'s per-ray epochs ([`new_epoch`]) use a private table per thread instead,
+//! so that no other thread's rays can evict a ray's cubes and its values stay the same
+//! whatever `-n`.
 
 use std::cell::RefCell;
+use std::sync::atomic::{AtomicU64, Ordering::Relaxed};
 
 use glam::DVec3;
 
@@ -38,10 +46,10 @@ pub const TRUST: u16 = 8;
 /// A trusted cube still traces every `RECHECK`-th query it answers.
 pub const RECHECK: u16 = 8;
 
-/// Slots of the per-thread table (a power of two; 24 bytes each, so 1.5 MiB per thread). The
-/// table is direct-mapped: a cube whose slot another cube takes starts afresh. 2^16 rather
-/// than 2^18: the same pictures within their noise (means within 0.02% on the three scenes
-/// of `bench/realscenes.sh`), the same CPU within the runs' spread and 6 MiB less a thread.
+/// Slots of a table (a power of two; 24 bytes each, so 1.5 MiB). The table is direct-mapped:
+/// a cube whose slot another cube takes starts afresh. 2^16 rather than 2^18: the same
+/// pictures within their noise (means within 0.02% on the three scenes of
+/// `bench/realscenes.sh`), the same CPU within the runs' spread and a quarter of the memory.
 pub const SLOTS_LOG2: u32 = 16;
 
 /// Where a shadow query comes from: the cube around the hit of an ambient sample ray.
@@ -105,99 +113,141 @@ fn floor_i64(x: f64) -> i64 {
     }
 }
 
-/// One cube's answers: 24 bytes. The slot's index is the tag's top bits and the slot keeps
-/// its low 32 bits, so two cubes share a slot unnoticed only when 48 bits of their tags
-/// agree.
-#[derive(Clone, Copy, Default)]
-struct Slot {
-    /// The low bits of the cube's tag ([`VisQuery::tag`]; a fresh slot's state is that of an
-    /// empty one, so 0 needs no meaning of its own).
-    tag: u32,
-    sum: [f32; 3],
-    traced: u16,
-    uses: u16,
-    /// [`LIT`] | [`DARK`]: what its shadow rays found.
-    seen: u8,
+/// A table of cubes: per slot, three words.
+/// - word 0: the low 32 bits of the cube's tag ([`VisQuery::tag`]; the slot's index is the
+///   tag's top bits, so two cubes share a slot unnoticed only when 48 bits of their tags
+///   agree), the shadow rays traced (16 bits), the answers given since the last check
+///   (8 bits, used modulo [`RECHECK`]) and [`LIT`] | [`DARK`] (8 bits);
+/// - words 1 and 2: the running mean of the traced transmissions, three `f32`.
+///
+/// A fresh slot's state is that of an empty one (all zero), so tag 0 needs no meaning of its
+/// own.
+pub struct VisTable {
+    slots: Box<[[AtomicU64; 3]]>,
 }
 
 /// A shadow ray of the cube reached the source.
-const LIT: u8 = 1;
+const LIT: u64 = 1;
 /// A shadow ray of the cube was blocked.
-const DARK: u8 = 2;
+const DARK: u64 = 2;
 
-const _: () = assert!(std::mem::size_of::<Slot>() == 24);
+impl Default for VisTable {
+    fn default() -> Self {
+        VisTable {
+            slots: (0..1usize << SLOTS_LOG2)
+                .map(|_| Default::default())
+                .collect(),
+        }
+    }
+}
 
+impl VisTable {
+    /// The transmission toward the source of `tag`: the cube's mean when it is trusted, else
+    /// `trace()`, whose answer the cube learns; and whether a ray was traced.
+    fn query(&self, tag: u64, trace: impl FnOnce() -> Color) -> (Color, bool) {
+        let slot = &self.slots[(tag >> (64 - SLOTS_LOG2)) as usize];
+        let low = tag & 0xFFFF_FFFF;
+        let w = slot[0].load(Relaxed);
+        let (traced, mut uses, seen) = if w & 0xFFFF_FFFF == low {
+            ((w >> 32) & 0xFFFF, (w >> 48) & 0xFF, w >> 56)
+        } else {
+            (0, 0, 0)
+        };
+        let mean = || {
+            let (a, b) = (slot[1].load(Relaxed), slot[2].load(Relaxed));
+            [
+                f32::from_bits(a as u32),
+                f32::from_bits((a >> 32) as u32),
+                f32::from_bits(b as u32),
+            ]
+        };
+        let pack = |traced: u64, uses: u64, seen: u64| low | traced << 32 | uses << 48 | seen << 56;
+        if traced >= u64::from(TRUST) && seen != LIT | DARK {
+            uses = (uses + 1) & 0xFF;
+            if uses % u64::from(RECHECK) != 0 {
+                slot[0].store(pack(traced, uses, seen), Relaxed);
+                let m = mean();
+                return (Color::new(m[0] as f64, m[1] as f64, m[2] as f64), false);
+            }
+        }
+        let t = trace();
+        let seen = seen | if bright(t) > 0.0 { LIT } else { DARK };
+        let mut traced = traced;
+        if traced < 0xFFFF && t.is_finite() {
+            traced += 1;
+            let old = if traced == 1 { [0.0; 3] } else { mean() };
+            let n = traced as f32;
+            let m: [f32; 3] = std::array::from_fn(|i| {
+                let v = t.to_array()[i] as f32;
+                old[i] + (v - old[i]) / n
+            });
+            slot[1].store(
+                u64::from(m[0].to_bits()) | u64::from(m[1].to_bits()) << 32,
+                Relaxed,
+            );
+            slot[2].store(u64::from(m[2].to_bits()), Relaxed);
+        }
+        slot[0].store(pack(traced, uses, seen), Relaxed);
+        (t, true)
+    }
+}
+
+/// A thread's private table ([`new_epoch`]), tied to one calculation (an owner id).
 #[derive(Default)]
-struct VisCache {
+struct Private {
     owner: u64,
-    slots: Vec<Slot>,
+    table: Option<VisTable>,
 }
 
 thread_local! {
-    static VIS: RefCell<VisCache> = RefCell::default();
-    /// The current epoch of this thread's table (0: none, the tags as they are).
+    static PRIVATE: RefCell<Private> = RefCell::default();
+    /// The current epoch of this thread's queries (0: none, the tags as they are).
     static EPOCH: std::cell::Cell<u64> = const { std::cell::Cell::new(0) };
 }
 
-/// Start a new epoch of this thread's table: no cube learnt before answers after (the
-/// tags of a new epoch differ), without clearing its 1.5 MiB. `ttrace` starts one per ray, so
-/// that a ray's shadow answers do not depend on which rays its thread traced before.
+/// Start a new epoch of this thread's queries: no cube learnt before answers after (the tags
+/// of a new epoch differ), and they go to the thread's private table. `ttrace` starts one
+/// per ray, so that a ray's shadow answers do not depend on which rays its thread, or any
+/// other, traced before; epoch 0 goes back to the shared table.
 pub fn new_epoch(epoch: u64) {
     EPOCH.with(|e| e.set(epoch));
 }
 
 /// The transmission toward source `src` for a query: reused from its cube when the cube is
-/// trusted, else `trace()` (a real shadow ray), whose answer the cube learns. Returns the
-/// transmission and whether a ray was traced.
-pub fn shadow(q: &VisQuery, src: usize, trace: impl FnOnce() -> Color) -> (Color, bool) {
+/// trusted, else `trace()` (a real shadow ray), whose answer the cube learns. `shared` is
+/// the calculation's table (None: this thread's private one). Returns the transmission and
+/// whether a ray was traced.
+pub fn shadow(
+    shared: Option<&VisTable>,
+    q: &VisQuery,
+    src: usize,
+    trace: impl FnOnce() -> Color,
+) -> (Color, bool) {
     let epoch = EPOCH.with(|e| e.get());
+    if epoch == 0 {
+        if let Some(t) = shared {
+            return t.query(q.tag(src), trace);
+        }
+    }
     let tag = if epoch == 0 {
         q.tag(src)
     } else {
         fx_mix(q.tag(src), epoch).max(1)
     };
-    VIS.with(|v| {
+    PRIVATE.with(|p| {
         // A shadow ray never shades, so it never comes back here; if it ever did, the
         // nested query would simply trace.
-        let Ok(mut v) = v.try_borrow_mut() else {
+        let Ok(mut p) = p.try_borrow_mut() else {
             return (trace(), true);
         };
-        if v.owner != q.owner || v.slots.is_empty() {
-            v.owner = q.owner;
-            v.slots.clear();
-            v.slots.resize(1 << SLOTS_LOG2, Slot::default());
+        if p.owner != q.owner || p.table.is_none() {
+            p.owner = q.owner;
+            p.table = Some(VisTable::default());
         }
-        let e = &mut v.slots[(tag >> (64 - SLOTS_LOG2)) as usize];
-        let low = tag as u32;
-        if e.tag != low {
-            *e = Slot {
-                tag: low,
-                ..Slot::default()
-            };
+        match &p.table {
+            Some(t) => t.query(tag, trace),
+            None => (trace(), true),
         }
-        if e.traced >= TRUST && e.seen != LIT | DARK {
-            e.uses = e.uses.wrapping_add(1);
-            if e.uses % RECHECK != 0 {
-                let n = e.traced as f32;
-                return (
-                    Color::new(
-                        (e.sum[0] / n) as f64,
-                        (e.sum[1] / n) as f64,
-                        (e.sum[2] / n) as f64,
-                    ),
-                    false,
-                );
-            }
-        }
-        let t = trace();
-        e.seen |= if bright(t) > 0.0 { LIT } else { DARK };
-        if e.traced < u16::MAX && t.is_finite() {
-            e.sum[0] += t.x as f32;
-            e.sum[1] += t.y as f32;
-            e.sum[2] += t.z as f32;
-            e.traced += 1;
-        }
-        (t, true)
     })
 }
 
@@ -211,10 +261,11 @@ mod tests {
 
     #[test]
     fn agreeing_cube_is_reused_and_rechecked() {
+        let table = VisTable::default();
         let p = DVec3::new(0.51, 0.52, 0.53);
         let mut traced = 0;
-        for i in 0..(TRUST + RECHECK) {
-            let (c, did) = shadow(&q(1, p), 0, || {
+        for i in 0..(TRUST + 3 * RECHECK) {
+            let (c, did) = shadow(Some(&table), &q(1, p), 0, || {
                 traced += 1;
                 Color::splat(0.8)
             });
@@ -229,14 +280,14 @@ mod tests {
                 "query {i}"
             );
         }
-        assert_eq!(traced, TRUST as usize + 1);
+        assert_eq!(traced, TRUST as usize + 3);
         // Another source, another side, or another calculation: nothing reused.
-        let (_, did) = shadow(&q(1, p), 1, || Color::ONE);
+        let (_, did) = shadow(Some(&table), &q(1, p), 1, || Color::ONE);
         assert!(did);
         let back = VisQuery::new(1, 3, true, 0.1, p).unwrap();
-        let (_, did) = shadow(&back, 0, || Color::ONE);
+        let (_, did) = shadow(Some(&table), &back, 0, || Color::ONE);
         assert!(did);
-        let (_, did) = shadow(&q(2, p), 0, || Color::ONE);
+        let (_, did) = shadow(Some(&table), &q(2, p), 0, || Color::ONE);
         assert!(did);
     }
 
@@ -246,10 +297,66 @@ mod tests {
         for i in 0..40 {
             let lit = i % 5 != 0;
             let want = if lit { Color::ONE } else { Color::ZERO };
-            let (c, did) = shadow(&q(7, p), 2, || want);
+            let (c, did) = shadow(None, &q(7, p), 2, || want);
             assert!(did, "query {i} of a mixed cube must trace");
             assert_eq!(c, want);
         }
+    }
+
+    #[test]
+    fn threads_share_a_table_and_its_means_stay_within_the_answers() {
+        let table = VisTable::default();
+        let p = DVec3::new(1.5, 2.5, -0.5);
+        // One thread teaches the cube; another is answered without a ray.
+        std::thread::scope(|s| {
+            s.spawn(|| {
+                for _ in 0..TRUST {
+                    shadow(Some(&table), &q(3, p), 4, || Color::new(0.5, 0.25, 1.0));
+                }
+            });
+        });
+        let (c, did) = std::thread::scope(|s| {
+            s.spawn(|| shadow(Some(&table), &q(3, p), 4, || Color::ZERO))
+                .join()
+                .unwrap()
+        });
+        assert!(!did);
+        assert!((c - Color::new(0.5, 0.25, 1.0)).abs().max_element() < 1e-6);
+        // Four threads at once on a few cubes, each answer a transmission of 0.2-0.8 on
+        // every channel (all lit): every answer, reused or traced, stays within them.
+        std::thread::scope(|s| {
+            for k in 0..4u64 {
+                let table = &table;
+                s.spawn(move || {
+                    for i in 0..20_000u64 {
+                        let v = 0.2 + 0.6 * ((i * 7 + k * 13) % 97) as f64 / 96.0;
+                        let at = DVec3::new(0.1 + (i % 3) as f64, 0.3, 0.7);
+                        let (c, _) =
+                            shadow(Some(table), &q(5, at), (i % 2) as usize, || Color::splat(v));
+                        assert!(
+                            c.min_element() >= 0.2 - 1e-6 && c.max_element() <= 0.8 + 1e-6,
+                            "{c:?}"
+                        );
+                    }
+                });
+            }
+        });
+    }
+
+    #[test]
+    fn epochs_use_a_private_table() {
+        let table = VisTable::default();
+        let p = DVec3::new(4.5, 0.5, 0.5);
+        for _ in 0..TRUST {
+            shadow(Some(&table), &q(9, p), 0, || Color::ONE);
+        }
+        // In an epoch, the shared table's trusted cube is not consulted.
+        new_epoch(77);
+        let (_, did) = shadow(Some(&table), &q(9, p), 0, || Color::ONE);
+        new_epoch(0);
+        assert!(did);
+        let (_, did) = shadow(Some(&table), &q(9, p), 0, || Color::ONE);
+        assert!(!did);
     }
 
     #[test]

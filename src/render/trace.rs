@@ -80,6 +80,12 @@ pub trait IndirectLight: Sync {
     /// How direct light is gathered at `hit` of `ray` (`fill_only`: for the overture).
     fn direct_plan(&self, ray: &Ray, hit: &Hit, fill_only: bool) -> DirectPlan;
 
+    /// The table of shadow answers the calculation's threads share
+    /// ([`crate::light::viscache`]); None: each thread keeps its own.
+    fn shadow_table(&self) -> Option<&crate::light::viscache::VisTable> {
+        None
+    }
+
     /// Count `n` shadow rays answered from a footprint's cache instead of traced.
     fn count_reused_shadows(&self, n: u64);
 }
