@@ -16,6 +16,7 @@ use std::sync::{Arc, Mutex};
 
 use glam::DVec3;
 
+use super::picture::FrameSetup;
 use super::trace::Tracer;
 use crate::light::source::LightSet;
 use crate::render::world::Scene;
@@ -30,42 +31,54 @@ const MAX_CELLS: usize = 4096;
 /// Largest distant source treated as small, in degrees (the sun is 0.5; skies are 180).
 const MAX_DISTANT_DEG: f64 = 5.0;
 
-/// Frames whose cells a [`CellMemo`] keeps (the tile loops of a worker may be on as many
+/// Frames a [`CellMemo`] keeps (the tile loops of a worker may be on as many
 /// frames at once).
 const MEMO_FRAMES: usize = 8;
 
-/// What the cells depend on besides the scene and its sources: the view, the picture's size
-/// and the cell side.
-type CellKey = (View, usize, usize, usize);
+/// What a frame's sources depend on besides the scene and its sources: the view, the
+/// picture's size, the cell side and whether pixels hold irradiance (`-i`).
+type FrameKey = (View, usize, usize, usize, bool);
 
-/// A frame's cells sampled at every pixel, shared by its tiles.
-pub type Cells = Arc<HashSet<(usize, usize)>>;
+/// What a frame's small light sources ask of its pixels: the cells sampled at every pixel,
+/// and the sources drawn by their coverage ([`super::srcdraw`]).
+#[derive(Debug, Default)]
+pub struct FrameSources {
+    /// Cells (column, row) sampled at every pixel.
+    pub cells: HashSet<(usize, usize)>,
+    /// Sources drawn by coverage.
+    pub drawn: Vec<super::srcdraw::Drawn>,
+}
 
-/// The cells of the frames a session rendered last: one computation per frame, however
-/// many tiles it is cut into. Only for one scene and one set of sources (a session's).
+impl FrameSources {
+    /// Both, for frame `fs` with sampling cells of side `cell`.
+    pub fn compute(tr: &Tracer, fs: &FrameSetup, cell: usize) -> FrameSources {
+        FrameSources {
+            cells: source_cells(tr, fs.view, fs.xres, fs.yres, cell),
+            drawn: super::srcdraw::frame_sources(tr, fs),
+        }
+    }
+}
+
+/// The small sources of the frames a session rendered last: one computation per frame,
+/// however many tiles it is cut into. Only for one scene and one set of sources (a
+/// session's).
 #[derive(Default)]
 pub struct CellMemo {
-    frames: Mutex<Vec<(CellKey, Cells)>>,
+    frames: Mutex<Vec<(FrameKey, Arc<FrameSources>)>>,
 }
 
 impl CellMemo {
-    /// [`source_cells`] for this frame, computed on its first tile.
-    pub fn cells(
-        &self,
-        tr: &Tracer,
-        view: &ViewFrame,
-        xres: usize,
-        yres: usize,
-        cell: usize,
-    ) -> Cells {
-        let key = (view.view.clone(), xres, yres, cell);
-        let found =
-            |f: &Vec<(CellKey, Cells)>| f.iter().find(|(k, _)| *k == key).map(|(_, c)| c.clone());
+    /// [`FrameSources::compute`] for this frame, computed on its first tile.
+    pub fn frame(&self, tr: &Tracer, fs: &FrameSetup, cell: usize) -> Arc<FrameSources> {
+        let key = (fs.view.view.clone(), fs.xres, fs.yres, cell, fs.irradiance);
+        let found = |f: &Vec<(FrameKey, Arc<FrameSources>)>| {
+            f.iter().find(|(k, _)| *k == key).map(|(_, c)| c.clone())
+        };
         if let Some(c) = self.frames.lock().ok().and_then(|f| found(&f)) {
             return c;
         }
         // Computed without the lock (another thread may compute the same: the same set).
-        let c = Arc::new(source_cells(tr, view, xres, yres, cell));
+        let c = Arc::new(FrameSources::compute(tr, fs, cell));
         if let Ok(mut f) = self.frames.lock() {
             if found(&f).is_none() {
                 if f.len() >= MEMO_FRAMES {

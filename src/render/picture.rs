@@ -227,6 +227,19 @@ pub fn render_region(
         .rows_total
         .store(overture_rows.len() + rows, Ordering::Relaxed);
     overture(tr, fs, x0, x1, &overture_rows, progress);
+    // The frame's small light sources: cells sampled at every pixel, sources drawn by
+    // their coverage once the pixels are done.
+    let frame_src = match tr.cells {
+        Some(memo) => memo.frame(tr, fs, ps),
+        None => std::sync::Arc::new(super::lightcells::FrameSources::compute(tr, fs, ps)),
+    };
+    let draw = |out: &mut Vec<[f32; 3]>| {
+        if !frame_src.drawn.is_empty() && tr.scene.fatal_error().is_none() {
+            let mut rays = 0;
+            super::srcdraw::draw(tr, fs, &frame_src.drawn, (x0, y0, x1, y1), out, &mut rays);
+            progress.rays.fetch_add(rays, Ordering::Relaxed);
+        }
+    };
     if ps == 1 {
         // One row per job (with_max_len): rows differ in cost, and rayon's adaptive split
         // otherwise leaves a quarter of the rows to one thread at the end.
@@ -245,17 +258,13 @@ pub fn render_region(
                 progress.rays.fetch_add(rays, Ordering::Relaxed);
                 progress.rows_done.fetch_add(1, Ordering::Relaxed);
             });
+        draw(&mut out);
         return out;
     }
     let cx0 = x0 / ps;
     let cx1 = x1.div_ceil(ps);
     // Cells where a small light source appears are sampled at every pixel.
-    let full = match tr.cells {
-        Some(memo) => memo.cells(tr, fs.view, fs.xres, fs.yres, ps),
-        None => std::sync::Arc::new(super::lightcells::source_cells(
-            tr, fs.view, fs.xres, fs.yres, ps,
-        )),
-    };
+    let full = &frame_src.cells;
     // Samples on the cell borders are shared: a cell takes its left column from the cell
     // before it in its band, and its top and bottom rows from the band lines it shares with
     // the bands above and below. Even bands run first (in parallel, their lines disjoint),
@@ -320,6 +329,7 @@ pub fn render_region(
     // One band per job, as the rows above.
     even.into_par_iter().with_max_len(1).for_each(band);
     odd.into_par_iter().with_max_len(1).for_each(band);
+    draw(&mut out);
     out
 }
 
