@@ -296,6 +296,22 @@ fn sources_smaller_than_a_pixel_are_drawn_by_their_coverage() {
             aa: None,
         };
         let px = render_region(&tracer, &fs, 0, 0, 64, 64, &RenderProgress::default());
+        // Tiles cut through the lamp's pixels draw the same pixels.
+        for (tx, ty) in [(0, 0), (32, 0), (0, 32), (32, 32)] {
+            let tile = render_region(
+                &tracer,
+                &fs,
+                tx,
+                ty,
+                tx + 32,
+                ty + 32,
+                &RenderProgress::default(),
+            );
+            for (i, p) in tile.iter().enumerate() {
+                let (x, y) = (tx + i % 32, ty + i / 32);
+                assert_eq!(*p, px[y * 64 + x], "tile pixel ({x}, {y})");
+            }
+        }
         let mut seen = 0;
         for (i, p) in px.iter().enumerate() {
             let (x, y) = (i % 64, i / 64);
