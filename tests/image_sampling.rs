@@ -50,28 +50,16 @@ impl Curved {
             res,
             ps,
             r,
+            None,
         )
     }
 }
 
 /// Pixels of region `[x0, x1) × [y0, y1)` of a `res`-wide picture of `scene` at `-ps ps`
-/// (`-pj .67 -pt .05`), the rays traced and the picture's size.
-fn render(
-    scene: &Scene,
-    lights: &LightSet,
-    params: &RenderParams,
-    view: &View,
-    res: usize,
-    ps: usize,
-    r: [usize; 4],
-) -> (Vec<[f32; 3]>, u64, usize, usize) {
-    render_with(scene, lights, params, view, res, ps, r, None)
-}
-
-/// [`render`] with a memo of the small sources' cells shared between calls (as a session's
-/// tiles share it).
+/// (`-pj .67 -pt .05`), the rays traced and the picture's size; `memo`, when given, keeps
+/// the small sources' cells between calls (as a session's tiles share them).
 #[allow(clippy::too_many_arguments)]
-fn render_with(
+fn render(
     scene: &Scene,
     lights: &LightSet,
     params: &RenderParams,
@@ -148,7 +136,7 @@ fn picture(scene: &Scene, view: &View, res: usize, ps: usize) -> Vec<[f32; 3]> {
     let params = RenderParams::default();
     let lights = LightSet::collect(scene, params.dr);
     let all = [0, 0, usize::MAX, usize::MAX];
-    render(scene, &lights, &params, view, res, ps, all).0
+    render(scene, &lights, &params, view, res, ps, all, None).0
 }
 
 /// Downlights a pixel or two wide across a dark hall, and a sun disc of 0.5° low in a dark
@@ -210,8 +198,8 @@ fn tiles_share_the_cells(scene: &Scene, view: &View, whole: &[[f32; 3]]) {
     let lights = LightSet::collect(scene, params.dr);
     let memo = CellMemo::default();
     let other = hall_view("-vp 0 0 1.6 -vd .3 1 .1 -vu 0 0 1 -vh 70 -vv 50");
-    let (_, _, w, h) = render_with(scene, &lights, &params, view, 320, 4, [0, 0, 1, 1], None);
-    render_with(
+    let (_, _, w, h) = render(scene, &lights, &params, view, 320, 4, [0, 0, 1, 1], None);
+    render(
         scene,
         &lights,
         &params,
@@ -225,7 +213,7 @@ fn tiles_share_the_cells(scene: &Scene, view: &View, whole: &[[f32; 3]]) {
         let x1 = if x == 0 { 137 } else { w };
         let y1 = if y == 0 { 61 } else { h };
         let r = [x, y, x1, y1];
-        let (tile, _, _, _) = render_with(scene, &lights, &params, view, 320, 4, r, Some(&memo));
+        let (tile, _, _, _) = render(scene, &lights, &params, view, 320, 4, r, Some(&memo));
         let tw = x1 - x;
         for (i, p) in tile.iter().enumerate() {
             let (px, py) = (x + i % tw, y + i / tw);

@@ -123,13 +123,7 @@ fn for_each_outline(scene: &Scene, lights: &LightSet, vp: DVec3, mut f: impl FnM
             };
             let (lo, hi) = o.surface.bounds();
             let (lo, hi) = (lo + scene.origin, hi + scene.origin);
-            f(&std::array::from_fn::<_, 8, _>(|k| {
-                DVec3::new(
-                    if k & 1 == 0 { lo.x } else { hi.x },
-                    if k & 2 == 0 { lo.y } else { hi.y },
-                    if k & 4 == 0 { lo.z } else { hi.z },
-                )
-            }));
+            f(&super::srcdraw::box_corners(lo, hi));
         } else if let Some(d) = s.distant.and_then(|i| scene.distant.get(i)) {
             let src = &d.source;
             if !(src.angle_deg > 0.0 && src.angle_deg <= MAX_DISTANT_DEG) {

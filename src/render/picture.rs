@@ -61,12 +61,19 @@ struct Sample {
     dist: f64,
 }
 
-fn sample_pixel(tr: &Tracer, fs: &FrameSetup, px: usize, py_top: usize, rays: &mut u64) -> Sample {
+/// Where pixel `(px, py_top)`'s sample lies (image coordinates in [0, 1], y from the
+/// bottom: its jitter), with the pixel's random numbers ready for the rest of its path.
+pub(super) fn sample_point(fs: &FrameSetup, px: usize, py_top: usize) -> (Sampler, f64, f64) {
     let mut rng = Sampler::for_pixel(fs.frame, px as u32, py_top as u32, 0);
     let yb = fs.yres - 1 - py_top;
     let (r1, r2) = rng.next2();
     let x = (px as f64 + 0.5 + fs.pj * (0.5 - r1)) / fs.xres as f64;
     let y = (yb as f64 + 0.5 + fs.pj * (0.5 - r2)) / fs.yres as f64;
+    (rng, x, y)
+}
+
+fn sample_pixel(tr: &Tracer, fs: &FrameSetup, px: usize, py_top: usize, rays: &mut u64) -> Sample {
+    let (mut rng, x, y) = sample_point(fs, px, py_top);
     let Some((org, dir, tmax)) = fs.view.ray(x, y) else {
         return Sample {
             color: Color::ZERO,

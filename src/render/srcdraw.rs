@@ -129,17 +129,20 @@ fn outline_of(s: &Surface, eye: DVec3) -> Vec<DVec3> {
         Surface::Sphere(sp) => circle(sp.center, (sp.center - eye).normalize_or_zero(), sp.radius),
         Surface::Cone(_) => {
             let (lo, hi) = s.bounds();
-            (0..8)
-                .map(|k| {
-                    DVec3::new(
-                        if k & 1 == 0 { lo.x } else { hi.x },
-                        if k & 2 == 0 { lo.y } else { hi.y },
-                        if k & 4 == 0 { lo.z } else { hi.z },
-                    )
-                })
-                .collect()
+            box_corners(lo, hi).to_vec()
         }
     }
+}
+
+/// The eight corners of the box `[lo, hi]`.
+pub fn box_corners(lo: DVec3, hi: DVec3) -> [DVec3; 8] {
+    std::array::from_fn(|k| {
+        DVec3::new(
+            if k & 1 == 0 { lo.x } else { hi.x },
+            if k & 2 == 0 { lo.y } else { hi.y },
+            if k & 4 == 0 { lo.z } else { hi.z },
+        )
+    })
 }
 
 /// [`CIRCLE`] points on the circle of radius `r` about `c` perpendicular to `n`.
@@ -176,22 +179,24 @@ fn hull(mut pts: Vec<[f64; 2]>) -> Vec<[f64; 2]> {
     let cross = |o: [f64; 2], a: [f64; 2], b: [f64; 2]| {
         (a[0] - o[0]) * (b[1] - o[1]) - (a[1] - o[1]) * (b[0] - o[0])
     };
+    // The lower chain left to right, then the upper chain right to left; each drops its
+    // last point, the first of the other.
     let mut h: Vec<[f64; 2]> = Vec::with_capacity(2 * pts.len());
-    for pass in 0..2 {
-        let start = h.len();
-        let it: Box<dyn Iterator<Item = &[f64; 2]>> = if pass == 0 {
-            Box::new(pts.iter())
-        } else {
-            Box::new(pts.iter().rev())
-        };
-        for &p in it {
-            while h.len() >= start + 2 && cross(h[h.len() - 2], h[h.len() - 1], p) <= 0.0 {
-                h.pop();
-            }
-            h.push(p);
+    for &p in &pts {
+        while h.len() >= 2 && cross(h[h.len() - 2], h[h.len() - 1], p) <= 0.0 {
+            h.pop();
         }
-        h.pop();
+        h.push(p);
     }
+    h.pop();
+    let lower = h.len();
+    for &p in pts.iter().rev() {
+        while h.len() >= lower + 2 && cross(h[h.len() - 2], h[h.len() - 1], p) <= 0.0 {
+            h.pop();
+        }
+        h.push(p);
+    }
+    h.pop();
     h
 }
 
@@ -313,12 +318,9 @@ pub fn draw(
                 let mut rng = Sampler::for_pixel(fs.frame, px as u32, py as u32, SALT);
                 let l = crate::color::sanitize(tr.trace(&ray, &mut rng));
                 *rays += rng.rays;
-                // Where the pixel's own sample landed (as sample_pixel places it).
-                let (r1, r2) = Sampler::for_pixel(fs.frame, px as u32, py as u32, 0).next2();
-                let sample = [
-                    px as f64 + 0.5 + fs.pj * (0.5 - r1),
-                    py as f64 + 0.5 - fs.pj * (0.5 - r2),
-                ];
+                // Where the pixel's own sample landed, in pixels from the top left.
+                let (_, sx, sy) = super::picture::sample_point(fs, px, py);
+                let sample = [sx * fs.xres as f64, (1.0 - sy) * fs.yres as f64];
                 let Some(pix) = out.get_mut((py - y0) * w + (px - x0)) else {
                     continue;
                 };
