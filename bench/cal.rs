@@ -64,6 +64,7 @@ fn main() {
     b.load_text(SKY.as_bytes(), "sky", sky).unwrap();
     let g = tessera::cal::Ctx::GLOBAL;
     let cases: Vec<(&str, ExprId)> = vec![
+        ("Px (one channel)", b.expr("Px", g, "b:0").unwrap()),
         (
             "Px*2 + Py (trivial)",
             b.expr("Px*2 + Py", g, "b:1").unwrap(),
@@ -93,10 +94,26 @@ fn main() {
             "skybr (Radiance's skybright.cal)",
             b.expr("skybr", ctx, "b:6").unwrap(),
         ));
+        // An ies2rad luminaire's brightdata: the coordinate and the correction function
+        // (without the data lookup between them).
+        let src = b.load_file("source.cal").unwrap();
+        cases.push((
+            "src_theta (source.cal, ies2rad)",
+            b.expr("src_theta", src, "b:7").unwrap(),
+        ));
+        cases.push((
+            "flatcorr(2.5) (source.cal, ies2rad)",
+            b.expr("flatcorr(2.5)", src, "b:8").unwrap(),
+        ));
     }
     let prog = b.finish();
     let n = 2_000_000;
+    // `cargo bench --bench cal -- WORD` runs the cases whose name contains WORD.
+    let only = std::env::args().skip(1).find(|a| !a.starts_with('-'));
     for (name, e) in cases {
+        if only.as_deref().is_some_and(|w| !name.contains(w)) {
+            continue;
+        }
         time(name, &prog, e, n);
     }
 }

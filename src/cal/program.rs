@@ -15,16 +15,26 @@ const POOL_SIZE: usize = 16;
 
 thread_local! {
     /// Variable caches and value stacks not in use, by program id.
-    static POOL: RefCell<Vec<(u64, Scratch)>> = const { RefCell::new(Vec::new()) };
+    static POOL: RefCell<Vec<(u64, Box<Scratch>)>> = const { RefCell::new(Vec::new()) };
     /// This thread's evaluation clock.
     static TICK: Cell<u64> = const { Cell::new(0) };
 }
 
 /// What one evaluation writes: the variable cache and the value stack.
-#[derive(Default)]
 struct Scratch {
     cache: Vec<Entry>,
     stack: Vec<f64>,
+}
+
+impl Scratch {
+    /// A fresh one for a program of `n` slots (boxed: an evaluation moves a pointer in
+    /// and out of the pool, not the two vectors).
+    fn boxed(n: usize) -> Box<Scratch> {
+        Box::new(Scratch {
+            cache: vec![Entry::default(); n],
+            stack: Vec::with_capacity(64),
+        })
+    }
 }
 
 /// Compiled definitions and expressions. Immutable; evaluate it from any number of threads
@@ -75,16 +85,20 @@ impl Program {
             })
             .ok()
             .flatten()
-            .unwrap_or_else(|| Scratch {
-                cache: vec![Entry::default(); n],
-                stack: Vec::with_capacity(64),
-            });
+            .unwrap_or_else(|| Scratch::boxed(n));
         Evaluation {
             prog: self,
             env,
-            scratch,
+            scratch: Some(scratch),
             tick,
         }
+    }
+
+    /// Function calls left in the code of expression `e` itself (those compiled inline
+    /// are not calls).
+    #[cfg(test)]
+    pub(crate) fn calls_in(&self, e: ExprId) -> usize {
+        self.vm.calls_in(self.exprs[e.0 as usize])
     }
 
     /// The rcalc-style outputs (`$N = expr`) in definition order.
@@ -102,20 +116,23 @@ impl Program {
 pub struct Evaluation<'a> {
     prog: &'a Program,
     env: &'a Env<'a>,
-    scratch: Scratch,
+    /// Always Some until dropped (then back in the pool).
+    scratch: Option<Box<Scratch>>,
     tick: u64,
 }
 
 impl Evaluation<'_> {
     fn run(&mut self, f: impl FnOnce(&mut Vm) -> Result<f64, Trap>) -> Result<f64, EvalError> {
         let top = Frame::top();
+        let n = self.prog.code.slots.len();
+        let scratch = self.scratch.get_or_insert_with(|| Scratch::boxed(n));
         let mut m = Vm {
             top: &top,
             prog: &self.prog.vm,
             code: &self.prog.code,
             env: self.env,
-            cache: &mut self.scratch.cache,
-            stack: &mut self.scratch.stack,
+            cache: &mut scratch.cache,
+            stack: &mut scratch.stack,
             tick: self.tick,
             depth: 0,
             origin: super::eval::stack_here(),
@@ -140,10 +157,12 @@ impl Evaluation<'_> {
     #[cfg(test)]
     pub(crate) fn eval_tree(&mut self, e: ExprId) -> Result<f64, EvalError> {
         let node = self.prog.roots[e.0 as usize];
+        let n = self.prog.code.slots.len();
+        let scratch = self.scratch.get_or_insert_with(|| Scratch::boxed(n));
         let mut m = super::eval::Machine {
             code: &self.prog.code,
             env: Some(self.env),
-            cache: &mut self.scratch.cache,
+            cache: &mut scratch.cache,
             tick: self.tick,
             depth: 0,
             stack: super::eval::stack_here(),
@@ -165,7 +184,9 @@ impl Evaluation<'_> {
 
 impl Drop for Evaluation<'_> {
     fn drop(&mut self) {
-        let scratch = std::mem::take(&mut self.scratch);
+        let Some(scratch) = self.scratch.take() else {
+            return;
+        };
         let id = self.prog.id;
         let _ = POOL.try_with(|p| {
             if let Ok(mut p) = p.try_borrow_mut() {

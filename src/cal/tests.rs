@@ -557,11 +557,15 @@ fn run_time_machine_matches_the_tree_walker() {
         m(x) = min(x, a, b) + max(b, x); q(x) = x/(x - 1) + x^.5;
         bad1 = nothere + 1; bad2(x) = g(x); bad3 = f; deep(n) = deep(n + 1);
         t(x) = atan2(x, a) + noise3(x, a, b) + arg(1) + arg(0);
+        u(x, y) = f(x) + g(y, -x); w(x) = u(-x, x*b) / m(x); e(x) = if(x, x, sqrt(x));
+        l(x) = t(x) + 1; o(x) = u(x, Py) - e(-x) + bound(-1, x, 1) + Acos(x);
     ";
     let atoms = [
         "a", "b", "c", "Px", "Py", "Pz", "A1", "arg(2)", "0", "1", "2.5", "-.5",
     ];
-    let calls1 = ["f", "r", "m", "q", "t", "sin", "sqrt", "log", "floor"];
+    let calls1 = [
+        "f", "r", "m", "q", "t", "sin", "sqrt", "log", "floor", "w", "e", "l", "o",
+    ];
     let mut seed: u64 = 0x9e37_79b9_7f4a_7c15;
     let mut next = |n: usize| -> usize {
         seed ^= seed << 13;
@@ -603,7 +607,7 @@ fn run_time_machine_matches_the_tree_walker() {
     let mut b = CalBuilder::new(&[]).unwrap();
     b.load_text(DEFS.as_bytes(), "defs", Ctx::GLOBAL).unwrap();
     let mut exprs = Vec::new();
-    for i in 0..3000 {
+    for i in 0..4000 {
         let text = gen(&mut next, 5, &atoms, &calls1);
         if let Ok(e) = b.expr(&text, Ctx::GLOBAL, &format!("case:{i}")) {
             exprs.push((text, e));
@@ -638,4 +642,38 @@ fn run_time_machine_matches_the_tree_walker() {
     }
     // Every outcome occurs.
     assert!(kinds.iter().all(|&k| k > 10), "{kinds:?}");
+}
+
+/// Small functions called with short call-free arguments are compiled inline (no call at
+/// run time), nested ones too; a body with `arg()`, a call it cannot inline, recursion, a
+/// wrong argument count or a long argument keeps its call. Values and errors are checked
+/// against the tree walker by `run_time_machine_matches_the_tree_walker`.
+#[test]
+fn small_functions_are_compiled_inline() {
+    const DEFS: &str = "
+        a = Px*2 - 1; f(x) = x*x - a; g(x, y) = if(x, y, -y); u(x, y) = f(x) + g(y, -x);
+        t(x) = x + arg(1); l(x) = t(x) + 1; r(n) = if(n - .5, n*r(n-1), 1);
+    ";
+    let mut b = CalBuilder::new(&[]).unwrap();
+    b.load_text(DEFS.as_bytes(), "defs", Ctx::GLOBAL).unwrap();
+    let cases = [
+        ("Acos(Dz)", 0),
+        ("u(Px, -Py)", 0),
+        ("u(Px*a, Py/2)", 0),
+        ("Atan2(-Dy, -Dx)", 0),
+        ("t(Px)", 1),
+        ("l(Px)", 1),
+        ("r(3)", 1),
+        ("f(Px, Py)", 1),
+        ("f(Px*Py*Pz)", 1),
+        ("f(sin(Px))", 1),
+    ];
+    let ids: Vec<_> = cases
+        .iter()
+        .map(|(t, _)| b.expr(t, Ctx::GLOBAL, "inline").unwrap())
+        .collect();
+    let prog = b.finish();
+    for ((text, calls), e) in cases.iter().zip(ids) {
+        assert_eq!(prog.calls_in(e), *calls, "{text}");
+    }
 }

@@ -130,9 +130,33 @@ struct Compiler<'c> {
     fixups: Vec<usize>,
     /// Slots whose definition must be compiled.
     wanted: Vec<SlotId>,
+    /// Calls being compiled inline, innermost last: each call's argument list. A
+    /// parameter met in an inlined body is its argument, compiled in the context of the
+    /// call ([`Compiler::can_inline`]).
+    inline: Vec<(u32, u16)>,
+    /// How many of `inline` apply to the node being compiled (fewer while an argument is
+    /// compiled in its caller's context).
+    visible: usize,
 }
 
+/// Deepest nesting of inlined calls.
+const INLINE_DEPTH: u32 = 4;
+/// Most nodes an inlined body (with what it inlines) may have.
+const INLINE_NODES: u32 = 64;
+/// Most nodes of an argument that an inlined body may repeat at each of its uses.
+const ARG_NODES: u32 = 3;
+
 impl Compiled {
+    /// Call instructions in the block starting at `pc` (up to its `Ret`).
+    #[cfg(test)]
+    pub(crate) fn calls_in(&self, pc: u32) -> usize {
+        self.ins[pc as usize..]
+            .iter()
+            .take_while(|i| !matches!(i, Ins::Ret))
+            .filter(|i| matches!(i, Ins::Call { .. } | Ins::CallParam { .. }))
+            .count()
+    }
+
     /// Compile every definition and every expression of `code`; returns the blocks of
     /// `exprs` in order.
     pub fn new(code: &Code, exprs: &[NodeId]) -> (Compiled, Vec<u32>) {
@@ -146,6 +170,8 @@ impl Compiled {
             pending: Vec::new(),
             fixups: Vec::new(),
             wanted: (0..code.slots.len() as u32).collect(),
+            inline: Vec::new(),
+            visible: 0,
         };
         let blocks = exprs.iter().map(|&e| c.block(e)).collect();
         loop {
@@ -247,9 +273,16 @@ impl Compiler<'_> {
                 Def::Func { .. } => self.fail(Fail::FuncAsVar(s, n), n),
                 Def::None => self.fail(Fail::UndefVar(s, n), n),
             },
-            Node::Param(i) => {
-                self.emit(Ins::Param(i), n);
-            }
+            Node::Param(i) => match self.inlined_arg(i) {
+                Some(a) => {
+                    self.visible -= 1;
+                    self.node(a);
+                    self.visible += 1;
+                }
+                None => {
+                    self.emit(Ins::Param(i), n);
+                }
+            },
             Node::Neg(a) => {
                 self.node(a);
                 self.emit(Ins::Neg, n);
@@ -289,11 +322,27 @@ impl Compiler<'_> {
         }
     }
 
+    /// The argument that parameter `i` stands for in the innermost visible inlined call.
+    fn inlined_arg(&self, i: u16) -> Option<NodeId> {
+        let (first, k) = *self.inline[..self.visible].last()?;
+        self.code.args(first, k).get(i as usize).copied()
+    }
+
     /// Node `n` as an operand read directly, when it is a leaf.
     fn leaf(&self, n: NodeId) -> Option<Rhs> {
+        self.leaf_in(n, self.visible)
+    }
+
+    /// [`Compiler::leaf`] with `visible` inlined calls applying.
+    fn leaf_in(&self, n: NodeId, visible: usize) -> Option<Rhs> {
         match self.code.nodes[n as usize] {
             Node::Num(v) => Some(Rhs::Num(v)),
             Node::Chan(c @ 1..=27) => Some(Rhs::Chan(c as u8 - 1)),
+            Node::Param(i) if visible > 0 => {
+                let (first, k) = self.inline[visible - 1];
+                let a = *self.code.args(first, k).get(i as usize)?;
+                self.leaf_in(a, visible - 1)
+            }
             Node::Param(i) => Some(Rhs::Param(i)),
             Node::Var(s) => match self.code.slots[s as usize].def {
                 Def::Num(v) => Some(Rhs::Num(v)),
@@ -312,7 +361,15 @@ impl Compiler<'_> {
             Callee::Slot(s) => {
                 let slot = &self.code.slots[s as usize];
                 match slot.def {
+                    Def::Func { body, .. } if self.can_inline(s, first, k, 0, &mut 0) => {
+                        self.inline.push((first, k));
+                        self.visible += 1;
+                        self.node(body);
+                        self.visible -= 1;
+                        self.inline.pop();
+                    }
                     Def::Func { .. } => {
+                        debug_assert_eq!(self.visible, 0, "a call in an inlined body");
                         self.args_later(first, k);
                         let pc = self.emit(
                             Ins::Call {
@@ -345,6 +402,100 @@ impl Compiler<'_> {
                     site,
                 );
             }
+        }
+    }
+
+    /// Whether the call of function `s` with the arguments `code.args(first, k)` may be
+    /// compiled inline, `depth` inlined calls deep, `nodes` counting the nodes inlined so
+    /// far. The code is then the same operations in the same order as the call's, so every
+    /// value and error stays as it was: the call passes exactly the function's parameters,
+    /// each argument is a short expression without calls (a number, channel, variable or
+    /// parameter, or a negation or `+ - * /` of such), which the body computes where it
+    /// uses the parameter (the call would compute it there once and keep it: the same
+    /// value, and the same error at the same first use); the body has no `arg()`, no call
+    /// of a function passed as a parameter, no call of its own that cannot be inlined too,
+    /// and nothing that compiles to a fatal error.
+    fn can_inline(&self, s: SlotId, first: u32, k: u16, depth: u32, nodes: &mut u32) -> bool {
+        let Def::Func { nparams, body, .. } = self.code.slots[s as usize].def else {
+            return false;
+        };
+        depth < INLINE_DEPTH
+            && nparams == k
+            && self
+                .code
+                .args(first, k)
+                .iter()
+                .all(|&a| self.simple_arg(a, &mut 0))
+            && self.inline_body(body, k, depth, nodes)
+    }
+
+    /// Whether `n` is a call-free argument of at most [`ARG_NODES`] nodes.
+    fn simple_arg(&self, n: NodeId, count: &mut u32) -> bool {
+        *count += 1;
+        if *count > ARG_NODES {
+            return false;
+        }
+        match self.code.nodes[n as usize] {
+            Node::Num(_) | Node::Param(_) | Node::Chan(1..=27) => true,
+            Node::Var(v) => matches!(
+                self.code.slots[v as usize].def,
+                Def::Num(_) | Def::Var { .. }
+            ),
+            Node::Neg(a) => self.simple_arg(a, count),
+            Node::Bin(Op::Add | Op::Sub | Op::Mul | Op::Div, a, b) => {
+                self.simple_arg(a, count) && self.simple_arg(b, count)
+            }
+            _ => false,
+        }
+    }
+
+    /// Whether the body node `n` compiles inline ([`Compiler::can_inline`]).
+    fn inline_body(&self, n: NodeId, k: u16, depth: u32, nodes: &mut u32) -> bool {
+        *nodes += 1;
+        if *nodes > INLINE_NODES {
+            return false;
+        }
+        match self.code.nodes[n as usize] {
+            Node::Num(_) | Node::Chan(1..=27) => true,
+            Node::Param(i) => i < k,
+            Node::Chan(_) => false,
+            Node::Var(v) => matches!(
+                self.code.slots[v as usize].def,
+                Def::Num(_) | Def::Var { .. }
+            ),
+            Node::Neg(a) => self.inline_body(a, k, depth, nodes),
+            Node::Bin(_, a, b) => {
+                self.inline_body(a, k, depth, nodes) && self.inline_body(b, k, depth, nodes)
+            }
+            Node::Call {
+                callee: Callee::Lib(l),
+                first,
+                n,
+            } => {
+                let arity_ok = match l {
+                    Lib::If => n == 3,
+                    Lib::Select => n >= 2,
+                    Lib::Min | Lib::Max => n >= 1,
+                    Lib::Atan2 => n == 2,
+                    _ => l.unary().is_some() && n == 1,
+                };
+                arity_ok
+                    && self
+                        .code
+                        .args(first, n)
+                        .iter()
+                        .all(|&a| self.inline_body(a, k, depth, nodes))
+            }
+            Node::Call {
+                callee: Callee::Slot(s),
+                first,
+                n,
+            } => {
+                let slot = &self.code.slots[s as usize];
+                matches!(slot.def, Def::Func { .. })
+                    && self.can_inline(s, first, n, depth + 1, nodes)
+            }
+            Node::Call { .. } => false,
         }
     }
 
