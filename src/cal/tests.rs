@@ -645,14 +645,16 @@ fn run_time_machine_matches_the_tree_walker() {
 }
 
 /// Small functions called with short call-free arguments are compiled inline (no call at
-/// run time), nested ones too; a body with `arg()`, a call it cannot inline, recursion, a
-/// wrong argument count or a long argument keeps its call. Values and errors are checked
+/// run time), nested ones too, `arg()` (the primitive's arguments in any frame) included;
+/// a body with a call it cannot inline, recursion, a wrong argument count or a long
+/// argument keeps its call. Values and errors are checked
 /// against the tree walker by `run_time_machine_matches_the_tree_walker`.
 #[test]
 fn small_functions_are_compiled_inline() {
     const DEFS: &str = "
         a = Px*2 - 1; f(x) = x*x - a; g(x, y) = if(x, y, -y); u(x, y) = f(x) + g(y, -x);
         t(x) = x + arg(1); l(x) = t(x) + 1; r(n) = if(n - .5, n*r(n-1), 1);
+        c(v) = if(arg(0) - .5, arg(1)*v, v); fc(v) = c(v) / Rdot; k(x) = r(x) + 1;
     ";
     let mut b = CalBuilder::new(&[]).unwrap();
     b.load_text(DEFS.as_bytes(), "defs", Ctx::GLOBAL).unwrap();
@@ -661,8 +663,10 @@ fn small_functions_are_compiled_inline() {
         ("u(Px, -Py)", 0),
         ("u(Px*a, Py/2)", 0),
         ("Atan2(-Dy, -Dx)", 0),
-        ("t(Px)", 1),
-        ("l(Px)", 1),
+        ("t(Px)", 0),
+        ("l(Px)", 0),
+        ("fc(Px)", 0),
+        ("k(Px)", 1),
         ("r(3)", 1),
         ("f(Px, Py)", 1),
         ("f(Px*Py*Pz)", 1),

@@ -412,8 +412,8 @@ impl Compiler<'_> {
     /// each argument is a short expression without calls (a number, channel, variable or
     /// parameter, or a negation or `+ - * /` of such), which the body computes where it
     /// uses the parameter (the call would compute it there once and keep it: the same
-    /// value, and the same error at the same first use); the body has no `arg()`, no call
-    /// of a function passed as a parameter, no call of its own that cannot be inlined too,
+    /// value, and the same error at the same first use); the body has no call of a
+    /// function passed as a parameter, no call of its own that cannot be inlined too,
     /// and nothing that compiles to a fatal error.
     fn can_inline(&self, s: SlotId, first: u32, k: u16, depth: u32, nodes: &mut u32) -> bool {
         let Def::Func { nparams, body, .. } = self.code.slots[s as usize].def else {
@@ -477,6 +477,8 @@ impl Compiler<'_> {
                     Lib::Select => n >= 2,
                     Lib::Min | Lib::Max => n >= 1,
                     Lib::Atan2 => n == 2,
+                    // The primitive's real arguments, whatever the frame.
+                    Lib::Arg => n == 1,
                     _ => l.unary().is_some() && n == 1,
                 };
                 arity_ok
