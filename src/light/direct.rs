@@ -75,17 +75,20 @@ fn direct_with(
         };
         lights.sample(tr.scene, (si, p), how, rng, samples);
     }
-    // The potentials carry the light each sample's source sends toward p (its patterns: an
-    // ies2rad luminaire's distribution), so the tests are ordered, stopped and the untested
-    // samples estimated by it; the shadow rays give the transmission only.
-    for s in samples.iter_mut() {
-        s.radiance *= tr.sample_pattern(p, s);
-    }
-    // Potentials.
+    // Potentials. They carry the light each sample's source sends toward p (its patterns:
+    // an ies2rad luminaire's distribution), so the tests are ordered, stopped and the
+    // untested samples estimated by it; the shadow rays give the transmission only. A
+    // sample the surface does not take light from (a zero coefficient: behind it) has no
+    // potential whatever its pattern, which is then not evaluated (as Radiance's direct()).
     let cands = &mut scratch.cands;
     cands.clear();
-    for (k, s) in samples.iter().enumerate() {
-        let c = coef(s.dir, s.omega) * s.radiance;
+    for (k, s) in samples.iter_mut().enumerate() {
+        let w = coef(s.dir, s.omega);
+        if w.to_array() == [0.0; 3] {
+            continue;
+        }
+        s.radiance *= tr.sample_pattern(p, s);
+        let c = w * s.radiance;
         let b = bright(c);
         if b > 0.0 && b.is_finite() {
             cands.push((b, c, k));
