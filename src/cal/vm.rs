@@ -656,10 +656,11 @@ impl Vm<'_> {
             let site = self.prog.site.get(pc as usize).copied().unwrap_or(NONE);
             return Err(self.fail(Fail::TooDeep(site)));
         }
-        let base = self.stack.len();
+        let (base, depth) = (self.stack.len(), self.depth);
         let r = self.exec(pc as usize, f);
         self.stack.truncate(base);
-        self.depth -= 1;
+        // Variables whose blocks ran inline in `exec` counted too; an error leaves them.
+        self.depth = depth - 1;
         r
     }
 
@@ -694,14 +695,39 @@ impl Vm<'_> {
         }
     }
 
-    fn exec(&mut self, mut pc: usize, f: &Frame) -> R {
+    /// The block at `pc` in frame `f`. A variable not computed yet in this evaluation has
+    /// its block run in this same loop (no recursion): its return place and slot go on the
+    /// value stack, its code runs in the variables' frame, and its `Ret` caches the value
+    /// and comes back. Each such block counts as a nested block against [`MAX_DEPTH`], as
+    /// one run by [`Vm::run`] does.
+    fn exec(&mut self, mut pc: usize, f0: &Frame) -> R {
         let prog = self.prog;
+        let top = self.top;
+        let mut f = f0;
+        let mut nested = 0u32;
         let mut acc = 0.0;
         loop {
             match prog.ins[pc] {
                 Ins::Num(v) => acc = v,
                 Ins::Chan(c) => acc = self.env.chan[c as usize],
-                Ins::Var { slot, block } => acc = self.var(slot, block)?,
+                Ins::Var { slot, block } => {
+                    let e = self.cache[slot as usize];
+                    if e.tick == self.tick {
+                        acc = e.value;
+                    } else {
+                        self.depth += 1;
+                        if self.depth > MAX_DEPTH {
+                            let site = prog.site.get(block as usize).copied().unwrap_or(NONE);
+                            return Err(self.fail(Fail::TooDeep(site)));
+                        }
+                        self.stack
+                            .push(f64::from_bits((pc as u64) << 32 | u64::from(slot)));
+                        nested += 1;
+                        f = top;
+                        pc = block as usize;
+                        continue;
+                    }
+                }
                 Ins::Brdf { i, slot, site } => match self.env.brdf {
                     Some(b) => acc = b[i as usize],
                     None => return Err(self.fail(Fail::NoBrdf(slot, site))),
@@ -783,7 +809,23 @@ impl Vm<'_> {
                     acc = call_param(self, f, i as usize, src, site)?;
                 }
                 Ins::Fail(k) => return Err(self.fail(prog.fails[k as usize])),
-                Ins::Ret => return Ok(acc),
+                Ins::Ret => {
+                    if nested == 0 {
+                        return Ok(acc);
+                    }
+                    // The end of a variable's block: cache its value, go back.
+                    let rec = self.stack.pop().unwrap_or(0.0).to_bits();
+                    nested -= 1;
+                    self.depth -= 1;
+                    self.cache[(rec & 0xFFFF_FFFF) as usize] = Entry {
+                        tick: self.tick,
+                        value: acc,
+                    };
+                    pc = (rec >> 32) as usize;
+                    if nested == 0 {
+                        f = f0;
+                    }
+                }
             }
             pc += 1;
         }
