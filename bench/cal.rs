@@ -3,7 +3,8 @@
 //! Each evaluation is one [`Program::begin`] (a clock tick, as for one ray hitting one
 //! modifier) and one [`Evaluation::eval`], with the ray direction and hit point changing
 //! every time. With Radiance installed (`TESSERA_RADIANCE_BIN`, or its default location),
-//! Radiance's own skybright.cal is measured too.
+//! Radiance's own skybright.cal and source.cal (what ies2rad luminaires call) are measured
+//! too. `cargo bench --bench cal -- WORD` runs the cases whose name contains WORD.
 
 use std::hint::black_box;
 use std::path::PathBuf;
