@@ -51,6 +51,7 @@
 
 mod builder;
 mod code;
+mod compile;
 mod error;
 mod eval;
 mod fold;

@@ -2,8 +2,9 @@
 //! evaluation clock, with this thread's variable cache).
 
 use super::code::{Code, NodeId};
+use super::compile::Compiled;
 use super::eval::{call_slot, ArgSrc, Entry, Frame, Trap};
-use super::vm::{Compiled, Vm};
+use super::vm::Vm;
 use super::{Env, EvalError, ExprId, FuncRef};
 use std::cell::{Cell, RefCell};
 use std::sync::atomic::{AtomicU64, Ordering};

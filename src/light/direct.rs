@@ -84,7 +84,7 @@ fn direct_with(
     cands.clear();
     for (k, s) in samples.iter_mut().enumerate() {
         let w = coef(s.dir, s.omega);
-        if w.to_array() == [0.0; 3] {
+        if w == Color::ZERO {
             continue;
         }
         s.radiance *= tr.sample_pattern(p, s);
