@@ -213,6 +213,71 @@ fn ab0_jobs_are_pixel_identical_to_tpict_at_any_worker_count() {
     }
 }
 
+/// Workers take the top-level geometry from the job's scene image (tplan writes it); a
+/// damaged or missing image is refused with the reason, the scene is built instead and a
+/// new image is written; the pictures are those of tpict either way.
+#[test]
+fn workers_use_sound_scene_images_and_replace_bad_ones() {
+    let args = view_args(48, 36, &["-ab", "0"]);
+    let mut refargs = vec!["-n".to_string(), "1".into()];
+    refargs.extend(args.iter().cloned());
+    let reference = tpict(&refargs);
+    let d = tempfile::tempdir().unwrap();
+    let run = |job: &Path, id: &str| -> String {
+        let out = cmd("tpiece")
+            .arg(job)
+            .args(["--worker-id", id, "--threads", "1"])
+            .output()
+            .unwrap();
+        let err = String::from_utf8_lossy(&out.stderr).into_owned();
+        assert!(out.status.success(), "{err}");
+        err
+    };
+    for damage in ["none", "flip", "remove", "truncate"] {
+        let job = d.path().join(format!("job-{damage}"));
+        plan(&job, &["--workers", "1", "--tiles", "6"], &args);
+        let image = job.join("scene.img");
+        let good = std::fs::read(&image).unwrap();
+        assert!(good.starts_with(b"TSSCNIMG"));
+        match damage {
+            "flip" => {
+                let mut b = good.clone();
+                let k = b.len() * 2 / 3;
+                b[k] ^= 1;
+                std::fs::write(&image, b).unwrap();
+            }
+            "remove" => std::fs::remove_file(&image).unwrap(),
+            "truncate" => std::fs::write(&image, &good[..100]).unwrap(),
+            _ => {}
+        }
+        let err = run(&job, "w0");
+        let img = assemble(&job);
+        assert!(img.pixels == reference.pixels, "{damage}: picture differs");
+        let want = match damage {
+            "none" => None,
+            "flip" => Some("checksum mismatch"),
+            "remove" => Some("there is none"),
+            _ => Some("not a scene image"),
+        };
+        match want {
+            None => assert!(!err.contains("scene.img"), "{err}"),
+            Some(w) => {
+                assert!(
+                    err.contains("scene.img: not used (") && err.contains(w),
+                    "{damage}: {err}"
+                );
+                assert!(err.contains("wrote a new one"), "{err}");
+                // The new image is the planner's, byte for byte but for the names of the
+                // files the surfaces came from (the job's flattened scene), and sound.
+                let again = std::fs::read(&image).unwrap();
+                assert!(again.starts_with(b"TSSCNIMG"));
+                let err = run(&job, "w1");
+                assert!(!err.contains("scene.img"), "{damage}, second worker: {err}");
+            }
+        }
+    }
+}
+
 #[test]
 fn ambient_values_are_shared_and_not_recomputed() {
     let amb = [

@@ -594,7 +594,9 @@ proptest! {
     /// folding makes `0*x` +0 whatever the sign of x, as Radiance; without noise calls,
     /// whose high octaves turn a last-bit difference of an argument into a visible one:
     /// `fnoise3(1.625, a / 8.75, 3187500)` differs by 0.0016 when `a / 8.75` is folded into
-    /// `a * (1 / 8.75)`).
+    /// `a * (1 / 8.75)`; without sin, cos and tan, for the same reason far from the origin:
+    /// `4.81 / sin(rand(1.125) ^ (c + b ^ 9) / atan2(7.94, .5558))`, at about `sin(2.3e63)`,
+    /// gave −57.8 folded against −12.3).
     #[test]
     fn evaluation_matches_reference(seed in any::<u64>(), depth in 1u32..7) {
         let mut rng = Rng(seed | 1);
@@ -605,7 +607,8 @@ proptest! {
         let got = tessera_eval(cal_gen::DEFS, std::slice::from_ref(&text), opts, &Env::default())[0];
         prop_assert!(same(got, want), "{}: {:?} vs {:?}", text, got, want);
         let folded = tessera::cal::icalc(cal_gen::DEFS, &text, CalOptions { rayinit: false, ..CalOptions::default() });
-        if let (Ok(w), Ok(f), false) = (want, &folded, cal_gen::has_zero(&e) || cal_gen::has_noise(&e)) {
+        let unstable = cal_gen::has_zero(&e) || cal_gen::has_noise(&e) || cal_gen::has_periodic(&e);
+        if let (Ok(w), Ok(f), false) = (want, &folded, unstable) {
             prop_assert!(!w.is_finite() || close(*f, w, 1e-6) || (f - w).abs() < 1e-9,
                 "{}: folded {} vs {}", text, f, w);
         }

@@ -26,11 +26,13 @@ use glam::{uvec2, DVec3, UVec2, Vec3A};
 use obvhs::aabb::Aabb;
 use obvhs::bvh2::reinsertion::ReinsertionOptimizer;
 use obvhs::cwbvh::bvh2_to_cwbvh::bvh2_to_cwbvh;
+use obvhs::cwbvh::node::CwBvhNode;
 use obvhs::cwbvh::CwBvh;
 use obvhs::ploc::PlocBuilder;
 use obvhs::ray::Ray;
 use obvhs::{Boundable, BvhBuildParams};
 
+use super::plain::Slab;
 use crate::FTINY;
 
 /// Relative box padding (times the largest coordinate magnitude).
@@ -192,14 +194,14 @@ fn morton(b: &Aabb, lo: DVec3, hi: DVec3) -> u64 {
 }
 
 /// The tree of many boxes ([`CHUNK`]): the boxes sorted along a Morton curve, cut into
-/// chunks each built alone, and a tree over the chunks' boxes. Returns the top tree, its
-/// primitives' ids (the chunks' indices) and the chunks.
+/// chunks each built alone, and a tree over the chunks' boxes. Returns the top tree (whose
+/// primitives are the chunks) and each chunk's tree with the ids of its boxes.
 fn build_chunked(
     ids: Vec<u32>,
     boxed: impl Fn(u32) -> BoxPrim,
     lo: DVec3,
     hi: DVec3,
-) -> (Option<CwBvh>, Vec<u32>, Vec<Chunk>) {
+) -> (Option<CwBvh>, Vec<(CwBvh, Vec<u32>)>) {
     let mut order: Vec<(u64, u32)> = ids
         .iter()
         .map(|&i| (morton(&boxed(i).0, lo, hi), i))
@@ -216,14 +218,11 @@ fn build_chunked(
         }
         let bounds = prims.iter().fold(Aabb::empty(), |acc, b| acc.union(&b.0));
         tops.push(BoxPrim(bounds));
-        chunks.push(Chunk {
-            cw,
-            ids: group.iter().map(|&(_, i)| i).collect(),
-        });
+        chunks.push((cw, group.iter().map(|&(_, i)| i).collect()));
     }
     drop(order);
     let top = Some(build_cw_big_stack(&tops)).filter(|cw| !cw.nodes.is_empty());
-    (top, (0..chunks.len() as u32).collect(), chunks)
+    (top, chunks)
 }
 
 /// Round an `f64` to the nearest `f32` that is `>= x`.
@@ -262,29 +261,64 @@ fn ray32(o: DVec3, dir: DVec3, tmax32: f32) -> Ray {
 /// Bounding volume hierarchy over the scene's finite surfaces (obvhs CwBvh, f32 boxes rounded
 /// OUTWARD and padded so that f32 rounding of the ray origin can never make a box test miss a
 /// true f64 hit).
+///
+/// Its trees lie in two plain arrays (which a scene image lends to every process that maps
+/// it): the nodes of the top tree (its root first) and then those of each chunk's tree, with
+/// child and leaf offsets made absolute; and the leaves' slots, each holding the caller's
+/// index (in the top tree of a chunked BVH, the chunk's).
+#[derive(Clone)]
 pub struct Bvh {
-    /// The wide BVH (None when there is no usable box).
-    cw: Option<CwBvh>,
-    /// Caller index of each box given to obvhs (boxes with non-finite bounds are left out).
-    ids: Vec<u32>,
+    /// Every tree's nodes (empty when there is no usable box).
+    pub(crate) nodes: Slab<CwBvhNode>,
+    /// What each leaf slot refers to.
+    pub(crate) slots: Slab<u32>,
+    /// For large inputs, the root node of each chunk's tree (empty: the top tree holds the
+    /// boxes).
+    pub(crate) chunks: Slab<u32>,
     /// Padded scene bounds (f64).
-    lo: DVec3,
-    hi: DVec3,
+    pub(crate) lo: DVec3,
+    pub(crate) hi: DVec3,
     /// Padding applied to every box.
-    pad: f64,
+    pub(crate) pad: f64,
     /// The scene's length tolerance (minimum hit distance, tie window).
-    eps: f64,
+    pub(crate) eps: f64,
     /// Number of input boxes.
-    count: usize,
-    /// For large inputs, the chunks `cw` is built over (empty: `cw` holds the boxes).
-    chunks: Vec<Chunk>,
+    pub(crate) count: usize,
 }
 
-/// A spatially compact group of boxes with its own tree ([`CHUNK`]).
-struct Chunk {
-    cw: CwBvh,
-    /// Caller index of each of its boxes.
-    ids: Vec<u32>,
+/// A tree's nodes, as obvhs's traversal macro reads them.
+struct Nodes<'a> {
+    nodes: &'a [CwBvhNode],
+}
+
+/// Append `cw`'s nodes and leaf slots to the arrays, mapping each slot through `ids`;
+/// returns the index of its root.
+fn append(nodes: &mut Vec<CwBvhNode>, slots: &mut Vec<u32>, cw: &CwBvh, ids: &[u32]) -> u32 {
+    let (n0, s0) = (nodes.len() as u32, slots.len() as u32);
+    nodes.extend(cw.nodes.iter().map(|n| CwBvhNode {
+        child_base_idx: n.child_base_idx + n0,
+        primitive_base_idx: n.primitive_base_idx + s0,
+        ..*n
+    }));
+    slots.extend(
+        cw.primitive_indices
+            .iter()
+            .map(|&k| ids.get(k as usize).copied().unwrap_or(u32::MAX)),
+    );
+    n0
+}
+
+/// Whether the trees in `nodes` can be walked without an index leaving the array and
+/// without a cycle: every node's internal children lie in it after the node itself. (Leaf
+/// slots are looked up with a bounds check; a scene image's BVH is checked with this before
+/// use.)
+pub(crate) fn tree_in_bounds(nodes: &[CwBvhNode]) -> bool {
+    nodes.iter().enumerate().all(|(k, n)| {
+        n.imask == 0
+            || (u64::from(n.child_base_idx) > k as u64
+                && u64::from(n.child_base_idx) + u64::from(n.imask.count_ones())
+                    <= nodes.len() as u64)
+    })
 }
 
 /// Hits within `eps` of the closest one (fixed capacity, no allocation).
@@ -427,24 +461,36 @@ impl Bvh {
                 Vec3A::new(f32_up(hi.x), f32_up(hi.y), f32_up(hi.z)),
             ))
         };
-        let (cw, ids, chunks) = if ids.is_empty() {
-            (None, ids, Vec::new())
+        let (mut nodes, mut slots, mut roots) = (Vec::new(), Vec::new(), Vec::new());
+        if ids.is_empty() {
+            // No usable box: every query misses.
         } else if ids.len() <= CHUNK {
             let prims: Vec<BoxPrim> = ids.iter().map(|&i| boxed(i)).collect();
-            let cw = Some(build_cw_big_stack(&prims)).filter(|cw| !cw.nodes.is_empty());
-            (cw, ids, Vec::new())
+            let cw = build_cw_big_stack(&prims);
+            drop(prims);
+            if !cw.nodes.is_empty() {
+                append(&mut nodes, &mut slots, &cw, &ids);
+            }
         } else {
-            build_chunked(ids, boxed, tlo, thi)
-        };
+            let (top, chunks) = build_chunked(ids, boxed, tlo, thi);
+            if let Some(top) = top {
+                let order: Vec<u32> = (0..chunks.len() as u32).collect();
+                append(&mut nodes, &mut slots, &top, &order);
+                drop(top);
+                for (cw, ids) in &chunks {
+                    roots.push(append(&mut nodes, &mut slots, cw, ids));
+                }
+            }
+        }
         Bvh {
-            cw,
-            ids,
+            nodes: nodes.into(),
+            slots: slots.into(),
+            chunks: roots.into(),
             lo: tlo,
             hi: thi,
             pad,
             eps,
             count: n,
-            chunks,
         }
     }
 
@@ -465,7 +511,9 @@ impl Bvh {
 
     /// The f32 ray for a query, and the shift `s` such that f32 distance = f64 distance − s.
     fn setup(&self, org: DVec3, dir: DVec3, tmax: f64) -> Option<(Ray, f64)> {
-        self.cw.as_ref()?;
+        if self.nodes.is_empty() {
+            return None;
+        }
         if !(org.is_finite() && dir.is_finite())
             || dir == DVec3::ZERO
             || tmax.is_nan()
@@ -580,37 +628,64 @@ impl Bvh {
     /// Visit every primitive whose box the f32 ray reaches, calling `prim(caller index)`;
     /// the returned value lowers the ray's (f32) tmax when smaller.
     fn traverse(&self, ray: Ray, mut prim: impl FnMut(usize) -> f32) {
-        let Some(cw) = self.cw.as_ref() else {
+        if self.nodes.is_empty() {
             return;
-        };
+        }
+        let tree = Nodes { nodes: &self.nodes };
         if self.chunks.is_empty() {
-            walk(cw, &self.ids, ray, &mut |i, _| prim(i));
+            walk(&tree, &self.slots, 0, ray, &mut |i, _| prim(i));
         } else {
             // The top tree's primitives are the chunks: each is walked with the ray as far
             // as it reaches now.
-            walk(cw, &self.ids, ray, &mut |c, tmax| {
-                let ch = &self.chunks[c];
-                walk(&ch.cw, &ch.ids, Ray { tmax, ..ray }, &mut |i, _| prim(i))
-            });
+            walk(
+                &tree,
+                &self.slots,
+                0,
+                ray,
+                &mut |c, tmax| match self.chunks.get(c) {
+                    Some(&root) => walk(
+                        &tree,
+                        &self.slots,
+                        root,
+                        Ray { tmax, ..ray },
+                        &mut |i, _| prim(i),
+                    ),
+                    None => tmax,
+                },
+            );
         }
     }
 }
 
-/// Walk `cw` (whose primitive slots map to `ids`) along `ray`, calling `prim(id, tmax)` for
-/// every primitive whose box the ray reaches within its current `tmax`; the returned value
-/// lowers `tmax` when smaller. Returns the final `tmax`.
-fn walk(cw: &CwBvh, ids: &[u32], mut ray: Ray, prim: &mut impl FnMut(usize, f32) -> f32) -> f32 {
+/// Walk the tree whose root is node `root` of `tree` along `ray`, calling `prim(slot's
+/// value, tmax)` for every leaf slot whose box the ray reaches within its current `tmax`;
+/// the returned value lowers `tmax` when smaller. Returns the final `tmax`.
+fn walk(
+    tree: &Nodes,
+    slots: &[u32],
+    root: u32,
+    mut ray: Ray,
+    prim: &mut impl FnMut(usize, f32) -> f32,
+) -> f32 {
     let mut state = TravState::new(ray.direction);
+    state.current_group.x = root;
     let mut node;
-    obvhs::traverse!(cw, node, state, node.intersect_ray(&ray, state.oct_inv4), {
-        let slot = cw.primitive_indices.get(state.primitive_id as usize);
-        if let Some(&i) = slot.and_then(|&s| ids.get(s as usize)) {
-            let t = prim(i as usize, ray.tmax);
-            if t < ray.tmax {
-                ray.tmax = t;
+    obvhs::traverse!(
+        tree,
+        node,
+        state,
+        node.intersect_ray(&ray, state.oct_inv4),
+        {
+            if let Some(&i) = slots.get(state.primitive_id as usize) {
+                if i != u32::MAX {
+                    let t = prim(i as usize, ray.tmax);
+                    if t < ray.tmax {
+                        ray.tmax = t;
+                    }
+                }
             }
         }
-    });
+    );
     ray.tmax
 }
 
@@ -651,8 +726,13 @@ mod tests {
             })
             .collect();
         let bvh = Bvh::build(&nested, FTINY);
-        let cw = bvh.cw.as_ref().unwrap();
-        let parents = cw.compute_parents();
+        assert!(tree_in_bounds(&bvh.nodes));
+        let mut parents = vec![0usize; bvh.nodes.len()];
+        for (k, n) in bvh.nodes.iter().enumerate() {
+            for c in 0..n.imask.count_ones() as usize {
+                parents[n.child_base_idx as usize + c] = k;
+            }
+        }
         let depth = (0..parents.len())
             .map(|mut n| {
                 let mut d = 0;
@@ -699,6 +779,14 @@ mod tests {
             .collect();
         let bvh = Bvh::build(&boxes, FTINY);
         assert_eq!(bvh.chunks.len(), 3);
+        assert!(tree_in_bounds(&bvh.nodes));
+        // A child index that points back (a cycle) or out of the array is refused.
+        let mut bad = bvh.nodes.to_vec();
+        let k = bad.iter().position(|n| n.imask != 0).unwrap();
+        bad[k].child_base_idx = k as u32;
+        assert!(!tree_in_bounds(&bad));
+        bad[k].child_base_idx = bad.len() as u32;
+        assert!(!tree_in_bounds(&bad));
         let slab = |b: &(DVec3, DVec3), o: DVec3, d: DVec3| -> Option<f64> {
             let (t0, t1) = ((b.0 - o) / d, (b.1 - o) / d);
             let (near, far) = (t0.min(t1).max_element(), t0.max(t1).min_element());

@@ -220,3 +220,57 @@ impl Cone {
         std::f64::consts::PI * (self.r0 + self.r1) * (self.len * self.len + dr * dr).sqrt()
     }
 }
+
+impl Cone {
+    /// Words in [`Cone::to_words`].
+    pub(crate) const WORDS: usize = 26;
+
+    /// Its fields as numbers (a scene image stores them).
+    pub(crate) fn to_words(&self) -> [f64; Self::WORDS] {
+        let kind = match self.kind {
+            ConeKind::Cone => 0.0,
+            ConeKind::Cup => 1.0,
+            ConeKind::Cylinder => 2.0,
+            ConeKind::Tube => 3.0,
+        };
+        let mut w = [0.0; Self::WORDS];
+        w[0] = kind;
+        for (k, v) in [self.p0, self.p1, self.axis, self.mid, self.e1, self.e2]
+            .into_iter()
+            .enumerate()
+        {
+            w[1 + 3 * k..4 + 3 * k].copy_from_slice(&v.to_array());
+        }
+        w[19..26].copy_from_slice(&[self.r0, self.r1, self.len, self.slope, self.eps, 0.0, 0.0]);
+        w
+    }
+
+    /// What [`Cone::to_words`] made; None for non-finite or impossible values.
+    pub(crate) fn from_words(w: &[f64]) -> Option<Cone> {
+        let w: &[f64; Self::WORDS] = w.try_into().ok()?;
+        let kind = match w[0] as u8 {
+            _ if w[0].fract() != 0.0 => return None,
+            0 => ConeKind::Cone,
+            1 => ConeKind::Cup,
+            2 => ConeKind::Cylinder,
+            3 => ConeKind::Tube,
+            _ => return None,
+        };
+        let v = |k: usize| DVec3::new(w[1 + 3 * k], w[2 + 3 * k], w[3 + 3 * k]);
+        let c = Cone {
+            kind,
+            p0: v(0),
+            p1: v(1),
+            axis: v(2),
+            mid: v(3),
+            e1: v(4),
+            e2: v(5),
+            r0: w[19],
+            r1: w[20],
+            len: w[21],
+            slope: w[22],
+            eps: w[23],
+        };
+        (w.iter().all(|x| x.is_finite()) && c.len > 0.0 && c.eps > 0.0).then_some(c)
+    }
+}

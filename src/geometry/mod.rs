@@ -29,24 +29,39 @@ use crate::scene::primitive::Primitive;
 
 pub mod bvh;
 pub mod cone;
+pub mod plain;
 pub mod polygon;
 pub mod ring;
 pub mod source;
 pub mod sphere;
 pub mod trimesh;
 
-/// A finite surface. The large kinds are boxed, so that a sphere (the smallest) does not
-/// take a polygon's room: a scene's objects stay compact.
+/// A finite surface that owns its data (what a primitive builds; a scene's objects keep
+/// them in arrays by kind, [`crate::scene::object::Objects`], and lend [`SurfaceRef`]s).
 #[derive(Clone, Debug)]
 pub enum Surface {
     /// A planar polygon (possibly concave, possibly with seam-joined holes).
-    Polygon(Box<polygon::Polygon>),
+    Polygon(polygon::PolygonBuf),
     /// A sphere or bubble.
     Sphere(sphere::Sphere),
     /// A cone, cup, cylinder or tube (open-ended).
-    Cone(Box<cone::Cone>),
+    Cone(cone::Cone),
     /// A ring or disk.
-    Ring(Box<ring::Ring>),
+    Ring(ring::Ring),
+}
+
+/// A finite surface as tracing sees it: borrowed from a scene's arrays or from a
+/// [`Surface`].
+#[derive(Clone, Copy, Debug)]
+pub enum SurfaceRef<'a> {
+    /// A planar polygon with its vertices.
+    Polygon(polygon::PolyRef<'a>),
+    /// A sphere or bubble.
+    Sphere(&'a sphere::Sphere),
+    /// A cone, cup, cylinder or tube.
+    Cone(&'a cone::Cone),
+    /// A ring or disk.
+    Ring(&'a ring::Ring),
 }
 
 /// Geometry at a hit point.
@@ -190,17 +205,15 @@ impl Surface {
     ) -> Result<(Surface, Option<String>), String> {
         check_finite(p)?;
         match p.ptype.as_str() {
-            "polygon" => polygon::Polygon::from_primitive(p, origin)
-                .map(|(s, w)| (Surface::Polygon(Box::new(s)), w)),
+            "polygon" => polygon::PolygonBuf::from_primitive(p, origin)
+                .map(|(s, w)| (Surface::Polygon(s), w)),
             "sphere" | "bubble" => {
                 sphere::Sphere::from_primitive(p, origin).map(|(s, w)| (Surface::Sphere(s), w))
             }
             "cone" | "cup" | "cylinder" | "tube" => {
-                cone::Cone::from_primitive(p, origin).map(|(s, w)| (Surface::Cone(Box::new(s)), w))
+                cone::Cone::from_primitive(p, origin).map(|(s, w)| (Surface::Cone(s), w))
             }
-            "ring" => {
-                ring::Ring::from_primitive(p, origin).map(|s| (Surface::Ring(Box::new(s)), None))
-            }
+            "ring" => ring::Ring::from_primitive(p, origin).map(|s| (Surface::Ring(s), None)),
             other => Err(format!("type \"{other}\" is not a finite surface")),
         }
     }
@@ -216,15 +229,58 @@ impl Surface {
         }
     }
 
+    /// The surface as tracing sees it.
+    #[inline]
+    pub fn as_ref(&self) -> SurfaceRef<'_> {
+        match self {
+            Surface::Polygon(s) => SurfaceRef::Polygon(s.r()),
+            Surface::Sphere(s) => SurfaceRef::Sphere(s),
+            Surface::Cone(s) => SurfaceRef::Cone(s),
+            Surface::Ring(s) => SurfaceRef::Ring(s),
+        }
+    }
+
+    /// [`SurfaceRef::intersect`].
+    pub fn intersect(&self, org: DVec3, dir: DVec3, tmax: f64) -> Option<f64> {
+        self.as_ref().intersect(org, dir, tmax)
+    }
+
+    /// [`SurfaceRef::hit_geom`].
+    pub fn hit_geom(&self, org: DVec3, dir: DVec3, t: f64) -> HitGeom {
+        self.as_ref().hit_geom(org, dir, t)
+    }
+
+    /// [`SurfaceRef::normal_at`].
+    pub fn normal_at(&self, point: DVec3) -> DVec3 {
+        self.as_ref().normal_at(point)
+    }
+
+    /// [`SurfaceRef::bounds`].
+    pub fn bounds(&self) -> (DVec3, DVec3) {
+        self.as_ref().bounds()
+    }
+
+    /// [`SurfaceRef::is_flat`].
+    pub fn is_flat(&self) -> bool {
+        self.as_ref().is_flat()
+    }
+
+    /// [`SurfaceRef::area`].
+    pub fn area(&self) -> f64 {
+        self.as_ref().area()
+    }
+}
+
+impl SurfaceRef<'_> {
     /// Nearest intersection distance t with eps < t < tmax, or None (eps: the scene's length
     /// tolerance, [`Surface::set_eps`]).
     #[inline]
-    pub fn intersect(&self, org: DVec3, dir: DVec3, tmax: f64) -> Option<f64> {
+    pub fn intersect(self, org: DVec3, dir: DVec3, tmax: f64) -> Option<f64> {
         match self {
-            Surface::Polygon(s) => s.intersect(org, dir, tmax),
-            Surface::Sphere(s) => s.intersect(org, dir, tmax),
-            Surface::Cone(s) => s.intersect(org, dir, tmax),
-            Surface::Ring(s) => s.intersect(org, dir, tmax),
+            SurfaceRef::Polygon(s) => s.intersect(org, dir, tmax),
+            SurfaceRef::Sphere(s) => s.intersect(org, dir, tmax),
+            SurfaceRef::Cone(s) => s.intersect(org, dir, tmax),
+            SurfaceRef::Ring(s) => s.intersect(org, dir, tmax),
         }
     }
 
@@ -232,21 +288,21 @@ impl Surface {
     pub fn hit_geom(&self, org: DVec3, dir: DVec3, t: f64) -> HitGeom {
         let point = org + dir * t;
         match self {
-            Surface::Polygon(s) => HitGeom {
+            SurfaceRef::Polygon(s) => HitGeom {
                 point,
                 normal: s.normal,
                 uv: (0.0, 0.0),
             },
-            Surface::Sphere(s) => HitGeom {
+            SurfaceRef::Sphere(s) => HitGeom {
                 point,
                 normal: s.normal_at(point),
                 uv: (0.0, 0.0),
             },
-            Surface::Cone(s) => {
+            SurfaceRef::Cone(s) => {
                 let (normal, uv) = s.normal_uv_at(point);
                 HitGeom { point, normal, uv }
             }
-            Surface::Ring(s) => HitGeom {
+            SurfaceRef::Ring(s) => HitGeom {
                 point,
                 normal: s.normal,
                 uv: s.uv_at(point),
@@ -254,40 +310,40 @@ impl Surface {
         }
     }
 
-    /// Unit front normal at a point on the surface: [`Surface::hit_geom`] without the
+    /// Unit front normal at a point on the surface: [`SurfaceRef::hit_geom`] without the
     /// surface coordinates, which the tracer does not need.
     #[inline]
     pub fn normal_at(&self, point: DVec3) -> DVec3 {
         match self {
-            Surface::Polygon(s) => s.normal,
-            Surface::Sphere(s) => s.normal_at(point),
-            Surface::Cone(s) => s.normal_at(point),
-            Surface::Ring(s) => s.normal,
+            SurfaceRef::Polygon(s) => s.normal,
+            SurfaceRef::Sphere(s) => s.normal_at(point),
+            SurfaceRef::Cone(s) => s.normal_at(point),
+            SurfaceRef::Ring(s) => s.normal,
         }
     }
 
     /// Axis-aligned bounds (relative frame), not yet padded.
     pub fn bounds(&self) -> (DVec3, DVec3) {
         match self {
-            Surface::Polygon(s) => s.bounds(),
-            Surface::Sphere(s) => s.bounds(),
-            Surface::Cone(s) => s.bounds(),
-            Surface::Ring(s) => s.bounds(),
+            SurfaceRef::Polygon(s) => s.bounds(),
+            SurfaceRef::Sphere(s) => s.bounds(),
+            SurfaceRef::Cone(s) => s.bounds(),
+            SurfaceRef::Ring(s) => s.bounds(),
         }
     }
 
     /// True for planar surfaces (polygon, ring).
     pub fn is_flat(&self) -> bool {
-        matches!(self, Surface::Polygon(_) | Surface::Ring(_))
+        matches!(self, SurfaceRef::Polygon(_) | SurfaceRef::Ring(_))
     }
 
     /// Surface area.
     pub fn area(&self) -> f64 {
         match self {
-            Surface::Polygon(s) => s.area,
-            Surface::Sphere(s) => s.area(),
-            Surface::Cone(s) => s.area(),
-            Surface::Ring(s) => s.area(),
+            SurfaceRef::Polygon(s) => s.area,
+            SurfaceRef::Sphere(s) => s.area(),
+            SurfaceRef::Cone(s) => s.area(),
+            SurfaceRef::Ring(s) => s.area(),
         }
     }
 }

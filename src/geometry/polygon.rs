@@ -8,6 +8,7 @@
 
 use glam::DVec3;
 
+use super::plain::Plain;
 use crate::scene::primitive::Primitive;
 use crate::FTINY;
 
@@ -30,37 +31,23 @@ struct Edge2 {
 
 /// A vertex with the projected length of the edge that starts at it (its square root is
 /// the one costly part of an edge: the rest is made again at each test, bit for bit).
-#[derive(Clone, Copy, Debug)]
-struct Vertex {
+#[derive(Clone, Copy, Debug, PartialEq)]
+#[repr(C)]
+pub struct Vertex {
     p: DVec3,
     len: f64,
 }
 
-/// The vertices: a triangle's in place (most polygons of large scenes are triangles), the
-/// others in one allocation of their own.
-#[derive(Clone, Debug)]
-enum Vertices {
-    Three([Vertex; 3]),
-    Many(Box<[Vertex]>),
-}
+// SAFETY: `#[repr(C)]` of four f64 (32 bytes, no padding, any bits).
+unsafe impl Plain for Vertex {}
 
-impl Vertices {
-    #[inline]
-    fn as_slice(&self) -> &[Vertex] {
-        match self {
-            Vertices::Three(v) => v,
-            Vertices::Many(v) => v,
-        }
-    }
-}
-
-/// A planar polygon, stored in the relative frame: about 190 bytes for a triangle (with its
-/// box, one allocation), 112 more and 32 per vertex for the others. What only set-up and
-/// light sources read (bounds, centroid) is computed when asked.
-#[derive(Clone, Debug)]
+/// A planar polygon's plain record, stored in the relative frame (96 bytes; its vertices,
+/// 32 bytes each, lie in a pool: `pool[first..first + count]`). What only set-up and light
+/// sources read (bounds, centroid) is computed when asked. [`PolyRef`] is a record with its
+/// vertices, [`PolygonBuf`] one that owns them.
+#[derive(Clone, Copy, Debug)]
+#[repr(C)]
 pub struct Polygon {
-    /// Vertices (relative frame), without a duplicated closing vertex.
-    verts: Vertices,
     /// Unit normal, or the zero vector when the area is zero (then it is never hit).
     pub normal: DVec3,
     /// Plane offset: the plane is `normal · x = offset` (average over the vertices).
@@ -73,26 +60,144 @@ pub struct Polygon {
     /// The scene's length tolerance: hits at `t <= eps` are ignored and points within `eps`
     /// of an edge are inside.
     pub(crate) eps: f64,
-    /// Index of the first kept coordinate of the 2-D projection.
+    /// Index of the first vertex in the pool.
+    pub(crate) first: u32,
+    /// Number of vertices (at least 3), without a duplicated closing vertex.
+    pub(crate) count: u32,
+    /// Index of the first kept coordinate of the 2-D projection (0–2).
     iu: u8,
-    /// Index of the second kept coordinate of the 2-D projection.
+    /// Index of the second kept coordinate of the 2-D projection (0–2).
     iv: u8,
     /// For a convex polygon, the sign of its turn in the projection (+1 counter-clockwise,
     /// −1 clockwise): the inside test is then one half-plane test per edge. 0 for concave
     /// polygons, polygons with holes and degenerate ones (the general crossing test).
     convex: i8,
-    /// A convex polygon whose projection is an axis-aligned rectangle: its edge tests are
-    /// the bounding-box test.
-    is_box: bool,
+    /// Non-zero for a convex polygon whose projection is an axis-aligned rectangle: its edge
+    /// tests are the bounding-box test.
+    is_box: u8,
+    _pad: [u8; 4],
+}
+
+// SAFETY: `#[repr(C)]`: 10 f64, 2 u32, 4 one-byte fields and 4 bytes of explicit padding
+// (96 bytes, no implicit padding); any bits are a value (indices are checked on loading).
+unsafe impl Plain for Polygon {}
+
+const _: () = assert!(std::mem::size_of::<Polygon>() == 96);
+
+/// A polygon record with its vertices.
+#[derive(Clone, Copy, Debug)]
+pub struct PolyRef<'a> {
+    rec: &'a Polygon,
+    verts: &'a [Vertex],
+}
+
+impl std::ops::Deref for PolyRef<'_> {
+    type Target = Polygon;
+
+    fn deref(&self) -> &Polygon {
+        self.rec
+    }
+}
+
+/// A polygon that owns its vertices (what [`Polygon::new`] makes; a scene keeps the record
+/// and moves the vertices into its pool).
+#[derive(Clone, Debug)]
+pub struct PolygonBuf {
+    /// The record (`first` is 0).
+    pub rec: Polygon,
+    /// Its vertices.
+    pub verts: Box<[Vertex]>,
+}
+
+impl PolygonBuf {
+    /// The polygon with its vertices.
+    #[inline]
+    pub fn r(&self) -> PolyRef<'_> {
+        PolyRef {
+            rec: &self.rec,
+            verts: &self.verts,
+        }
+    }
+
+    /// Use the scene's length tolerance `eps` (instead of `FTINY`).
+    pub(crate) fn set_eps(&mut self, eps: f64) {
+        let rec = &mut self.rec;
+        rec.eps = eps;
+        let mut lo2 = [f64::INFINITY; 2];
+        let mut hi2 = [f64::NEG_INFINITY; 2];
+        for v in self.verts.iter() {
+            let a = [v.p[rec.iu as usize], v.p[rec.iv as usize]];
+            for k in 0..2 {
+                lo2[k] = lo2[k].min(a[k]);
+                hi2[k] = hi2[k].max(a[k]);
+            }
+        }
+        for k in 0..2 {
+            rec.lo2[k] = lo2[k] - eps;
+            rec.hi2[k] = hi2[k] + eps;
+        }
+    }
 }
 
 impl Polygon {
+    /// This record with its vertices in `pool`. The record's range must lie in the pool
+    /// (scenes check it when they load one).
+    #[inline]
+    pub fn with<'a>(&'a self, pool: &'a [Vertex]) -> PolyRef<'a> {
+        let a = self.first as usize;
+        PolyRef {
+            rec: self,
+            verts: &pool[a..a + self.count as usize],
+        }
+    }
+
+    /// [`PolyRef::intersect`] of this record with its vertices in `pool`: the vertices are
+    /// only read when the plane is hit inside the projection's box (never for boxes).
+    #[inline]
+    pub fn intersect_in(&self, pool: &[Vertex], org: DVec3, dir: DVec3, tmax: f64) -> Option<f64> {
+        let (t, p) = self.plane_hit(org, dir, tmax)?;
+        (self.is_box != 0 || self.with(pool).inside_edges(p)).then_some(t)
+    }
+
+    /// The plane and box part of the hit test: the distance and the projected point when
+    /// the ray meets the plane within `(eps, tmax)` inside the projection's box.
+    #[inline(always)]
+    fn plane_hit(&self, org: DVec3, dir: DVec3, tmax: f64) -> Option<(f64, [f64; 2])> {
+        let denom = self.normal.dot(dir);
+        if denom.abs() <= FTINY {
+            return None;
+        }
+        let t = (self.offset - self.normal.dot(org)) / denom;
+        if !(t > self.eps && t < tmax) {
+            return None;
+        }
+        let p = self.project(org + dir * t);
+        if p[0] < self.lo2[0] || p[0] > self.hi2[0] || p[1] < self.lo2[1] || p[1] > self.hi2[1] {
+            return None;
+        }
+        Some((t, p))
+    }
+
+    /// A point's coordinates in the projection.
+    #[inline(always)]
+    fn project(&self, p: DVec3) -> [f64; 2] {
+        [p[self.iu as usize], p[self.iv as usize]]
+    }
+
+    /// Whether the record is usable with a pool of `pool` vertices: its range lies in it,
+    /// it has at least 3 vertices and its projection axes are axes.
+    pub(crate) fn valid_in(&self, pool: usize) -> bool {
+        self.count >= 3
+            && (self.first as usize).saturating_add(self.count as usize) <= pool
+            && self.iu < 3
+            && self.iv < 3
+    }
+}
+
+impl PolygonBuf {
     /// Build from a `polygon` primitive. Fewer than 9 or a non-multiple of 3 real arguments
     /// is an error. Returns a warning for zero area or non-planar vertices.
-    pub fn from_primitive(
-        p: &Primitive,
-        origin: DVec3,
-    ) -> Result<(Polygon, Option<String>), String> {
+    pub fn from_primitive(p: &Primitive, origin: DVec3) -> Result<(Self, Option<String>), String> {
         let r = &p.rargs;
         if r.len() < 9 || !r.len().is_multiple_of(3) {
             return Err(format!("bad # arguments for polygon \"{}\"", p.name));
@@ -101,7 +206,7 @@ impl Polygon {
             .chunks_exact(3)
             .map(|c| DVec3::new(c[0], c[1], c[2]) - origin)
             .collect();
-        let (poly, warn) = Polygon::new(verts)?;
+        let (poly, warn) = PolygonBuf::new(verts)?;
         Ok((
             poly,
             warn.map(|w| format!("{w} for polygon \"{}\"", p.name)),
@@ -110,7 +215,7 @@ impl Polygon {
 
     /// Build from vertices already in the relative frame. Returns a warning text ("zero
     /// area", "non-planar vertex") when appropriate.
-    pub fn new(mut verts: Vec<DVec3>) -> Result<(Polygon, Option<String>), String> {
+    pub fn new(mut verts: Vec<DVec3>) -> Result<(Self, Option<String>), String> {
         if verts.len() < 3 {
             return Err("fewer than 3 vertices".to_string());
         }
@@ -179,31 +284,37 @@ impl Polygon {
             p: verts[i],
             len: edges[i].len,
         };
-        let verts = if n == 3 {
-            Vertices::Three([vertex(0), vertex(1), vertex(2)])
-        } else {
-            Vertices::Many((0..n).map(vertex).collect())
-        };
-        let mut poly = Polygon {
+        if n > u32::MAX as usize {
+            return Err("too many vertices".to_string());
+        }
+        let verts: Box<[Vertex]> = (0..n).map(vertex).collect();
+        let mut poly = PolygonBuf {
+            rec: Polygon {
+                normal,
+                offset,
+                area,
+                lo2: [0.0; 2],
+                hi2: [0.0; 2],
+                eps: FTINY,
+                first: 0,
+                count: n as u32,
+                iu,
+                iv,
+                convex: convex.map_or(0, |s| s as i8),
+                is_box: u8::from(is_box),
+                _pad: [0; 4],
+            },
             verts,
-            normal,
-            offset,
-            area,
-            lo2: [0.0; 2],
-            hi2: [0.0; 2],
-            eps: FTINY,
-            iu,
-            iv,
-            convex: convex.map_or(0, |s| s as i8),
-            is_box,
         };
         poly.set_eps(FTINY);
         Ok((poly, warn))
     }
+}
 
+impl<'a> PolyRef<'a> {
     /// The number of vertices.
     pub fn len(&self) -> usize {
-        self.verts.as_slice().len()
+        self.verts.len()
     }
 
     /// False: a polygon has at least 3 vertices.
@@ -212,13 +323,13 @@ impl Polygon {
     }
 
     /// The vertices (relative frame), without a duplicated closing vertex.
-    pub fn verts(&self) -> impl ExactSizeIterator<Item = DVec3> + Clone + '_ {
-        self.verts.as_slice().iter().map(|v| v.p)
+    pub fn verts(&self) -> impl ExactSizeIterator<Item = DVec3> + Clone + 'a {
+        self.verts.iter().map(|v| v.p)
     }
 
     /// Area-weighted centroid (vertex average when the area is zero).
     pub fn centroid(&self) -> DVec3 {
-        let verts = self.verts.as_slice();
+        let verts = self.verts;
         let n = verts.len();
         let vavg = verts.iter().map(|v| v.p).sum::<DVec3>() / n as f64;
         if self.area <= 0.0 {
@@ -245,44 +356,8 @@ impl Polygon {
     /// every ray for a zero-area polygon).
     #[inline]
     pub fn intersect(&self, org: DVec3, dir: DVec3, tmax: f64) -> Option<f64> {
-        let denom = self.normal.dot(dir);
-        if denom.abs() <= FTINY {
-            return None;
-        }
-        let t = (self.offset - self.normal.dot(org)) / denom;
-        if !(t > self.eps && t < tmax) {
-            return None;
-        }
-        let p = org + dir * t;
-        if self.contains_projected(self.project(p)) {
-            Some(t)
-        } else {
-            None
-        }
-    }
-
-    /// A point's coordinates in the projection.
-    #[inline]
-    fn project(&self, p: DVec3) -> [f64; 2] {
-        [p[self.iu as usize], p[self.iv as usize]]
-    }
-
-    /// Use the scene's length tolerance `eps` (instead of `FTINY`).
-    pub(crate) fn set_eps(&mut self, eps: f64) {
-        self.eps = eps;
-        let mut lo2 = [f64::INFINITY; 2];
-        let mut hi2 = [f64::NEG_INFINITY; 2];
-        for v in self.verts.as_slice() {
-            let a = self.project(v.p);
-            for k in 0..2 {
-                lo2[k] = lo2[k].min(a[k]);
-                hi2[k] = hi2[k].max(a[k]);
-            }
-        }
-        for k in 0..2 {
-            self.lo2[k] = lo2[k] - eps;
-            self.hi2[k] = hi2[k] + eps;
-        }
+        let (t, p) = self.rec.plane_hit(org, dir, tmax)?;
+        (self.is_box != 0 || self.inside_edges(p)).then_some(t)
     }
 
     /// Inside test for a point assumed to lie in the plane (even–odd, edges inclusive).
@@ -292,10 +367,11 @@ impl Polygon {
 
     /// The edges in the projection, each made from its two vertices.
     #[inline]
-    fn edges(&self) -> impl Iterator<Item = Edge2> + '_ {
-        let v = self.verts.as_slice();
+    fn edges(&self) -> impl Iterator<Item = Edge2> + 'a {
+        let v = self.verts;
         let n = v.len();
-        (0..n).map(move |i| edge_of(v[i].p, v[(i + 1) % n].p, self.iu, self.iv, Some(v[i].len)))
+        let (iu, iv) = (self.iu, self.iv);
+        (0..n).map(move |i| edge_of(v[i].p, v[(i + 1) % n].p, iu, iv, Some(v[i].len)))
     }
 
     /// Inside test in the projection; points within `FTINY` of an edge are inside. Convex
@@ -307,9 +383,13 @@ impl Polygon {
         if p[0] < self.lo2[0] || p[0] > self.hi2[0] || p[1] < self.lo2[1] || p[1] > self.hi2[1] {
             return false;
         }
-        if self.is_box {
-            return true;
-        }
+        self.is_box != 0 || self.inside_edges(p)
+    }
+
+    /// [`PolyRef::contains_projected`] for a point inside the projection's box, of a
+    /// polygon that is not a box.
+    #[inline]
+    fn inside_edges(&self, p: [f64; 2]) -> bool {
         if self.convex != 0 {
             let s = f64::from(self.convex);
             self.edges().all(|ed| {
@@ -412,8 +492,8 @@ fn convex_turn(edges: &[Edge2]) -> Option<f64> {
 mod tests {
     use super::*;
 
-    fn sq() -> Polygon {
-        Polygon::new(vec![
+    fn sq() -> PolygonBuf {
+        PolygonBuf::new(vec![
             DVec3::new(0.0, 0.0, 0.0),
             DVec3::new(1.0, 0.0, 0.0),
             DVec3::new(1.0, 1.0, 0.0),
@@ -426,6 +506,7 @@ mod tests {
     #[test]
     fn square_basics() {
         let p = sq();
+        let p = p.r();
         assert_eq!(p.normal, DVec3::Z);
         assert!((p.area - 1.0).abs() < 1e-15);
         assert!((p.centroid() - DVec3::new(0.5, 0.5, 0.0)).length() < 1e-15);
@@ -437,15 +518,11 @@ mod tests {
         assert!(!p.contains(DVec3::new(-0.5, 0.5, 0.0)));
     }
 
-    /// A triangle is one allocation of at most 200 bytes (with the box that holds it); a
-    /// polygon keeps its vertices in order, and its bounds are theirs.
+    /// A polygon is a 96-byte record and 32 bytes a vertex; it keeps its vertices in
+    /// order, and its bounds are theirs.
     #[test]
     fn compact_storage_keeps_vertices() {
-        assert!(
-            std::mem::size_of::<Polygon>() <= 200,
-            "{}",
-            std::mem::size_of::<Polygon>()
-        );
+        assert_eq!(std::mem::size_of::<Vertex>(), 32);
         for n in [3usize, 4, 7] {
             let verts: Vec<DVec3> = (0..n)
                 .map(|i| {
@@ -453,7 +530,8 @@ mod tests {
                     DVec3::new(t.cos(), 2.0 * t.sin(), 0.1 * t.cos() + 3.0)
                 })
                 .collect();
-            let (p, _) = Polygon::new(verts.clone()).unwrap();
+            let (p, _) = PolygonBuf::new(verts.clone()).unwrap();
+            let p = p.r();
             assert_eq!(p.len(), n);
             assert_eq!(p.verts().collect::<Vec<_>>(), verts);
             let lo = verts.iter().fold(DVec3::INFINITY, |a, v| a.min(*v));
@@ -473,13 +551,14 @@ mod tests {
 
     #[test]
     fn closing_vertex_dropped() {
-        let (p, w) = Polygon::new(vec![
+        let (p, w) = PolygonBuf::new(vec![
             DVec3::new(0.0, 0.0, 0.0),
             DVec3::new(1.0, 0.0, 0.0),
             DVec3::new(1.0, 1.0, 0.0),
             DVec3::new(0.0, 0.0, 0.0),
         ])
         .unwrap();
+        let p = p.r();
         assert_eq!(p.len(), 3);
         assert!(w.is_none());
         assert!((p.area - 0.5).abs() < 1e-15);
@@ -488,7 +567,7 @@ mod tests {
     #[test]
     fn crossing_rule_through_vertex_row() {
         // A ray level with a vertex (y = 1 at the reflex vertex of a chevron).
-        let (p, _) = Polygon::new(vec![
+        let (p, _) = PolygonBuf::new(vec![
             DVec3::new(0.0, 0.0, 0.0),
             DVec3::new(4.0, 0.0, 0.0),
             DVec3::new(4.0, 2.0, 0.0),
@@ -496,6 +575,7 @@ mod tests {
             DVec3::new(0.0, 2.0, 0.0),
         ])
         .unwrap();
+        let p = p.r();
         assert!(p.contains(DVec3::new(1.0, 1.0, 0.0)));
         assert!(p.contains(DVec3::new(3.0, 1.0, 0.0)));
         assert!(!p.contains(DVec3::new(2.0, 1.5, 0.0)));
@@ -529,9 +609,10 @@ mod tests {
                 .iter()
                 .map(|t| ux * (a * t.cos()) + uy * (b * t.sin()))
                 .collect();
-            let Ok((p, _)) = Polygon::new(verts.clone()) else {
+            let Ok((p, _)) = PolygonBuf::new(verts.clone()) else {
                 continue;
             };
+            let p = p.r();
             if p.area <= 1e-3 || p.convex == 0 {
                 continue;
             }
@@ -564,7 +645,7 @@ mod tests {
         }
         assert!(tested >= 30, "only {tested} convex cases");
         // Not convex: a chevron, a pentagram.
-        let chevron = Polygon::new(vec![
+        let chevron = PolygonBuf::new(vec![
             DVec3::new(0.0, 0.0, 0.0),
             DVec3::new(4.0, 0.0, 0.0),
             DVec3::new(4.0, 2.0, 0.0),
@@ -573,14 +654,14 @@ mod tests {
         ])
         .unwrap()
         .0;
-        assert_eq!(chevron.convex, 0);
+        assert_eq!(chevron.rec.convex, 0);
         let star: Vec<DVec3> = (0..5)
             .map(|i| {
                 let t = i as f64 * 4.0 * std::f64::consts::PI / 5.0;
                 DVec3::new(t.cos(), t.sin(), 0.0)
             })
             .collect();
-        assert_eq!(Polygon::new(star).unwrap().0.convex, 0);
-        assert_ne!(sq().convex, 0);
+        assert_eq!(PolygonBuf::new(star).unwrap().0.rec.convex, 0);
+        assert_ne!(sq().rec.convex, 0);
     }
 }

@@ -98,3 +98,32 @@ impl Ring {
         std::f64::consts::PI * (self.r1 * self.r1 - self.r0 * self.r0)
     }
 }
+
+impl Ring {
+    /// Words in [`Ring::to_words`].
+    pub(crate) const WORDS: usize = 15;
+
+    /// Its fields as numbers (a scene image stores them).
+    pub(crate) fn to_words(&self) -> [f64; Self::WORDS] {
+        let (c, n, a, b) = (self.center, self.normal, self.e1, self.e2);
+        [
+            c.x, c.y, c.z, n.x, n.y, n.z, self.r0, self.r1, a.x, a.y, a.z, b.x, b.y, b.z, self.eps,
+        ]
+    }
+
+    /// What [`Ring::to_words`] made; None for non-finite values.
+    pub(crate) fn from_words(w: &[f64]) -> Option<Ring> {
+        let w: &[f64; Self::WORDS] = w.try_into().ok()?;
+        let v = |i: usize| DVec3::new(w[i], w[i + 1], w[i + 2]);
+        let r = Ring {
+            center: v(0),
+            normal: v(3),
+            r0: w[6],
+            r1: w[7],
+            e1: v(8),
+            e2: v(11),
+            eps: w[14],
+        };
+        (w.iter().all(|x| x.is_finite()) && r.eps > 0.0).then_some(r)
+    }
+}

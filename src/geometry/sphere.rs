@@ -92,3 +92,33 @@ impl Sphere {
         4.0 * std::f64::consts::PI * self.radius * self.radius
     }
 }
+
+impl Sphere {
+    /// Words in [`Sphere::to_words`].
+    pub(crate) const WORDS: usize = 6;
+
+    /// Its fields as numbers (a scene image stores them).
+    pub(crate) fn to_words(&self) -> [f64; Self::WORDS] {
+        let c = self.center;
+        [
+            c.x,
+            c.y,
+            c.z,
+            self.radius,
+            f64::from(u8::from(self.inward)),
+            self.eps,
+        ]
+    }
+
+    /// What [`Sphere::to_words`] made; None for non-finite or impossible values.
+    pub(crate) fn from_words(w: &[f64]) -> Option<Sphere> {
+        let w: &[f64; Self::WORDS] = w.try_into().ok()?;
+        let s = Sphere {
+            center: DVec3::new(w[0], w[1], w[2]),
+            radius: w[3],
+            inward: w[4] != 0.0,
+            eps: w[5],
+        };
+        (w.iter().all(|x| x.is_finite()) && s.radius > 0.0 && s.eps > 0.0).then_some(s)
+    }
+}

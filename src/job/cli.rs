@@ -383,6 +383,12 @@ struct TpieceArgs {
     /// Print nothing but errors (no per-tile or waiting lines).
     #[arg(long, short, verbatim_doc_comment)]
     quiet: bool,
+    /// Build the scene instead of mapping the job's scene image
+    /// (JOB/scene.img), and leave the image alone. Pictures are the
+    /// same either way; with the image every worker on a node shares
+    /// one copy of the top-level geometry and starts sooner.
+    #[arg(long, verbatim_doc_comment)]
+    no_scene_image: bool,
 }
 
 /// Entry point of `tpiece`.
@@ -409,6 +415,7 @@ fn tpiece(a: TpieceArgs) -> Result<i32> {
         threads: a.threads,
         wait: !a.no_wait,
         verbose: !a.quiet,
+        scene_image: !a.no_scene_image,
     };
     let s = run_worker(&JobDir::new(a.job), &wo)?;
     if !a.quiet {

@@ -331,6 +331,10 @@ pub fn scene_text(prims: &[Primitive], sources: &[String]) -> String {
 
 /// Create a job directory (`tplan`). The directory is assembled under a temporary name
 /// beside `dir` and renamed into place, so a job directory is either complete or absent.
+/// The job's scene image ([`crate::scene::image`]): the planner's built geometry, which
+/// workers map instead of building it.
+pub const SCENE_IMAGE: &str = "scene.img";
+
 pub fn create_job(dir: &Path, req: &PlanRequest) -> Result<Manifest> {
     let (opts, points, rays) = match &req.points {
         Some((file, chunk)) => points_options(req, file, *chunk)?,
@@ -530,6 +534,12 @@ pub fn create_job(dir: &Path, req: &PlanRequest) -> Result<Manifest> {
     super::write_file_atomic(&job.file("scene.rad"), text.as_bytes())
         .context("cannot write scene.rad")?;
     copy_inputs(&job, &scene.inputs)?;
+    // The built geometry, which workers map instead of building (one copy per node).
+    super::write_file_atomic(
+        &job.file(SCENE_IMAGE),
+        &crate::scene::image::encode(&fingerprint, &scene.geom),
+    )
+    .with_context(|| format!("cannot write {SCENE_IMAGE}"))?;
     if m.points.is_some() {
         super::write_file_atomic(
             &job.file(super::points::RAYS_FILE),

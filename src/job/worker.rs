@@ -26,6 +26,7 @@ use super::{check_worker_id, default_worker_id, JobDir};
 use crate::ambient::Ambient;
 use crate::render::RenderProgress;
 use crate::runinfo::process_cpu_seconds;
+use crate::scene::image::{self, SceneImage};
 use crate::scene::ReadOptions;
 use crate::session::store::{AmbientStore, FlushPolicy};
 use crate::session::{Region, SceneSource, Session};
@@ -52,6 +53,9 @@ pub struct WorkerOptions {
     pub wait: bool,
     /// Print one line per tile.
     pub verbose: bool,
+    /// Map the job's scene image (`--no-scene-image` turns it off: build the scene and
+    /// leave the image alone).
+    pub scene_image: bool,
 }
 
 impl Default for WorkerOptions {
@@ -62,6 +66,7 @@ impl Default for WorkerOptions {
             threads: None,
             wait: true,
             verbose: true,
+            scene_image: true,
         }
     }
 }
@@ -222,10 +227,28 @@ fn start_session(job: &JobDir, m: &Manifest, owner: &str, wo: &WorkerOptions) ->
             .max(crate::scene::reader::DEFAULT_MAX_PRIMITIVES),
         ..ReadOptions::default()
     };
-    let source = SceneSource::read(&[scene_path.display().to_string()], &ro, &m.params)?;
+    let read = || SceneSource::read(&[scene_path.display().to_string()], &ro, &m.params);
+    let source = read()?;
     // The fingerprint covers the files the scene reads (JOB/files/), known once it is built.
-    // The tile loops render on threads of their own: the session's pool is not used.
-    let mut session = Session::start(m.params.clone(), source, Some(1))?;
+    // The tile loops render on threads of their own: the session's pool is not used. The
+    // top-level geometry comes from the job's scene image when it is sound; a damaged or
+    // foreign image is refused and replaced.
+    let image_path = job.file(super::manifest::SCENE_IMAGE);
+    let image = match std::fs::symlink_metadata(&image_path) {
+        _ if !wo.scene_image => Err(None),
+        Err(_) => Err(Some("there is none".to_string())),
+        Ok(_) => SceneImage::open(&image_path, &m.fingerprint_bytes()).map_err(Some),
+    };
+    let (mut session, refused) = match image {
+        Ok(image) => match Session::start_with_image(m.params.clone(), source, Some(1), &image)? {
+            Ok(s) => (s, None),
+            Err(why) => (
+                Session::start(m.params.clone(), read()?, Some(1))?,
+                Some(why),
+            ),
+        },
+        Err(why) => (Session::start(m.params.clone(), source, Some(1))?, why),
+    };
     if session.fingerprint != m.fingerprint_bytes() {
         bail!(
             "{}: the scene or the manifest's options changed since the job was planned \
@@ -234,6 +257,19 @@ fn start_session(job: &JobDir, m: &Manifest, owner: &str, wo: &WorkerOptions) ->
             super::hex32(&session.fingerprint),
             m.fingerprint
         );
+    }
+    if let Some(why) = refused {
+        if wo.verbose {
+            eprintln!(
+                "tpiece: warning: {}: not used ({why}); built the scene and wrote a new one",
+                image_path.display()
+            );
+        }
+        super::write_file_atomic(
+            &image_path,
+            &image::encode(&m.fingerprint_bytes(), &session.scene.geom),
+        )
+        .with_context(|| format!("cannot write {}", image_path.display()))?;
     }
     if session.cached_ambient().is_some() {
         let store = open_share(job, owner, &session, wo.amb_flush)?;

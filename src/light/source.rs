@@ -3,7 +3,7 @@
 use crate::color::Color;
 use crate::geometry::any_perpendicular;
 use crate::geometry::cone::ConeKind;
-use crate::geometry::Surface;
+use crate::geometry::SurfaceRef;
 use crate::material::emitter::{Emitter, EmitterKind};
 use crate::material::Material;
 use crate::render::sampler::Sampler;
@@ -193,15 +193,15 @@ impl LightSet {
     pub fn collect(scene: &Scene, relays: i32) -> LightSet {
         let mut set = LightSet::default();
         for (i, o) in scene.objects.iter().enumerate() {
-            let Some(m) = o.material else { continue };
+            let Some(m) = o.material() else { continue };
             let Material::Emitter(e) = scene.material(m) else {
                 continue;
             };
             if !e.is_source() {
                 continue;
             }
-            let shape = match &o.surface {
-                Surface::Polygon(p) => {
+            let shape = match scene.objects.shape(o) {
+                SurfaceRef::Polygon(p) => {
                     if p.area <= 0.0 {
                         continue;
                     }
@@ -230,22 +230,22 @@ impl LightSet {
                         ev: v * (v1 - v0),
                     }
                 }
-                Surface::Ring(r) => SourceShape::Ring {
+                SurfaceRef::Ring(r) => SourceShape::Ring {
                     center: r.center,
                     normal: r.normal,
                     r0: r.r0,
                     r1: r.r1,
                 },
-                Surface::Sphere(s) => SourceShape::Sphere {
+                SurfaceRef::Sphere(s) => SourceShape::Sphere {
                     center: s.center,
                     radius: s.radius,
                 },
-                Surface::Cone(c) if c.kind == ConeKind::Cylinder => SourceShape::Cylinder {
+                SurfaceRef::Cone(c) if c.kind == ConeKind::Cylinder => SourceShape::Cylinder {
                     p0: c.p0,
                     p1: c.p1,
                     radius: c.r0,
                 },
-                Surface::Cone(_) => {
+                SurfaceRef::Cone(_) => {
                     set.warnings.push(format!(
                         "{}: cones, cups and tubes cannot be light sources; '{}' only glows when seen",
                         scene.objects.loc(i),
@@ -410,10 +410,10 @@ impl LightSet {
                 let (nu, nv) = partitions(eu.length() / d, ev.length() / d, ds, weight);
                 let rect_area = eu.cross(*ev).length();
                 let cell = rect_area / (nu * nv) as f64;
-                let obj = src.obj.map(|i| &scene.objects[i].surface);
+                let obj = src.obj.map(|i| scene.objects.surface(i));
                 // A quadrilateral with the area of its bounding rectangle IS that rectangle:
                 // every sample lies on it, so the per-sample inside test is skipped.
-                let fills_rect = matches!(obj, Some(Surface::Polygon(pg))
+                let fills_rect = matches!(obj, Some(SurfaceRef::Polygon(pg))
                     if pg.len() == 4 && (pg.area - rect_area).abs() <= 1e-9 * pg.area);
                 let obj = if fills_rect { None } else { obj };
                 for i in 0..nu {

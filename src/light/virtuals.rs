@@ -19,7 +19,7 @@
 
 use super::source::{LightSet, Relay, Source, SourceShape};
 use crate::color::Color;
-use crate::geometry::Surface;
+use crate::geometry::SurfaceRef;
 use crate::material::{reflect, Material};
 use crate::render::world::Scene;
 use crate::FTINY;
@@ -47,10 +47,10 @@ fn mirror_point(x: DVec3, normal: DVec3, offset: f64) -> DVec3 {
 
 /// Points spread over a flat mirror: its centre, and for each vertex (at most 64 of them)
 /// points 2%, 35% and 70% of the way from the vertex to the centre.
-fn probes(s: &Surface) -> Vec<DVec3> {
+fn probes(s: SurfaceRef) -> Vec<DVec3> {
     let (center, rim): (DVec3, Vec<DVec3>) = match s {
-        Surface::Polygon(p) => (p.centroid(), p.verts().take(64).collect()),
-        Surface::Ring(r) => {
+        SurfaceRef::Polygon(p) => (p.centroid(), p.verts().take(64).collect()),
+        SurfaceRef::Ring(r) => {
             let u = crate::geometry::any_perpendicular(r.normal);
             let v = r.normal.cross(u);
             let rim = (0..16)
@@ -171,7 +171,7 @@ impl LightSet {
                 return None;
             }
             let lim = if rest.is_finite() { rest } else { f64::MAX };
-            let t = scene.objects[r.obj].surface.intersect(o, d, lim)?;
+            let t = scene.objects.surface(r.obj).intersect(o, d, lim)?;
             o += d * t;
             d = reflect(d, r.normal);
             if rest.is_finite() {
@@ -226,13 +226,13 @@ impl LightSet {
     pub(super) fn add_virtual(&mut self, scene: &Scene, generations: i32) {
         let mut mirrors = Vec::new();
         for (mi, o) in scene.objects.iter().enumerate() {
-            let Some(m) = o.material else { continue };
+            let Some(m) = o.material() else { continue };
             let Material::Mirror(mirror) = scene.material(m) else {
                 continue;
             };
-            let (normal, point) = match &o.surface {
-                Surface::Polygon(p) if p.area > 0.0 => (p.normal, p.centroid()),
-                Surface::Ring(r) => (r.normal, r.center),
+            let (normal, point) = match scene.objects.shape(o) {
+                SurfaceRef::Polygon(p) if p.area > 0.0 => (p.normal, p.centroid()),
+                SurfaceRef::Ring(r) => (r.normal, r.center),
                 _ => {
                     self.warnings.push(format!(
                         "{}: mirror '{}' is not flat and relays no light sources",
@@ -247,7 +247,7 @@ impl LightSet {
                 normal,
                 offset: normal.dot(point),
                 color: mirror.color,
-                probes: probes(&o.surface),
+                probes: probes(scene.objects.shape(o)),
             });
         }
         if mirrors.is_empty() {

@@ -147,7 +147,7 @@ impl Tracer<'_> {
                 } else {
                     FHUGE
                 };
-                let surface = &self.scene.objects[o].surface;
+                let surface = self.scene.objects.surface(o);
                 let t = surface.intersect(org, dir, limit).unwrap_or(reach);
                 let r = HitRef::top(o);
                 let (point, normal, flat) = self.scene.hit_geom(r, org, dir, t);

@@ -121,7 +121,7 @@ fn for_each_outline(scene: &Scene, lights: &LightSet, vp: DVec3, mut f: impl FnM
             let Some(o) = scene.objects.get(obj) else {
                 continue;
             };
-            let (lo, hi) = o.surface.bounds();
+            let (lo, hi) = scene.objects.shape(o).bounds();
             let (lo, hi) = (lo + scene.origin, hi + scene.origin);
             f(&super::srcdraw::box_corners(lo, hi));
         } else if let Some(d) = s.distant.and_then(|i| scene.distant.get(i)) {

@@ -25,7 +25,7 @@ use super::ray::Ray;
 use super::sampler::Sampler;
 use super::trace::Tracer;
 use crate::color::Color;
-use crate::geometry::Surface;
+use crate::geometry::SurfaceRef;
 use crate::material::emitter::EmitterKind;
 
 /// A source at most this many pixels across (in its narrower direction) is drawn.
@@ -66,7 +66,7 @@ pub fn frame_sources(tr: &Tracer, fs: &FrameSetup) -> Vec<Drawn> {
             let Some(obj) = tr.scene.objects.get(o) else {
                 continue;
             };
-            outline_of(&obj.surface, vp - tr.scene.origin)
+            outline_of(tr.scene.objects.shape(obj), vp - tr.scene.origin)
                 .into_iter()
                 .map(|p| p + tr.scene.origin)
                 .collect::<Vec<_>>()
@@ -92,7 +92,7 @@ pub fn frame_sources(tr: &Tracer, fs: &FrameSetup) -> Vec<Drawn> {
             continue;
         }
         if s.obj
-            .is_some_and(|o| !is_outline_exact(&tr.scene.objects[o].surface))
+            .is_some_and(|o| !is_outline_exact(tr.scene.objects.surface(o)))
         {
             pts = hull(pts);
         }
@@ -113,21 +113,23 @@ pub fn frame_sources(tr: &Tracer, fs: &FrameSetup) -> Vec<Drawn> {
 }
 
 /// Whether [`outline_of`] is the surface's own outline (else the hull of its box).
-fn is_outline_exact(s: &Surface) -> bool {
+fn is_outline_exact(s: SurfaceRef) -> bool {
     matches!(
         s,
-        Surface::Polygon(_) | Surface::Ring(_) | Surface::Sphere(_)
+        SurfaceRef::Polygon(_) | SurfaceRef::Ring(_) | SurfaceRef::Sphere(_)
     )
 }
 
 /// Points outlining a surface seen from `eye` (relative frame): a polygon's vertices, a
 /// ring's outer circle, a sphere's silhouette circle, else its bounding box's corners.
-fn outline_of(s: &Surface, eye: DVec3) -> Vec<DVec3> {
+fn outline_of(s: SurfaceRef, eye: DVec3) -> Vec<DVec3> {
     match s {
-        Surface::Polygon(p) => p.verts().collect(),
-        Surface::Ring(r) => circle(r.center, r.normal, r.r1.abs().max(r.r0.abs())),
-        Surface::Sphere(sp) => circle(sp.center, (sp.center - eye).normalize_or_zero(), sp.radius),
-        Surface::Cone(_) => {
+        SurfaceRef::Polygon(p) => p.verts().collect(),
+        SurfaceRef::Ring(r) => circle(r.center, r.normal, r.r1.abs().max(r.r0.abs())),
+        SurfaceRef::Sphere(sp) => {
+            circle(sp.center, (sp.center - eye).normalize_or_zero(), sp.radius)
+        }
+        SurfaceRef::Cone(_) => {
             let (lo, hi) = s.bounds();
             box_corners(lo, hi).to_vec()
         }

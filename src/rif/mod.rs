@@ -322,8 +322,8 @@ pub fn scene_cube(
     let scene = crate::render::world::Scene::build_taking(prims, &build)?;
     let mut lo = glam::DVec3::splat(f64::INFINITY);
     let mut hi = glam::DVec3::splat(f64::NEG_INFINITY);
-    for o in &scene.objects {
-        let (a, b) = o.surface.bounds();
+    for i in 0..scene.objects.len() {
+        let (a, b) = scene.objects.surface(i).bounds();
         lo = lo.min(a);
         hi = hi.max(b);
     }

@@ -45,7 +45,7 @@ impl SceneGeometry {
                     org,
                     dir,
                     tmax,
-                    |i| self.objects[i].surface.intersect(org, dir, tmax),
+                    |i| self.objects.intersect(i, org, dir, tmax),
                     |a, b| prefer(HitRef::top(a), HitRef::top(b)),
                 )
                 .map(|(i, t)| (HitRef::top(i), t));
@@ -68,10 +68,7 @@ impl SceneGeometry {
                 tmax,
                 |i| {
                     if i < n {
-                        self.objects[i]
-                            .surface
-                            .intersect(org, dir, tmax)
-                            .map(|t| (t, 0))
+                        self.objects.intersect(i, org, dir, tmax).map(|t| (t, 0))
                     } else {
                         self.placement_hit(i - n, org, dir, tmax, &prefer)
                     }
@@ -125,7 +122,7 @@ impl SceneGeometry {
     pub fn hit_geom(&self, r: HitRef, org: DVec3, dir: DVec3, t: f64) -> (DVec3, DVec3, bool) {
         let point = org + dir * t;
         if r.inst == NO_INST {
-            let s = &self.objects[r.obj].surface;
+            let s = self.objects.surface(r.obj);
             return (point, s.normal_at(point), s.is_flat());
         }
         let p = &self.placements[r.inst as usize];
@@ -141,7 +138,7 @@ impl SceneGeometry {
     /// Whether the surface of `r` is hit from its front along a ray (for ties).
     pub fn facing(&self, r: HitRef, org: DVec3, dir: DVec3, tmax: f64) -> bool {
         if r.inst == NO_INST {
-            let s = &self.objects[r.obj].surface;
+            let s = self.objects.surface(r.obj);
             return match s.intersect(org, dir, tmax) {
                 Some(t) => s.normal_at(org + dir * t).dot(dir) < 0.0,
                 None => false,
@@ -162,8 +159,8 @@ impl SceneGeometry {
         if r.inst == NO_INST {
             let o = &self.objects[r.obj];
             return HitInfo {
-                chain: o.chain,
-                material: o.material,
+                chain: o.chain(),
+                material: o.material(),
                 modifier: self.objects.modifier(r.obj),
                 frame: None,
             };
@@ -190,7 +187,7 @@ impl SceneGeometry {
     #[inline]
     pub fn ref_material(&self, r: HitRef) -> Option<MatId> {
         if r.inst == NO_INST {
-            self.objects[r.obj].material
+            self.objects[r.obj].material()
         } else {
             self.hit_info(r).material
         }

@@ -5,6 +5,7 @@ pub mod primitive;
 pub use primitive::{Location, Primitive};
 pub mod error;
 pub mod gen;
+pub mod image;
 /// The built-in genbox (now in [`gen::genbox`]).
 pub use gen::genbox;
 pub mod lexer;

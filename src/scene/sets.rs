@@ -31,7 +31,7 @@ pub struct MeshModifier {
 /// What a set holds.
 pub enum SetGeom {
     /// Surfaces with their materials (an octree).
-    Objects(Objects),
+    Objects(Box<Objects>),
     /// Triangles (a mesh) and their modifiers by object index of the mesh's scene.
     Mesh {
         /// The triangles.
@@ -88,7 +88,7 @@ impl ObjectSet {
     #[inline]
     pub fn intersect(&self, j: usize, o: DVec3, d: DVec3, tmax: f64) -> Option<f64> {
         match &self.geom {
-            SetGeom::Objects(objs) => objs[j].surface.intersect(o, d, tmax),
+            SetGeom::Objects(objs) => objs.intersect(j, o, d, tmax),
             SetGeom::Mesh { mesh, .. } => mesh.intersect(j, o, d, tmax),
         }
     }
@@ -97,7 +97,10 @@ impl ObjectSet {
     /// surface is flat.
     pub fn normal(&self, j: usize, p: DVec3) -> (DVec3, bool) {
         match &self.geom {
-            SetGeom::Objects(objs) => (objs[j].surface.normal_at(p), objs[j].surface.is_flat()),
+            SetGeom::Objects(objs) => {
+                let s = objs.surface(j);
+                (s.normal_at(p), s.is_flat())
+            }
             SetGeom::Mesh { mesh, .. } => (mesh.normal(j), true),
         }
     }
@@ -105,7 +108,7 @@ impl ObjectSet {
     /// Chain, material and modifier name of object `j`.
     pub fn shading(&self, j: usize) -> (ModRef, Option<MatId>, &str) {
         match &self.geom {
-            SetGeom::Objects(objs) => (objs[j].chain, objs[j].material, objs.modifier(j)),
+            SetGeom::Objects(objs) => (objs[j].chain(), objs[j].material(), objs.modifier(j)),
             SetGeom::Mesh { mesh, mods } => {
                 let k = mesh.tris[j].modifier;
                 match usize::try_from(k)

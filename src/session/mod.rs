@@ -116,12 +116,40 @@ impl Session {
         source: SceneSource,
         threads: Option<usize>,
     ) -> Result<Session> {
+        // Without an image nothing is refused.
+        Session::start_core(params, source, threads, None)?.map_err(|m| anyhow::anyhow!(m))
+    }
+
+    /// [`Session::start`] with the scene's top-level surfaces and BVH taken from a scene
+    /// image made for it ([`crate::scene::image`]). The inner error says why the image was
+    /// refused (the primitives are used up: read the scene again and start without it).
+    pub fn start_with_image(
+        params: RenderParams,
+        source: SceneSource,
+        threads: Option<usize>,
+        image: &crate::scene::image::SceneImage,
+    ) -> Result<std::result::Result<Session, String>> {
+        Session::start_core(params, source, threads, Some(image))
+    }
+
+    fn start_core(
+        params: RenderParams,
+        source: SceneSource,
+        threads: Option<usize>,
+        image: Option<&crate::scene::image::SceneImage>,
+    ) -> Result<std::result::Result<Session, String>> {
         let ro = ReadOptions {
             allow_commands: source.allow_commands,
             raypath: source.raypath.clone(),
             ..ReadOptions::default()
         };
-        let scene = Scene::build_taking(source.prims, &ro)?;
+        let scene = match image {
+            None => Scene::build_taking(source.prims, &ro)?,
+            Some(image) => match Scene::build_with_image(source.prims, &ro, image)? {
+                Ok(scene) => scene,
+                Err(why) => return Ok(Err(why)),
+            },
+        };
         let fingerprint =
             crate::ambient::fingerprint::with_inputs(source.fingerprint, &scene.inputs)
                 .map_err(|e| anyhow::anyhow!("cannot read a scene input: {e}"))?;
@@ -144,7 +172,7 @@ impl Session {
             .build()
             .or_else(|_| rayon::ThreadPoolBuilder::new().num_threads(threads).build())
             .context("cannot start render threads")?;
-        Ok(Session {
+        Ok(Ok(Session {
             params,
             scene,
             lights,
@@ -156,7 +184,7 @@ impl Session {
             pool,
             store: None,
             cells: Default::default(),
-        })
+        }))
     }
 
     /// The ambient calculation when it caches its values (stores apply only then).

@@ -62,6 +62,19 @@ pub fn has_noise(e: &E) -> bool {
     }
 }
 
+/// Whether `e` calls sin, cos or tan: far from the origin (`sin(2.3e63)`) a last-bit
+/// difference of the argument changes their value entirely, so a folded expression (whose
+/// divisions by constants are multiplications by reciprocals) may differ from the reference.
+pub fn has_periodic(e: &E) -> bool {
+    match e {
+        E::Num(..) | E::Var(_) => false,
+        E::Neg(a) | E::Pos(a) | E::Paren(a) => has_periodic(a),
+        E::Pass(f, a) => ["sin", "cos", "tan"].contains(f) || has_periodic(a),
+        E::Bin(_, a, b) => has_periodic(a) || has_periodic(b),
+        E::Call(f, args) => ["sin", "cos", "tan"].contains(f) || args.iter().any(has_periodic),
+    }
+}
+
 /// The definitions every generated expression may use.
 pub const DEFS: &str = "a = 0.7; b = -2.3; c = a*b + 1;
 f(x) = x*x - 1; g(x,y) = if(x, y, -y); l(x,y,z) = if(x, y, z);

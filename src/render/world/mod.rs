@@ -14,6 +14,7 @@ use crate::modifier::{
     func::FuncShared, ModRef, ModifierDef, ModifierKind, ModifierLookup, ModifierTypes, SceneFiles,
 };
 use crate::scene::error::SceneError;
+use crate::scene::image::SceneImage;
 pub use crate::scene::object::{Object, Objects};
 use crate::scene::primitive::{Location, Primitive};
 use crate::scene::reader::{ReadOptions, KNOWN_TYPES};
@@ -268,7 +269,15 @@ impl Builder<'_> {
     ///
     /// The real and string arguments of each finite surface are freed once it is built (the
     /// text of a large mesh or `gensurf` would otherwise be held until the whole scene is).
-    pub(super) fn level(&mut self, prims: &mut [Primitive]) -> Result<Level, SceneError> {
+    ///
+    /// With `framed` (the origin, size and length tolerance of a scene image, which holds
+    /// the finite surfaces) the finite surfaces are skipped: the level has no objects, the
+    /// rest (materials, modifiers, distant sources, instances) is built as usual.
+    pub(super) fn level(
+        &mut self,
+        prims: &mut [Primitive],
+        framed: Option<(DVec3, f64, f64)>,
+    ) -> Result<Level, SceneError> {
         let err = |p: &Primitive, msg: String| SceneError::syntax(p.loc.clone(), msg);
         // Pass 1: bounds of finite geometry, to choose the origin. Surfaces are parsed once
         // with a zero origin for bounds, then re-parsed relative to the chosen origin.
@@ -286,7 +295,10 @@ impl Builder<'_> {
                     hi = hi.max(b);
                 }
                 pending.push((set, xf));
-            } else if SURFACE_TYPES.contains(&p.ptype.as_str()) && p.ptype != "source" {
+            } else if framed.is_none()
+                && SURFACE_TYPES.contains(&p.ptype.as_str())
+                && p.ptype != "source"
+            {
                 let s = match Surface::from_primitive(p, DVec3::ZERO) {
                     Ok(s) => s,
                     Err(m) if !surface_counts_ok(p) => {
@@ -309,6 +321,7 @@ impl Builder<'_> {
             (DVec3::ZERO, 1.0)
         };
         let eps = length_tolerance(size);
+        let (origin, size, eps) = framed.unwrap_or((origin, size, eps));
 
         let mut objects = Objects::with_capacity(nsurf);
         let mut distant = Vec::new();
@@ -363,6 +376,8 @@ impl Builder<'_> {
                         name: p.name.clone(),
                         modifier: p.modifier.clone(),
                     });
+                } else if framed.is_some() {
+                    // The scene image holds it.
                 } else {
                     let surface = match Surface::from_primitive_warn(p, origin) {
                         Ok((mut s, w)) => {
@@ -382,16 +397,9 @@ impl Builder<'_> {
                             continue;
                         }
                     };
-                    objects.push(
-                        Object {
-                            surface,
-                            material,
-                            chain,
-                        },
-                        &p.name,
-                        &p.modifier,
-                        &p.loc,
-                    );
+                    objects
+                        .push(surface, material, chain, &p.name, &p.modifier, &p.loc)
+                        .map_err(|m| err(p, m))?;
                     p.rargs = Vec::new();
                     p.sargs = Vec::new();
                     p.name = String::new();
@@ -576,10 +584,33 @@ impl Scene {
 
     /// [`Scene::build_opts`] freeing the primitives as it goes ([`Scene::build_taking`]).
     fn build_opts_taking(
-        mut prims: Vec<Primitive>,
+        prims: Vec<Primitive>,
         types: &ModifierTypes,
         opts: &ReadOptions,
     ) -> Result<Scene, SceneError> {
+        // Without an image nothing is refused.
+        Scene::build_core(prims, types, opts, None)?
+            .map_err(|m| SceneError::syntax(Location::new("<scene>", 0), m))
+    }
+
+    /// [`Scene::build_taking`] with the top level's finite surfaces and BVH taken from a
+    /// scene image made for these primitives ([`crate::scene::image`]) instead of built.
+    /// The outer error is the scene's; the inner one says why the image was refused (then
+    /// build the scene without it).
+    pub fn build_with_image(
+        prims: Vec<Primitive>,
+        opts: &ReadOptions,
+        image: &SceneImage,
+    ) -> Result<Result<Scene, String>, SceneError> {
+        Scene::build_core(prims, &ModifierTypes::standard(), opts, Some(image))
+    }
+
+    fn build_core(
+        mut prims: Vec<Primitive>,
+        types: &ModifierTypes,
+        opts: &ReadOptions,
+        image: Option<&SceneImage>,
+    ) -> Result<Result<Scene, String>, SceneError> {
         let mut b = Builder {
             mods: Modifiers {
                 current: HashMap::new(),
@@ -595,29 +626,48 @@ impl Scene {
             set_ids: HashMap::new(),
             loading: Vec::new(),
         };
-        let level = b.level(&mut prims)?;
+        let mut level = b.level(&mut prims, image.map(|i| i.frame()))?;
         let first = prims.first().map(|p| p.loc.clone());
         drop(prims);
-        let bounds: Vec<(DVec3, DVec3)> =
-            level.objects.iter().map(|o| o.surface.bounds()).collect();
-        let (bvh, placements) = if level.children.is_empty() {
-            (Bvh::build(&bounds, level.eps), Vec::new())
+        let placements = if level.children.is_empty() {
+            Vec::new()
         } else {
-            let placements = flatten(&b.sets, &level.children, level.origin).map_err(|m| {
+            flatten(&b.sets, &level.children, level.origin).map_err(|m| {
                 let loc = first.unwrap_or_else(|| Location::new("<scene>", 0));
                 SceneError::syntax(loc, m)
-            })?;
-            let mut all = bounds;
+            })?
+        };
+        let bvh = if let Some(image) = image {
+            let taken = image
+                .objects(b.materials.len(), b.mods.defs.len())
+                .and_then(|o| {
+                    if image.placements() != placements.len() {
+                        return Err("its instance placements differ from the scene's".into());
+                    }
+                    Ok((image.bvh(o.len() + placements.len())?, o))
+                });
+            match taken {
+                Ok((bvh, objects)) => {
+                    level.objects = objects;
+                    b.warnings = image.warnings().to_vec();
+                    bvh
+                }
+                Err(e) => return Ok(Err(e)),
+            }
+        } else {
+            let mut all: Vec<(DVec3, DVec3)> = (0..level.objects.len())
+                .map(|i| level.objects.surface(i).bounds())
+                .collect();
             for p in &placements {
                 let set = &b.sets[p.set];
                 let bb = set.bounds.unwrap_or((DVec3::ZERO, DVec3::ZERO));
                 all.push(map_box(bb, |c| p.to_world.transform_point3(c)));
             }
-            (Bvh::build(&all, level.eps), placements)
+            Bvh::build(&all, level.eps)
         };
         let functions = b.mods.files.functions().finish();
         let inputs = b.mods.files.relative_inputs();
-        Ok(Scene {
+        Ok(Ok(Scene {
             geom: SceneGeometry {
                 origin: level.origin,
                 size: level.size,
@@ -633,7 +683,7 @@ impl Scene {
             materials: b.materials,
             modifiers: b.mods.defs,
             functions,
-        })
+        }))
     }
 
     /// The material of a material id.

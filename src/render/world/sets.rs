@@ -87,7 +87,7 @@ impl Builder<'_> {
         for (n, p) in used {
             self.mods.files.note_input(&n, p);
         }
-        let level = self.in_own_namespace(|b| b.level(&mut prims))?;
+        let level = self.in_own_namespace(|b| b.level(&mut prims, None))?;
         // The primitives' text is not needed any more: free it before the BVH build, the
         // peak of a set's memory.
         drop(prims);
@@ -99,10 +99,10 @@ impl Builder<'_> {
         }
         let objects = &level.objects;
         let mut direct = None;
-        for o in objects {
-            union(&mut direct, o.surface.bounds());
+        for i in 0..objects.len() {
+            union(&mut direct, objects.surface(i).bounds());
         }
-        let bvh = Bvh::build_from(objects.len(), |i| objects[i].surface.bounds(), level.eps);
+        let bvh = Bvh::build_from(objects.len(), |i| objects.surface(i).bounds(), level.eps);
         let expanded = level.objects.len() as u64
             + level
                 .children
@@ -112,7 +112,7 @@ impl Builder<'_> {
         let placements = placements_of(&self.sets, &level.children);
         Ok(ObjectSet {
             file: name.to_string(),
-            geom: SetGeom::Objects(level.objects),
+            geom: SetGeom::Objects(Box::new(level.objects)),
             bvh,
             origin: level.origin,
             bounds: direct,
@@ -134,7 +134,7 @@ impl Builder<'_> {
         let mut file = crate::scene::rtm::parse_mesh(&bytes, name)
             .map_err(|m| SceneError::syntax(loc.clone(), m))?;
         drop(bytes);
-        let level = self.in_own_namespace(|b| b.level(&mut file.prims))?;
+        let level = self.in_own_namespace(|b| b.level(&mut file.prims, None))?;
         let mods: Vec<Option<MeshModifier>> = level
             .defined
             .iter()
