@@ -7,7 +7,7 @@ use std::sync::Arc;
 use glam::DVec3;
 use tessera::geometry::plain::{Aligned, Backing};
 use tessera::render::world::Scene;
-use tessera::scene::image::{encode, SceneImage};
+use tessera::scene::image::{encode, Rest, SceneImage};
 use tessera::scene::reader::parse_scene_text;
 use tessera::scene::{Primitive, ReadOptions};
 
@@ -35,8 +35,9 @@ fn prims(text: &str) -> Vec<Primitive> {
 }
 
 fn image_of(text: &str, key: &[u8; 32]) -> Vec<u8> {
-    let scene = Scene::build(&prims(text)).unwrap();
-    encode(key, &scene.geom)
+    let p = prims(text);
+    let scene = Scene::build(&p).unwrap();
+    encode(key, &Rest::of(&p, [1; 32]), &scene.geom)
 }
 
 fn open(bytes: &[u8], key: &[u8; 32]) -> Result<SceneImage, String> {
@@ -44,8 +45,15 @@ fn open(bytes: &[u8], key: &[u8; 32]) -> Result<SceneImage, String> {
     SceneImage::from_backing(keep, key)
 }
 
-fn mapped(text: &str, image: &SceneImage) -> Result<Scene, String> {
-    Scene::build_with_image(prims(text), &ReadOptions::default(), image).unwrap()
+/// The scene built from an image alone: its own primitives (all but the finite surfaces)
+/// and its geometry.
+fn mapped(image: &SceneImage) -> Result<Scene, String> {
+    let (rest, fp) = image.rest(&ReadOptions::default())?;
+    assert_eq!(fp, [1; 32]);
+    assert!(rest
+        .iter()
+        .all(|p| !["polygon", "sphere", "cone", "ring"].contains(&p.ptype.as_str())));
+    Scene::build_with_image(rest, &ReadOptions::default(), image).unwrap()
 }
 
 /// Rays from a grid of points in many directions: what each scene hits, where, its normal,
@@ -80,10 +88,12 @@ fn trace_all(s: &Scene) -> Vec<String> {
 #[test]
 fn a_scene_from_its_image_traces_like_the_built_one() {
     let key = [7u8; 32];
-    let built = Scene::build(&prims(SCENE)).unwrap();
-    let bytes = encode(&key, &built.geom);
+    let p = prims(SCENE);
+    let built = Scene::build(&p).unwrap();
+    let rest = Rest::of(&p, [1; 32]);
+    let bytes = encode(&key, &rest, &built.geom);
     let image = open(&bytes, &key).unwrap();
-    let from_image = mapped(SCENE, &image).unwrap();
+    let from_image = mapped(&image).unwrap();
     assert!(from_image.objects.len() >= 8);
     assert_eq!(from_image.objects.len(), built.objects.len());
     assert_eq!(from_image.origin, built.origin);
@@ -95,7 +105,7 @@ fn a_scene_from_its_image_traces_like_the_built_one() {
     assert!(a.iter().filter(|h| *h != "miss").count() > 100);
     assert_eq!(a, b);
     // Encoding the scene from the image gives the same bytes.
-    assert_eq!(encode(&key, &from_image.geom), bytes);
+    assert_eq!(encode(&key, &rest, &from_image.geom), bytes);
 }
 
 #[test]
@@ -131,7 +141,7 @@ fn damaged_foreign_or_inconsistent_images_are_refused() {
         let n = u64::from_le_bytes(b[at + 8..at + 16].try_into().unwrap()) as usize;
         (off, n)
     };
-    let later = |b: &[u8]| mapped(SCENE, &open(b, &key).unwrap()).err().unwrap();
+    let later = |b: &[u8]| mapped(&open(b, &key).unwrap()).err().unwrap();
     // An object's index beyond its kind's array (section 1, the objects: 16 bytes each).
     let mut bad = good.clone();
     let (off, _) = section(&bad, 1);

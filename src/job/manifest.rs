@@ -305,27 +305,7 @@ pub fn scene_text(prims: &[Primitive], sources: &[String]) -> String {
         crate::runinfo::SOFTWARE,
         sources.join(" ")
     );
-    for p in prims {
-        if p.ptype == "alias" {
-            let target = p.sargs.first().map(String::as_str).unwrap_or("void");
-            let _ = writeln!(s, "\n{} alias {} {}", p.modifier, p.name, target);
-            continue;
-        }
-        let _ = writeln!(s, "\n{} {} {}", p.modifier, p.ptype, p.name);
-        let _ = write!(s, "{}", p.sargs.len());
-        for a in &p.sargs {
-            let _ = write!(s, " {a}");
-        }
-        let _ = write!(s, "\n{}", p.iargs.len());
-        for a in &p.iargs {
-            let _ = write!(s, " {a}");
-        }
-        let _ = write!(s, "\n{}", p.rargs.len());
-        for a in &p.rargs {
-            let _ = write!(s, " {a}");
-        }
-        s.push('\n');
-    }
+    crate::scene::primitive::write_text(prims, &mut s);
     s
 }
 
@@ -390,6 +370,8 @@ pub fn create_job(dir: &Path, req: &PlanRequest) -> Result<Manifest> {
     // What the job keeps of the primitives, before the build frees them.
     let scene_fingerprint = crate::ambient::fingerprint::fingerprint(&prims, &opts.params);
     let text = scene_text(&prims, &opts.scene_files);
+    let mut rest = crate::scene::image::Rest::of(&prims, scene_fingerprint);
+    rest.scene_file = Some((text.len() as u64, crc32fast::hash(text.as_bytes())));
     let primitives = prims.len();
     let scene = Scene::build_taking(prims, &ro)?;
     for w in &scene.warnings {
@@ -537,7 +519,7 @@ pub fn create_job(dir: &Path, req: &PlanRequest) -> Result<Manifest> {
     // The built geometry, which workers map instead of building (one copy per node).
     super::write_file_atomic(
         &job.file(SCENE_IMAGE),
-        &crate::scene::image::encode(&fingerprint, &scene.geom),
+        &crate::scene::image::encode(&fingerprint, &rest, &scene.geom),
     )
     .with_context(|| format!("cannot write {SCENE_IMAGE}"))?;
     if m.points.is_some() {

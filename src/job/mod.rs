@@ -44,7 +44,7 @@ pub mod task;
 pub mod tile;
 pub mod worker;
 
-use anyhow::{bail, Result};
+use anyhow::{bail, Context, Result};
 use std::path::{Path, PathBuf};
 
 /// A job directory.
@@ -224,6 +224,27 @@ pub fn unix_now() -> f64 {
         .duration_since(std::time::UNIX_EPOCH)
         .map(|d| d.as_secs_f64())
         .unwrap_or(0.0)
+}
+
+/// The length and CRC-32 of a regular file, read in pieces (a large scene is not held).
+pub fn file_crc(path: &Path) -> Result<(u64, u32)> {
+    use std::io::Read;
+    let mut f = crate::safefile::open_regular(path, false)
+        .with_context(|| format!("cannot open {}", path.display()))?;
+    let mut h = crc32fast::Hasher::new();
+    let mut buf = vec![0u8; 1 << 20];
+    let mut len = 0u64;
+    loop {
+        let n = f
+            .read(&mut buf)
+            .with_context(|| format!("cannot read {}", path.display()))?;
+        if n == 0 {
+            break;
+        }
+        h.update(&buf[..n]);
+        len += n as u64;
+    }
+    Ok((len, h.finalize()))
 }
 
 /// Write `bytes` to `path` atomically (temporary in the same directory, fsync, rename).

@@ -26,7 +26,7 @@ use super::{check_worker_id, default_worker_id, JobDir};
 use crate::ambient::Ambient;
 use crate::render::RenderProgress;
 use crate::runinfo::process_cpu_seconds;
-use crate::scene::image::{self, SceneImage};
+use crate::scene::image::{self, Rest, SceneImage};
 use crate::scene::ReadOptions;
 use crate::session::store::{AmbientStore, FlushPolicy};
 use crate::session::{Region, SceneSource, Session};
@@ -227,28 +227,56 @@ fn start_session(job: &JobDir, m: &Manifest, owner: &str, wo: &WorkerOptions) ->
             .max(crate::scene::reader::DEFAULT_MAX_PRIMITIVES),
         ..ReadOptions::default()
     };
-    let read = || SceneSource::read(&[scene_path.display().to_string()], &ro, &m.params);
-    let source = read()?;
-    // The fingerprint covers the files the scene reads (JOB/files/), known once it is built.
-    // The tile loops render on threads of their own: the session's pool is not used. The
-    // top-level geometry comes from the job's scene image when it is sound; a damaged or
-    // foreign image is refused and replaced.
+    // The tile loops render on threads of their own: the session's pool is not used. With
+    // a sound scene image (JOB/scene.img) the top-level geometry is mapped from it and the
+    // other primitives come from it too: no scene file is read, no surface parsed. Without
+    // one, or with a damaged or foreign one, the scene is read from JOB/scene.rad and built,
+    // and a new image is written.
+    let plain = || -> Result<(Session, Rest)> {
+        let source = SceneSource::read(&[scene_path.display().to_string()], &ro, &m.params)?;
+        let mut rest = Rest::of(&source.prims, source.fingerprint);
+        rest.scene_file = Some(super::file_crc(&scene_path)?);
+        Ok((Session::start(m.params.clone(), source, Some(1))?, rest))
+    };
     let image_path = job.file(super::manifest::SCENE_IMAGE);
     let image = match std::fs::symlink_metadata(&image_path) {
         _ if !wo.scene_image => Err(None),
         Err(_) => Err(Some("there is none".to_string())),
         Ok(_) => SceneImage::open(&image_path, &m.fingerprint_bytes()).map_err(Some),
     };
-    let (mut session, refused) = match image {
-        Ok(image) => match Session::start_with_image(m.params.clone(), source, Some(1), &image)? {
-            Ok(s) => (s, None),
-            Err(why) => (
-                Session::start(m.params.clone(), read()?, Some(1))?,
-                Some(why),
-            ),
+    let image_scene = image.as_ref().ok().and_then(|i| i.scene_file());
+    let mapped = match image {
+        Ok(image) => match image.rest(&ro) {
+            Ok((prims, fingerprint)) => {
+                let source = SceneSource {
+                    prims,
+                    fingerprint,
+                    raypath: ro.raypath.clone(),
+                    allow_commands: false,
+                };
+                Session::start_with_image(m.params.clone(), source, Some(1), &image)?.map_err(Some)
+            }
+            Err(e) => Err(Some(format!("damaged: {e}"))),
         },
-        Err(why) => (Session::start(m.params.clone(), source, Some(1))?, why),
+        Err(why) => Err(why),
     };
+    let changed = || {
+        anyhow!(
+            "{}: the scene or the manifest's options changed since the job was planned; \
+             plan a new job",
+            scene_path.display()
+        )
+    };
+    let (mut session, refused) = match mapped {
+        Ok(_) if image_scene != Some(super::file_crc(&scene_path)?) => return Err(changed()),
+        Ok(s) => (s, None),
+        Err(None) => (plain()?.0, None),
+        Err(Some(why)) => {
+            let (s, rest) = plain()?;
+            (s, Some((why, rest)))
+        }
+    };
+    // The fingerprint covers the files the scene reads (JOB/files/), known once it is built.
     if session.fingerprint != m.fingerprint_bytes() {
         bail!(
             "{}: the scene or the manifest's options changed since the job was planned \
@@ -258,7 +286,7 @@ fn start_session(job: &JobDir, m: &Manifest, owner: &str, wo: &WorkerOptions) ->
             m.fingerprint
         );
     }
-    if let Some(why) = refused {
+    if let Some((why, rest)) = refused {
         if wo.verbose {
             eprintln!(
                 "tpiece: warning: {}: not used ({why}); built the scene and wrote a new one",
@@ -267,7 +295,7 @@ fn start_session(job: &JobDir, m: &Manifest, owner: &str, wo: &WorkerOptions) ->
         }
         super::write_file_atomic(
             &image_path,
-            &image::encode(&m.fingerprint_bytes(), &session.scene.geom),
+            &image::encode(&m.fingerprint_bytes(), &rest, &session.scene.geom),
         )
         .with_context(|| format!("cannot write {}", image_path.display()))?;
     }

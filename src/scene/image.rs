@@ -1,7 +1,9 @@
 //! Scene images: a built scene's top-level geometry (its surfaces, their names and places,
 //! and the BVH) in one read-only file that processes map instead of building it, so that
 //! every worker on a node shares one copy through the page cache (docs/batch.md, "One copy
-//! of the scene per node").
+//! of the scene per node"). The image also holds the text of the scene's other primitives
+//! (materials, modifiers, distant sources, instances) and the fingerprint of all of them:
+//! a process that maps it reads no scene file and parses no surface.
 //!
 //! Layout (little-endian): a 64-byte header — `TSSCNIMG`, the format version (u32), the
 //! number of sections (u32), the file's length (u64), the 32-byte key (the job's scene
@@ -19,7 +21,6 @@
 //! vertex ranges, material and modifier ids, name ends, BVH children and leaves) against
 //! the arrays it indexes. A damaged or foreign image is refused with the reason.
 
-use std::io::Write;
 use std::path::Path;
 use std::sync::Arc;
 
@@ -34,6 +35,9 @@ use crate::geometry::plain::{bytes_of, Backing, Plain, Slab};
 use crate::geometry::ring::Ring;
 use crate::geometry::sphere::Sphere;
 use crate::scene::object::ModRef;
+use crate::scene::primitive::Primitive;
+use crate::scene::reader::{parse_scene_text, ReadOptions};
+use crate::scene::world::SURFACE_TYPES;
 
 /// The first bytes of a scene image.
 pub const MAGIC: &[u8; 8] = b"TSSCNIMG";
@@ -78,6 +82,43 @@ struct Meta {
     modifiers: Vec<String>,
     files: Vec<String>,
     warnings: Vec<String>,
+    /// The fingerprint of all the scene's primitives (before the files they read).
+    prims_fingerprint: [u8; 32],
+    /// The scene text of the primitives other than finite surfaces (materials, modifiers,
+    /// distant sources, instances): what a process builds itself.
+    rest: String,
+    /// The length and CRC-32 of the scene file the primitives were written to, if any (a
+    /// job's `scene.rad`: a process that maps the image checks that it is unchanged).
+    scene_file: Option<(u64, u32)>,
+}
+
+/// What an image keeps of a scene's primitives: their fingerprint and the text of all but
+/// the finite surfaces, so that a process that maps the image reads no scene file.
+pub struct Rest {
+    /// [`crate::ambient::fingerprint::fingerprint`] of all the primitives.
+    pub fingerprint: [u8; 32],
+    /// The primitives other than finite surfaces, as scene text.
+    pub text: String,
+    /// The length and CRC-32 of the file that holds all the primitives as text, if any.
+    pub scene_file: Option<(u64, u32)>,
+}
+
+impl Rest {
+    /// The rest of `prims`, whose fingerprint is `fingerprint`.
+    pub fn of(prims: &[Primitive], fingerprint: [u8; 32]) -> Rest {
+        let kept: Vec<Primitive> = prims
+            .iter()
+            .filter(|p| !(SURFACE_TYPES.contains(&p.ptype.as_str()) && p.ptype != "source"))
+            .cloned()
+            .collect();
+        let mut text = String::new();
+        super::primitive::write_text(&kept, &mut text);
+        Rest {
+            fingerprint,
+            text,
+            scene_file: None,
+        }
+    }
 }
 
 /// An opened scene image (checked: header, checksum, key, version; its indices are
@@ -97,7 +138,7 @@ fn section<T: Plain>(out: &mut Vec<u8>, table: &mut Vec<(u64, u64)>, s: &[T]) {
 
 /// The bytes of an image of `geom` (only its top level: the sets its instances place are
 /// built by each process) under `key`.
-pub fn encode(key: &[u8; 32], geom: &SceneGeometry) -> Vec<u8> {
+pub fn encode(key: &[u8; 32], rest: &Rest, geom: &SceneGeometry) -> Vec<u8> {
     let o = &geom.objects;
     let b = &geom.bvh;
     let meta = Meta {
@@ -115,6 +156,9 @@ pub fn encode(key: &[u8; 32], geom: &SceneGeometry) -> Vec<u8> {
         modifiers: o.modifiers.iter().map(|m| m.to_string()).collect(),
         files: o.files.iter().map(|f| f.to_string()).collect(),
         warnings: geom.warnings.clone(),
+        prims_fingerprint: rest.fingerprint,
+        rest: rest.text.clone(),
+        scene_file: rest.scene_file,
     };
     let json = serde_json::to_vec(&meta).unwrap_or_default();
     let words = |n: usize, w: &mut dyn FnMut(&mut Vec<f64>)| {
@@ -162,26 +206,6 @@ pub fn encode(key: &[u8; 32], geom: &SceneGeometry) -> Vec<u8> {
     let crc = crc32fast::hash(&out[HEADER..]);
     out[56..60].copy_from_slice(&crc.to_le_bytes());
     out
-}
-
-/// Write an image of `geom` under `key` to `path`: to a temporary file in its directory,
-/// synced, then renamed over `path` (a reader sees a whole image or the one before).
-pub fn write(path: &Path, key: &[u8; 32], geom: &SceneGeometry) -> std::io::Result<()> {
-    let bytes = encode(key, geom);
-    let dir = match path.parent() {
-        Some(d) if !d.as_os_str().is_empty() => d,
-        _ => Path::new("."),
-    };
-    let mut tmp = tempfile::Builder::new()
-        .prefix(".scene-image.")
-        .tempfile_in(dir)?;
-    tmp.write_all(&bytes)?;
-    tmp.as_file().sync_all()?;
-    tmp.persist(path).map_err(|e| e.error)?;
-    if let Ok(d) = crate::safefile::open_dir(dir) {
-        let _ = d.sync_all();
-    }
-    Ok(())
 }
 
 impl SceneImage {
@@ -254,6 +278,19 @@ impl SceneImage {
     pub fn frame(&self) -> (DVec3, f64, f64) {
         let m = &self.meta;
         (DVec3::from_array(m.origin), m.size, m.eps)
+    }
+
+    /// The primitives other than finite surfaces (read with `ro`, which only gives the
+    /// limits: the text has no commands), and the fingerprint of all of them.
+    pub fn rest(&self, ro: &ReadOptions) -> Result<(Vec<Primitive>, [u8; 32]), String> {
+        let prims =
+            parse_scene_text(&self.meta.rest, "scene.img", ro).map_err(|e| e.to_string())?;
+        Ok((prims, self.meta.prims_fingerprint))
+    }
+
+    /// The length and CRC-32 of the scene file its primitives were written to, if any.
+    pub fn scene_file(&self) -> Option<(u64, u32)> {
+        self.meta.scene_file
     }
 
     /// The warnings the build gave.
