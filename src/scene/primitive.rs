@@ -65,6 +65,33 @@ pub fn append_prims(out: &mut Vec<Primitive>, mut more: Vec<Primitive>) {
     }
 }
 
+/// Write primitives as scene text that reads back as the same primitives (every number in
+/// its shortest exact form; an alias as `mod alias name target`), each after a blank line.
+pub fn write_text(prims: &[Primitive], s: &mut String) {
+    use std::fmt::Write;
+    for p in prims {
+        if p.ptype == "alias" {
+            let target = p.sargs.first().map(String::as_str).unwrap_or("void");
+            let _ = writeln!(s, "\n{} alias {} {}", p.modifier, p.name, target);
+            continue;
+        }
+        let _ = writeln!(s, "\n{} {} {}", p.modifier, p.ptype, p.name);
+        let _ = write!(s, "{}", p.sargs.len());
+        for a in &p.sargs {
+            let _ = write!(s, " {a}");
+        }
+        let _ = write!(s, "\n{}", p.iargs.len());
+        for a in &p.iargs {
+            let _ = write!(s, " {a}");
+        }
+        let _ = write!(s, "\n{}", p.rargs.len());
+        for a in &p.rargs {
+            let _ = write!(s, " {a}");
+        }
+        s.push('\n');
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -94,32 +121,5 @@ mod tests {
         let mut empty = Vec::new();
         append_prims(&mut empty, out);
         assert_eq!(names(&empty), ["a", "b", "c", "d"]);
-    }
-}
-
-/// Write primitives as scene text that reads back as the same primitives (every number in
-/// its shortest exact form; an alias as `mod alias name target`), each after a blank line.
-pub fn write_text(prims: &[Primitive], s: &mut String) {
-    use std::fmt::Write;
-    for p in prims {
-        if p.ptype == "alias" {
-            let target = p.sargs.first().map(String::as_str).unwrap_or("void");
-            let _ = writeln!(s, "\n{} alias {} {}", p.modifier, p.name, target);
-            continue;
-        }
-        let _ = writeln!(s, "\n{} {} {}", p.modifier, p.ptype, p.name);
-        let _ = write!(s, "{}", p.sargs.len());
-        for a in &p.sargs {
-            let _ = write!(s, " {a}");
-        }
-        let _ = write!(s, "\n{}", p.iargs.len());
-        for a in &p.iargs {
-            let _ = write!(s, " {a}");
-        }
-        let _ = write!(s, "\n{}", p.rargs.len());
-        for a in &p.rargs {
-            let _ = write!(s, " {a}");
-        }
-        s.push('\n');
     }
 }
