@@ -88,32 +88,32 @@ impl Backing for Aligned {
     }
 }
 
-/// An array of plain values: owned, or a view into shared read-only bytes.
+/// An array of plain values: owned, or a view into shared read-only bytes. Reading it is
+/// one pointer and one length, whichever it is (no branch on the hot path of tracing).
 pub struct Slab<T: Plain> {
-    repr: Repr<T>,
+    /// The values: into `owner`'s vector or into the shared bytes.
+    ptr: *const T,
+    len: usize,
+    owner: Owner<T>,
 }
 
-enum Repr<T> {
+enum Owner<T> {
+    /// Owned values (`ptr` and `len` are refreshed after every change).
     Owned(Vec<T>),
-    Shared {
-        /// Keeps the bytes alive; `ptr` points into them.
-        _keep: Arc<dyn Backing>,
-        ptr: *const T,
-        len: usize,
-    },
+    /// Keeps the shared bytes alive.
+    Shared(Arc<dyn Backing>),
 }
 
-// SAFETY: a shared slab only reads immutable bytes that `_keep` (Send + Sync) keeps alive.
+// SAFETY: a slab only reads values it owns or immutable bytes that its `Arc` (Send + Sync)
+// keeps alive; changing it takes `&mut self`.
 unsafe impl<T: Plain> Send for Slab<T> {}
 // SAFETY: as above.
 unsafe impl<T: Plain> Sync for Slab<T> {}
 
 impl<T: Plain> Slab<T> {
     /// An empty owned slab.
-    pub const fn new() -> Slab<T> {
-        Slab {
-            repr: Repr::Owned(Vec::new()),
-        }
+    pub fn new() -> Slab<T> {
+        Slab::from(Vec::new())
     }
 
     /// A view of `len` values at byte `offset` of `keep`'s bytes. Errors when the range is
@@ -136,40 +136,41 @@ impl<T: Plain> Slab<T> {
             return Err(format!("array at byte {offset} is not aligned"));
         }
         Ok(Slab {
-            repr: Repr::Shared {
-                _keep: keep.clone(),
-                ptr: ptr.cast::<T>(),
-                len,
-            },
+            ptr: ptr.cast::<T>(),
+            len,
+            owner: Owner::Shared(keep.clone()),
         })
     }
 
     /// Whether the values are borrowed from shared bytes.
     pub fn is_shared(&self) -> bool {
-        matches!(self.repr, Repr::Shared { .. })
+        matches!(self.owner, Owner::Shared(_))
     }
 
-    /// The values, owned (a shared slab is copied first).
-    pub fn to_mut(&mut self) -> &mut Vec<T> {
-        if let Repr::Shared { .. } = self.repr {
-            self.repr = Repr::Owned(self.deref().to_vec());
+    /// Change the values as a vector (a shared slab is copied first).
+    pub fn with_vec<R>(&mut self, f: impl FnOnce(&mut Vec<T>) -> R) -> R {
+        if let Owner::Shared(_) = self.owner {
+            self.owner = Owner::Owned(self.deref().to_vec());
         }
-        match &mut self.repr {
-            Repr::Owned(v) => v,
-            Repr::Shared { .. } => unreachable!("made owned above"),
-        }
+        let Owner::Owned(v) = &mut self.owner else {
+            unreachable!("made owned above")
+        };
+        let r = f(v);
+        self.ptr = v.as_ptr();
+        self.len = v.len();
+        r
     }
 
     /// Add a value (a shared slab is copied first).
     pub fn push(&mut self, v: T) {
-        self.to_mut().push(v);
+        self.with_vec(|s| s.push(v));
     }
 
     /// Heap bytes this slab owns (0 when shared).
     pub fn owned_bytes(&self) -> usize {
-        match &self.repr {
-            Repr::Owned(v) => v.capacity() * std::mem::size_of::<T>(),
-            Repr::Shared { .. } => 0,
+        match &self.owner {
+            Owner::Owned(v) => v.capacity() * std::mem::size_of::<T>(),
+            Owner::Shared(_) => 0,
         }
     }
 }
@@ -183,35 +184,33 @@ impl<T: Plain> Default for Slab<T> {
 impl<T: Plain> Deref for Slab<T> {
     type Target = [T];
 
-    #[inline]
+    #[inline(always)]
     fn deref(&self) -> &[T] {
-        match &self.repr {
-            Repr::Owned(v) => v,
-            // SAFETY: `ptr` is aligned and `len` values fit in the bytes `_keep` holds
-            // (checked in `shared`); `T: Plain` accepts any bits; the bytes never change.
-            Repr::Shared { ptr, len, .. } => unsafe { std::slice::from_raw_parts(*ptr, *len) },
-        }
+        // SAFETY: `ptr` and `len` describe the owned vector (refreshed after every change,
+        // and a vector's buffer does not move when the slab does) or values in the shared
+        // bytes `owner` keeps alive (checked in `shared`); `T: Plain` accepts any bits.
+        unsafe { std::slice::from_raw_parts(self.ptr, self.len) }
     }
 }
 
 impl<T: Plain> From<Vec<T>> for Slab<T> {
     fn from(v: Vec<T>) -> Self {
         Slab {
-            repr: Repr::Owned(v),
+            ptr: v.as_ptr(),
+            len: v.len(),
+            owner: Owner::Owned(v),
         }
     }
 }
 
 impl<T: Plain> Clone for Slab<T> {
     fn clone(&self) -> Self {
-        match &self.repr {
-            Repr::Owned(v) => Slab::from(v.clone()),
-            Repr::Shared { _keep, ptr, len } => Slab {
-                repr: Repr::Shared {
-                    _keep: _keep.clone(),
-                    ptr: *ptr,
-                    len: *len,
-                },
+        match &self.owner {
+            Owner::Owned(v) => Slab::from(v.clone()),
+            Owner::Shared(keep) => Slab {
+                ptr: self.ptr,
+                len: self.len,
+                owner: Owner::Shared(keep.clone()),
             },
         }
     }
@@ -246,8 +245,10 @@ mod tests {
         assert!(Slab::<f64>::shared(&keep, usize::MAX, 2).is_err());
         let mut c = s.clone();
         c.push(7.0);
+        let moved = [c];
+        let c = &moved[0];
         assert!(!c.is_shared());
-        assert_eq!(&*c, &[1.5, -2.0, 3.25, 7.0]);
+        assert_eq!(&c[..], &[1.5, -2.0, 3.25, 7.0]);
         assert_eq!(&*s, &vals);
     }
 }

@@ -8,6 +8,7 @@
 
 use glam::{DVec3, Vec3};
 
+use super::plain::{Plain, Slab};
 use crate::FTINY;
 
 /// A vertex has a normal.
@@ -16,28 +17,33 @@ pub const HAS_NORMAL: u8 = 2;
 pub const HAS_UV: u8 = 4;
 
 /// A triangle: three vertex indices (counter-clockwise seen from the front) and its
-/// modifier (an object index into the mesh's scene, −1 for void).
+/// modifier (an object index into the mesh's scene, −1 for void): 16 bytes of plain data.
 #[derive(Clone, Copy, Debug, PartialEq)]
+#[repr(C)]
 pub struct MeshTri {
     /// Vertex indices.
     pub v: [u32; 3],
     /// Modifier object index, −1 = void.
-    pub modifier: i16,
+    pub modifier: i32,
 }
 
-/// A triangle mesh.
+// SAFETY: `#[repr(C)]` of four 32-bit integers (no padding, any bits; indices are checked
+// where a mesh is loaded from a scene image).
+unsafe impl Plain for MeshTri {}
+
+/// A triangle mesh. Its arrays are [`Slab`]s (owned, or lent by a scene image).
 #[derive(Debug, Default)]
 pub struct TriMesh {
     /// Vertex positions (relative to the mesh origin).
-    pub pos: Vec<DVec3>,
+    pub pos: Slab<DVec3>,
     /// Vertex normals (zero where absent).
-    pub normal: Vec<Vec3>,
+    pub normal: Slab<Vec3>,
     /// Vertex (u,v).
-    pub uv: Vec<[f64; 2]>,
+    pub uv: Slab<[f64; 2]>,
     /// [`HAS_NORMAL`] | [`HAS_UV`] per vertex.
-    pub flags: Vec<u8>,
+    pub flags: Slab<u8>,
     /// Triangles.
-    pub tris: Vec<MeshTri>,
+    pub tris: Slab<MeshTri>,
     /// Length tolerance (minimum hit distance, edge tolerance).
     pub eps: f64,
 }
@@ -153,10 +159,11 @@ mod tests {
                 DVec3::new(1.0, 0.0, 0.0),
                 DVec3::new(1.0, 1.0, 0.0),
                 DVec3::new(0.0, 1.0, 0.0),
-            ],
-            normal: vec![Vec3::Z; 4],
-            uv: vec![[0.0, 0.0], [1.0, 0.0], [1.0, 1.0], [0.0, 1.0]],
-            flags: vec![HAS_NORMAL | HAS_UV; 4],
+            ]
+            .into(),
+            normal: vec![Vec3::Z; 4].into(),
+            uv: vec![[0.0, 0.0], [1.0, 0.0], [1.0, 1.0], [0.0, 1.0]].into(),
+            flags: vec![HAS_NORMAL | HAS_UV; 4].into(),
             tris: vec![
                 MeshTri {
                     v: [0, 1, 2],
@@ -166,7 +173,8 @@ mod tests {
                     v: [0, 2, 3],
                     modifier: 0,
                 },
-            ],
+            ]
+            .into(),
             eps: FTINY,
         }
     }

@@ -542,6 +542,11 @@ impl Worker<'_> {
             })
             .collect();
         let held = owners.len();
+        if held == 0 {
+            // Only this worker's own tiles are open (its committer is writing them, or its
+            // other loops render them): nothing to wait for from others.
+            return;
+        }
         owners.sort_unstable();
         owners.dedup();
         eprintln!(

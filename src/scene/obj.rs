@@ -220,7 +220,10 @@ impl Reader<'_> {
             }
         }
         let v = t.map(|c| self.vertex(c));
-        self.out.tris.push(MeshTri { v, modifier });
+        self.out.tris.push(MeshTri {
+            v,
+            modifier: modifier.into(),
+        });
     }
 
     /// Cut a face into triangles.

@@ -224,7 +224,7 @@ impl Objects {
                     .filter(|f| f.checked_add(p.rec.count).is_some())
                     .ok_or("more than 2^32 polygon vertices in one file")?;
                 p.rec.first = first;
-                self.verts.to_mut().extend_from_slice(&p.verts);
+                self.verts.with_vec(|v| v.extend_from_slice(&p.verts));
                 self.polys.push(p.rec);
                 (KIND_POLYGON, self.polys.len())
             }
@@ -260,7 +260,8 @@ impl Objects {
             chain,
             _pad: 0,
         });
-        self.names.to_mut().extend_from_slice(name.as_bytes());
+        self.names
+            .with_vec(|v| v.extend_from_slice(name.as_bytes()));
         self.name_end.push(self.names.len() as u64);
         let m = intern(
             &mut self.modifier_ids,
@@ -315,9 +316,9 @@ impl Objects {
     pub fn finish(&mut self) {
         self.modifier_ids = HashMap::new();
         self.file_ids = HashMap::new();
-        self.names.to_mut().shrink_to_fit();
-        self.verts.to_mut().shrink_to_fit();
-        self.polys.to_mut().shrink_to_fit();
+        self.names.with_vec(|v| v.shrink_to_fit());
+        self.verts.with_vec(|v| v.shrink_to_fit());
+        self.polys.with_vec(|v| v.shrink_to_fit());
     }
 
     /// Object `i`'s identifier.

@@ -170,13 +170,13 @@ pub fn parse_mesh(bytes: &[u8], name: &str) -> Result<MeshFile, String> {
             }
             for t in &mut raw[start..] {
                 let mk = r.int(2, "a triangle material")?;
-                t.modifier = material(&r, mk, m.prims.len())?;
+                t.modifier = material(&r, mk, m.prims.len())?.into();
             }
         } else {
             let mk = r.int(2, "the patch material")?;
             let mk = material(&r, mk, m.prims.len())?;
             for t in &mut raw[start..] {
-                t.modifier = mk;
+                t.modifier = mk.into();
             }
         }
         let nj1 = r.count(2, 256, "single joiner count")?;
@@ -185,7 +185,10 @@ pub fn parse_mesh(bytes: &[u8], name: &str) -> Result<MeshFile, String> {
             let v = [v1, local(&mut r)?, local(&mut r)?];
             let mk = r.int(2, "a joiner material")?;
             let modifier = material(&r, mk, m.prims.len())?;
-            raw.push(MeshTri { v, modifier });
+            raw.push(MeshTri {
+                v,
+                modifier: modifier.into(),
+            });
         }
         let nj2 = r.count(2, 256, "double joiner count")?;
         for _ in 0..nj2 {
@@ -194,7 +197,10 @@ pub fn parse_mesh(bytes: &[u8], name: &str) -> Result<MeshFile, String> {
             let v = [v1, v2, local(&mut r)?];
             let mk = r.int(2, "a joiner material")?;
             let modifier = material(&r, mk, m.prims.len())?;
-            raw.push(MeshTri { v, modifier });
+            raw.push(MeshTri {
+                v,
+                modifier: modifier.into(),
+            });
         }
     }
     for t in &mut raw {

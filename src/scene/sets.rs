@@ -35,7 +35,7 @@ pub enum SetGeom {
     /// Triangles (a mesh) and their modifiers by object index of the mesh's scene.
     Mesh {
         /// The triangles.
-        mesh: TriMesh,
+        mesh: Box<TriMesh>,
         /// Modifiers by object index (None: not a modifier).
         mods: Vec<Option<MeshModifier>>,
     },

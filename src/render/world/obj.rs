@@ -33,7 +33,7 @@ impl Builder<'_> {
         if default.is_some() {
             let k = obj.names.len() as i16;
             for t in tris.iter_mut().filter(|t| t.modifier < 0) {
-                t.modifier = k;
+                t.modifier = k.into();
             }
         }
         let mut set = mesh_object_set(

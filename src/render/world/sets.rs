@@ -192,19 +192,26 @@ pub(super) fn mesh_object_set(
     };
     let mut mesh = TriMesh {
         // In place: the file's positions are not kept twice.
-        pos: pos.into_iter().map(|p| p - origin).collect(),
-        normal,
-        uv,
-        flags,
-        tris,
+        pos: pos
+            .into_iter()
+            .map(|p| p - origin)
+            .collect::<Vec<_>>()
+            .into(),
+        normal: normal.into(),
+        uv: uv.into(),
+        flags: flags.into(),
+        tris: tris.into(),
         eps: super::length_tolerance(size),
     };
-    mesh.pos.shrink_to_fit();
+    mesh.pos.with_vec(|v| v.shrink_to_fit());
     let bvh = Bvh::build_from(mesh.tris.len(), |i| mesh.bounds(i), mesh.eps);
     let expanded = mesh.tris.len() as u64;
     ObjectSet {
         file: name.to_string(),
-        geom: SetGeom::Mesh { mesh, mods },
+        geom: SetGeom::Mesh {
+            mesh: Box::new(mesh),
+            mods,
+        },
         bvh,
         origin,
         bounds: full.map(|(lo, hi)| (lo - origin, hi - origin)),
