@@ -259,7 +259,7 @@ fn workers_use_sound_scene_images_and_replace_bad_ones() {
             "none" => None,
             "flip" => Some("checksum mismatch"),
             "remove" => Some("there is none"),
-            _ => Some("not a scene image"),
+            _ => Some("truncated"),
         };
         match want {
             None => assert!(!err.contains("scene.img"), "{err}"),

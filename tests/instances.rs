@@ -519,3 +519,83 @@ fn a_job_carries_its_instanced_files() {
         "the job's picture differs from tpict's"
     );
 }
+
+/// Every kind of set (an unfrozen and a frozen octree, nested instances, a compiled mesh
+/// and an OBJ mesh with and without a default modifier) built from a scene image traces
+/// and shades exactly like the scene built from its files: the same hits, points, normals,
+/// chains, materials, modifier names and mesh normals and (u,v).
+#[test]
+#[cfg_attr(not(radiance), ignore = "needs real Radiance: see tests/README.md")]
+fn sets_from_a_scene_image_trace_like_built_ones() {
+    use glam::DVec3;
+    use tessera::render::world::Scene;
+    use tessera::scene::image::{encode, Rest, SceneImage};
+    use tessera::scene::{read_scene_files, ReadOptions};
+    let Some(bin) = radiance_bin() else { return };
+    let t = workdir(&bin);
+    let d = t.path();
+    std::fs::write(d.join("ball.obj"), ball_obj()).unwrap();
+    let objscene =
+        "void plastic stripes 0 0 5 .6 .6 .6 0 0\nvoid plastic green 0 0 5 .1 .6 .1 0 0\n\
+                    void mesh b1 1 ball.obj 0 0\n\
+                    void mesh b2 7 ball.obj -m green -t 3 0 0 0 0\n";
+    std::fs::write(d.join("objs.rad"), objscene).unwrap();
+    let ro = ReadOptions {
+        raypath: vec![d.to_path_buf()],
+        ..ReadOptions::default()
+    };
+    for scene in ["inst.rad", "nest.rad", "mesh.rad", "objs.rad"] {
+        let prims = read_scene_files(&[d.join(scene).display().to_string()], &ro).unwrap();
+        let rest = Rest::of(&prims, [5; 32]);
+        let built = Scene::build_taking(prims, &ro).unwrap();
+        assert!(!built.sets.is_empty(), "{scene}: no sets");
+        let bytes = encode(&[9; 32], &rest, &built.geom);
+        let keep: std::sync::Arc<dyn tessera::geometry::plain::Backing> =
+            std::sync::Arc::new(tessera::geometry::plain::Aligned::new(&bytes));
+        let image = SceneImage::from_backing(keep, &[9; 32]).unwrap();
+        let (rest_prims, _) = image.rest(&ro).unwrap();
+        let mapped = Scene::build_with_image(rest_prims, &ro, &image)
+            .unwrap()
+            .unwrap_or_else(|e| panic!("{scene}: refused: {e}"));
+        assert_eq!(mapped.sets.len(), built.sets.len());
+        assert_eq!(mapped.placements.len(), built.placements.len());
+        assert_eq!(mapped.inputs, built.inputs, "{scene}");
+        // Rays in the scene's relative frame (the origin is the centre of its bounds).
+        let (lo, hi) = (
+            DVec3::splat(-0.5 * built.size),
+            DVec3::splat(0.5 * built.size),
+        );
+        let (c, r) = (DVec3::ZERO, built.size);
+        let mut hits = 0;
+        for i in 0..3000 {
+            let f = i as f64;
+            let org = c + DVec3::new((1.3 * f).sin(), (0.7 * f).cos(), (0.31 * f).sin()) * r;
+            let aim = lo
+                + (hi - lo)
+                    * DVec3::new(
+                        0.5 + 0.5 * (2.1 * f).sin(),
+                        0.5 + 0.5 * (1.7 * f).cos(),
+                        0.5 + 0.5 * (0.9 * f).sin(),
+                    );
+            let dir = (aim - org).normalize();
+            let one = |s: &Scene| -> String {
+                match s.closest(org, dir, 1e30, |_, _| false) {
+                    None => "miss".into(),
+                    Some((h, t)) => {
+                        let (p, n, flat) = s.hit_geom(h, org, dir, t);
+                        let info = s.hit_info(h);
+                        let detail = s.mesh_detail(h, p);
+                        format!(
+                            "{h:?} {t:?} {p:?} {n:?} {flat} {:?} {:?} {} {detail:?}",
+                            info.chain, info.material, info.modifier
+                        )
+                    }
+                }
+            };
+            let (a, b) = (one(&built), one(&mapped));
+            assert_eq!(a, b, "{scene}: ray {i}");
+            hits += usize::from(a != "miss");
+        }
+        assert!(hits > 300, "{scene}: only {hits} hits");
+    }
+}

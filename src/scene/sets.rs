@@ -56,6 +56,30 @@ pub struct Child {
     pub modifier: String,
 }
 
+/// What a set was built from beyond its geometry: what a scene image keeps to build the
+/// set again without reading its file ([`crate::scene::image`]).
+#[derive(Clone, Debug)]
+pub enum SetSource {
+    /// An octree's primitives (or its scene files') other than finite surfaces, as scene
+    /// text, and the names of the scene files an unfrozen octree read.
+    Octree {
+        /// The text.
+        rest: String,
+        /// The scene files' names.
+        used: Vec<String>,
+    },
+    /// A compiled mesh's primitives (its modifiers), as scene text.
+    Mesh {
+        /// The text.
+        prims: String,
+    },
+    /// An OBJ file's modifier names and the line that set each first.
+    Obj {
+        /// The names.
+        names: Vec<(String, u32)>,
+    },
+}
+
 /// One octree or mesh file, read and built once.
 pub struct ObjectSet {
     /// The file as named.
@@ -81,6 +105,11 @@ pub struct ObjectSet {
     /// An OBJ file's modifier names, bound where it is first placed
     /// ([`super::obj::bind_names`]).
     pub unbound: Option<super::obj::ObjNames>,
+    /// What it was built from ([`SetSource`]).
+    pub source: SetSource,
+    /// Its number in the order sets were begun (they are numbered in the order they are
+    /// finished: a set's nested sets come first).
+    pub started: usize,
 }
 
 impl ObjectSet {

@@ -3,6 +3,7 @@
 //! them. The builder lives here, above the scene's geometry, because it parses materials
 //! and modifiers; [`Scene`] is the geometry with them.
 
+mod mapped;
 mod obj;
 mod sets;
 
@@ -246,6 +247,12 @@ pub(super) struct Builder<'t> {
     pub(super) set_ids: HashMap<PathBuf, usize>,
     /// The files being read (instance loops are refused).
     pub(super) loading: Vec<PathBuf>,
+    /// The scene image the sets come from (with the top level's surfaces), if any.
+    pub(super) image: Option<&'t SceneImage>,
+    /// Why the image was refused, if it was (the build then stops).
+    pub(super) refused: Option<String>,
+    /// Sets begun so far.
+    pub(super) started: usize,
 }
 
 /// The objects of one file's primitives (the scene, or an instanced octree or mesh).
@@ -625,8 +632,25 @@ impl Scene {
             sets: Vec::new(),
             set_ids: HashMap::new(),
             loading: Vec::new(),
+            image,
+            refused: None,
+            started: 0,
         };
-        let mut level = b.level(&mut prims, image.map(|i| i.frame()))?;
+        let mut level = match b.level(&mut prims, image.map(|i| i.frame())) {
+            Ok(level) => level,
+            Err(e) => {
+                return match b.refused.take() {
+                    Some(why) => Ok(Err(why)),
+                    None => Err(e),
+                }
+            }
+        };
+        if let Some(image) = image {
+            if image.sets() != b.sets.len() {
+                let why = format!("it has {} sets, the scene {}", image.sets(), b.sets.len());
+                return Ok(Err(why));
+            }
+        }
         let first = prims.first().map(|p| p.loc.clone());
         drop(prims);
         let placements = if level.children.is_empty() {

@@ -36,14 +36,21 @@ impl Builder<'_> {
                 t.modifier = k.into();
             }
         }
+        let mesh = crate::geometry::trimesh::TriMesh {
+            pos: obj.pos.into(),
+            normal: obj.normal.into(),
+            uv: obj.uv.into(),
+            flags: obj.flags.into(),
+            tris: tris.into(),
+            eps: 0.0,
+        };
         let mut set = mesh_object_set(
             name,
-            obj.pos,
-            obj.normal,
-            obj.uv,
-            obj.flags,
-            tris,
+            mesh,
             Vec::new(),
+            crate::scene::sets::SetSource::Obj {
+                names: obj.names.clone(),
+            },
         );
         set.unbound = Some(ObjNames {
             file: name.to_string(),

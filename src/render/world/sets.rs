@@ -59,7 +59,13 @@ impl Builder<'_> {
             )));
         }
         self.loading.push(key.clone());
-        let set = if obj {
+        // Sets are numbered as they are finished (a set's nested sets first), and put in a
+        // scene image in that order; `started` numbers them as they are begun.
+        let started = self.started;
+        self.started += 1;
+        let set = if let Some(image) = self.image {
+            self.mapped_set(image, started, name, obj.then(|| obj_default(p)), &p.loc)
+        } else if obj {
             self.obj_set(name, &path, obj_default(p))
         } else if p.ptype == "mesh" {
             self.mesh_set(name, &path)
@@ -67,15 +73,22 @@ impl Builder<'_> {
             self.octree_set(name, &path)
         };
         self.loading.pop();
-        let set = set?;
+        let mut set = set?;
+        set.started = started;
         let id = self.sets.len();
+        if let Some(image) = self.image {
+            if image.set_started(id) != Some(started) {
+                let why = format!("its set {id} is not the scene's ('{name}')");
+                return Err(self.refuse(why, &p.loc));
+            }
+        }
         self.sets.push(set);
         self.set_ids.insert(key, id);
         Ok((id, xf))
     }
 
     /// Build `f` with a fresh name space (a file's names are its own).
-    fn in_own_namespace<T>(&mut self, f: impl FnOnce(&mut Self) -> T) -> T {
+    pub(super) fn in_own_namespace<T>(&mut self, f: impl FnOnce(&mut Self) -> T) -> T {
         let saved = self.mods.enter();
         let r = f(self);
         self.mods.leave(saved);
@@ -84,6 +97,10 @@ impl Builder<'_> {
 
     fn octree_set(&mut self, name: &str, path: &std::path::Path) -> Result<ObjectSet, SceneError> {
         let (mut prims, used) = crate::scene::octree::octree_primitives(path, name, &self.opts)?;
+        let source = SetSource::Octree {
+            rest: crate::scene::image::rest_text(&prims),
+            used: used.iter().map(|(n, _)| n.clone()).collect(),
+        };
         for (n, p) in used {
             self.mods.files.note_input(&n, p);
         }
@@ -121,6 +138,8 @@ impl Builder<'_> {
             expanded,
             placements,
             unbound: None,
+            source,
+            started: 0,
         })
     }
 
@@ -134,6 +153,8 @@ impl Builder<'_> {
         let mut file = crate::scene::rtm::parse_mesh(&bytes, name)
             .map_err(|m| SceneError::syntax(loc.clone(), m))?;
         drop(bytes);
+        let mut prims_text = String::new();
+        crate::scene::primitive::write_text(&file.prims, &mut prims_text);
         let level = self.in_own_namespace(|b| b.level(&mut file.prims, None))?;
         let mods: Vec<Option<MeshModifier>> = level
             .defined
@@ -160,50 +181,45 @@ impl Builder<'_> {
                 }
             }
         }
+        let mesh = TriMesh {
+            pos: file.pos.into(),
+            normal: file.normal.into(),
+            uv: file.uv.into(),
+            flags: file.flags.into(),
+            tris: file.tris.into(),
+            eps: 0.0,
+        };
         Ok(mesh_object_set(
             name,
-            file.pos,
-            file.normal,
-            file.uv,
-            file.flags,
-            file.tris,
+            mesh,
             mods,
+            SetSource::Mesh { prims: prims_text },
         ))
     }
 }
 
 /// The object set of a mesh's triangles (file coordinates), relative to their centre.
+/// `mesh` comes in the file's coordinates (its `eps` is set here).
 pub(super) fn mesh_object_set(
     name: &str,
-    pos: Vec<DVec3>,
-    normal: Vec<glam::Vec3>,
-    uv: Vec<[f64; 2]>,
-    flags: Vec<u8>,
-    tris: Vec<crate::scene::rtm::MeshTri>,
+    mut mesh: TriMesh,
     mods: Vec<Option<MeshModifier>>,
+    source: SetSource,
 ) -> ObjectSet {
     let mut full = None;
-    for p in &pos {
+    for p in mesh.pos.iter() {
         union(&mut full, (*p, *p));
     }
     let (origin, size) = match full {
         Some((lo, hi)) => ((lo + hi) * 0.5, (hi - lo).max_element()),
         None => (DVec3::ZERO, 1.0),
     };
-    let mut mesh = TriMesh {
-        // In place: the file's positions are not kept twice.
-        pos: pos
-            .into_iter()
-            .map(|p| p - origin)
-            .collect::<Vec<_>>()
-            .into(),
-        normal: normal.into(),
-        uv: uv.into(),
-        flags: flags.into(),
-        tris: tris.into(),
-        eps: super::length_tolerance(size),
-    };
-    mesh.pos.with_vec(|v| v.shrink_to_fit());
+    // In place: the file's positions are not kept twice.
+    mesh.pos.with_vec(|v| {
+        v.iter_mut().for_each(|p| *p -= origin);
+        v.shrink_to_fit();
+    });
+    mesh.eps = super::length_tolerance(size);
     let bvh = Bvh::build_from(mesh.tris.len(), |i| mesh.bounds(i), mesh.eps);
     let expanded = mesh.tris.len() as u64;
     ObjectSet {
@@ -220,5 +236,7 @@ pub(super) fn mesh_object_set(
         expanded,
         placements: 0,
         unbound: None,
+        source,
+        started: 0,
     }
 }
