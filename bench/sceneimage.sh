@@ -8,7 +8,8 @@
 # worker's start-up (a one-tile 1x1 job, best of 3).
 #
 # Usage: bash bench/sceneimage.sh
-# Environment: SCENE (files, default the demo), VIEW (default -vf demo/demo.vf),
+# Environment: SCENE (files, default the demo; "mesh": 18 placements of a 51,200-triangle
+#   OBJ height field made here), VIEW (default -vf demo/demo.vf),
 #   RES="-x 128 -y 128", OPTS="-ab 1 -aa .15 -ad 256 -as 64 -ar 64 -ps 1",
 #   WORKERS="1 2" (at most the cores).
 set -euo pipefail
@@ -24,6 +25,31 @@ B=$ROOT/target/release
 export RAYPATH="$ROOT/demo:${RAYPATH:-.}"
 TMP=$(mktemp -d)
 trap 'rm -rf "$TMP"' EXIT
+if [ "$SCENE" = mesh ]; then
+    python3 - "$TMP" << 'EOF'
+import math, sys
+d, n = sys.argv[1], 160
+with open(f"{d}/terrain.obj", "w") as f:
+    for j in range(n + 1):
+        for i in range(n + 1):
+            x, y = i / n * 4, j / n * 4
+            f.write(f"v {x:.6f} {y:.6f} {0.3 * math.sin(3 * x) * math.cos(2 * y) + 0.3:.6f}\n")
+    f.write("usemtl grey\n")
+    for j in range(n):
+        for i in range(n):
+            a = j * (n + 1) + i + 1
+            f.write(f"f {a} {a + 1} {a + n + 2}\nf {a} {a + n + 2} {a + n + 1}\n")
+with open(f"{d}/mesh.rad", "w") as f:
+    f.write("void plastic grey 0 0 5 .5 .5 .5 0 0\nvoid light bright 0 0 3 1000 1000 1000\n")
+    f.write("bright sphere sun 0 0 4 10 10 30 2\n")
+    for k in range(18):
+        f.write(f"void mesh m{k} 5 terrain.obj -t {k // 3 * 4.2} {k % 3 * 4.2} 0\n0\n0\n")
+    f.write("grey polygon floor 0 0 12 -5 -5 0 30 -5 0 30 20 0 -5 20 0\n")
+EOF
+    SCENE="$TMP/mesh.rad"
+    export RAYPATH="$TMP:$RAYPATH"
+    VIEW="-vp 12 -12 14 -vd 0 1 -0.8 -vu 0 0 1 -vh 60 -vv 45"
+fi
 # shellcheck disable=SC2206
 RARGS=($VIEW $RES $OPTS)
 # shellcheck disable=SC2206

@@ -1,18 +1,23 @@
-//! Scene images: a built scene's top-level geometry (its surfaces, their names and places,
-//! and the BVH) in one read-only file that processes map instead of building it, so that
+//! Scene images: a built scene's geometry (the surfaces of its top level and of every set
+//! its instances place, or a mesh set's triangles, their names and places, and each
+//! level's BVH) in one read-only file that processes map instead of building it, so that
 //! every worker on a node shares one copy through the page cache (docs/batch.md, "One copy
-//! of the scene per node"). The image also holds the text of the scene's other primitives
-//! (materials, modifiers, distant sources, instances) and the fingerprint of all of them:
-//! a process that maps it reads no scene file and parses no surface.
+//! of the scene per node"). The image also holds the text of each level's other
+//! primitives (materials, modifiers, distant sources, instances; a mesh's modifiers; an
+//! OBJ file's modifier names) and the fingerprint of all the scene's: a process that maps
+//! it reads no scene or instanced file and parses no surface.
 //!
 //! Layout (little-endian): a 64-byte header — `TSSCNIMG`, the format version (u32), the
 //! number of sections (u32), the file's length (u64), the 32-byte key (the job's scene
 //! fingerprint), the CRC-32 of every byte after the header (u32) and 4 zero bytes — then
 //! a table of `(offset u64, count u64)` per section, then the sections, each at an offset
 //! that is a multiple of 16. Section 0 is JSON ([`Meta`]: the crate version, origin, sizes,
-//! the distinct modifier and file names, the warnings); the others are arrays of plain
-//! values ([`crate::geometry::plain`]): objects, polygon records, polygon vertices, the
-//! other surfaces' fields, names, the BVH's nodes, leaf slots and chunk roots.
+//! the distinct modifier and file names, the warnings, the primitives' text, each set's
+//! file, kind and numbers); then [`PER_LEVEL`] sections per level (the top, then the sets
+//! in the order they were finished), arrays of plain values ([`crate::geometry::plain`]):
+//! objects, polygon records, polygon vertices, the other surfaces' fields, names (or a
+//! mesh's vertices, normals, (u,v), flags and triangles), the BVH's nodes, leaf slots and
+//! chunk roots.
 //!
 //! An image is written once (to a temporary name, synced, renamed into place) and never
 //! changed: a mapping of it stays valid. Opening one checks that it is a regular file within
