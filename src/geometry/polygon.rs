@@ -99,7 +99,7 @@ impl std::ops::Deref for PolyRef<'_> {
     }
 }
 
-/// A polygon that owns its vertices (what [`Polygon::new`] makes; a scene keeps the record
+/// A polygon that owns its vertices (what [`PolygonBuf::new`] makes; a scene keeps the record
 /// and moves the vertices into its pool).
 #[derive(Clone, Debug)]
 pub struct PolygonBuf {
