@@ -28,6 +28,7 @@ use glam::DVec3;
 use crate::scene::primitive::Primitive;
 
 pub mod bvh;
+mod bvh_build;
 pub mod cone;
 pub mod plain;
 pub mod polygon;

@@ -30,6 +30,7 @@ pub mod cli;
 pub mod commit;
 pub mod finish;
 pub mod heartbeat;
+mod jobscene;
 pub mod manifest;
 pub mod merge;
 pub mod path;
