@@ -235,7 +235,7 @@ fn workers_use_sound_scene_images_and_replace_bad_ones() {
         assert!(!err.contains("waiting for 0"), "{err}");
         err
     };
-    for damage in ["none", "flip", "remove", "truncate"] {
+    for damage in ["none", "flip", "remove", "truncate", "directory"] {
         let job = d.path().join(format!("job-{damage}"));
         plan(&job, &["--workers", "1", "--tiles", "6"], &args);
         let image = job.join("scene.img");
@@ -250,6 +250,12 @@ fn workers_use_sound_scene_images_and_replace_bad_ones() {
             }
             "remove" => std::fs::remove_file(&image).unwrap(),
             "truncate" => std::fs::write(&image, &good[..100]).unwrap(),
+            "directory" => {
+                // Neither readable nor replaceable: the worker renders without it.
+                std::fs::remove_file(&image).unwrap();
+                std::fs::create_dir(&image).unwrap();
+                std::fs::write(image.join("x"), b"x").unwrap();
+            }
             _ => {}
         }
         let err = run(&job, "w0");
@@ -259,10 +265,17 @@ fn workers_use_sound_scene_images_and_replace_bad_ones() {
             "none" => None,
             "flip" => Some("checksum mismatch"),
             "remove" => Some("there is none"),
+            "directory" => Some("not used ("),
             _ => Some("truncated"),
         };
         match want {
             None => assert!(!err.contains("scene.img"), "{err}"),
+            Some(w) if damage == "directory" => {
+                assert!(
+                    err.contains(w) && err.contains("cannot write a new one"),
+                    "{err}"
+                );
+            }
             Some(w) => {
                 assert!(
                     err.contains("scene.img: not used (") && err.contains(w),

@@ -3,7 +3,7 @@
 //! written; checked against the manifest's fingerprint; the render session started with
 //! the job's shared ambient store.
 
-use anyhow::{anyhow, bail, Context, Result};
+use anyhow::{anyhow, bail, Result};
 
 use super::manifest::Manifest;
 use super::share::open_share;
@@ -110,17 +110,20 @@ pub(super) fn start_session(
         );
     }
     if let Some((why, rest)) = refused {
-        if wo.verbose {
+        // The worker renders without an image as well: one it cannot write (a full disk,
+        // a read-only job directory) is a warning, not a failure.
+        let bytes = image::encode(&m.fingerprint_bytes(), &rest, &session.scene.geom);
+        let wrote = super::write_file_atomic(&image_path, &bytes);
+        if wo.verbose || wrote.is_err() {
+            let what = match wrote {
+                Ok(()) => "wrote a new one".to_string(),
+                Err(e) => format!("cannot write a new one: {e}"),
+            };
             eprintln!(
-                "tpiece: warning: {}: not used ({why}); built the scene and wrote a new one",
+                "tpiece: warning: {}: not used ({why}); built the scene and {what}",
                 image_path.display()
             );
         }
-        super::write_file_atomic(
-            &image_path,
-            &image::encode(&m.fingerprint_bytes(), &rest, &session.scene.geom),
-        )
-        .with_context(|| format!("cannot write {}", image_path.display()))?;
     }
     if session.cached_ambient().is_some() {
         let store = open_share(job, owner, &session, wo.amb_flush)?;
