@@ -51,10 +51,10 @@ pub(super) fn start_session(
         ..ReadOptions::default()
     };
     // The tile loops render on threads of their own: the session's pool is not used. With
-    // a sound scene image (JOB/scene.img) the top-level geometry is mapped from it and the
-    // other primitives come from it too: no scene file is read, no surface parsed. Without
-    // one, or with a damaged or foreign one, the scene is read from JOB/scene.rad and built,
-    // and a new image is written.
+    // a sound scene image (JOB/scene.img) the geometry (the top level's and every set's) is
+    // mapped from it and the other primitives come from it too: no scene or instanced file
+    // is read, no surface parsed. Without one, or with a damaged or foreign one, the scene
+    // is read from JOB/scene.rad and built, and a new image is written.
     let plain = || -> Result<(Session, Rest)> {
         let source = SceneSource::read(&[scene_path.display().to_string()], &ro, &m.params)?;
         let mut rest = Rest::of(&source.prims, source.fingerprint);
