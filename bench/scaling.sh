@@ -3,11 +3,15 @@
 # (up to this machine's cores), the same frame rendered by
 #   tpict -n 1, tpict -n P,
 #   a job on tplan's default plan for P workers, run by P single-thread workers
-#     (tpiece --threads 1, P processes: P copies of the scene),
+#     (tpiece --threads 1, P processes mapping the job's scene image: one copy of the
+#     geometry in the page cache),
+#   the same with --no-scene-image (P processes that each read and build the scene),
 #   the same job run by one worker with P tile loops (tpiece --threads P: one copy),
 # with wall seconds, CPU seconds, speed-up and efficiency against tpict -n 1, the job's
-# T_idle and T_sync (tstat, summed over workers, wall-s per thread) and the node's peak
-# memory (the sum of the processes' peak resident sizes, MB).
+# T_idle and T_sync (tstat, summed over workers, wall-s per thread), the sum of the
+# processes' peak resident sizes (MB, which counts shared pages in every process) and the
+# node's peak proportional set size (PSS MB: the largest sum over the workers, sampled
+# every 20 ms, of their PSS, which counts a page shared by k processes as 1/k in each).
 # Then the tile-plan simulation (bench/tilesim --sweep) for 2 to 256 workers on the tile
 # costs of a one-worker run of the same frame (--tile-size 16x16), frame costs scaled to
 # 0.1-1000 CPU-s.
@@ -52,9 +56,41 @@ sums() {
     awk '{ if ($1 > w) w = $1; c += $2 + $3; m += $4 } END { printf "%.2f %.2f %.0f\n", w, c, m / 1024 }' "$TMP/$1.t"
 }
 
-row() { # label P wall cpu mem idle sync
-    awk -v l="$1" -v p="$2" -v w="$3" -v c="$4" -v m="$5" -v i="$6" -v s="$7" -v b="$BASE" \
-        'BEGIN { printf "%-36s %3d %8.2f %8.2f %7.2f %5.0f%% %7s %7s %7.0f\n", l, p, w, c, b / w, 100 * b / w / p, i, s, m }'
+row() { # label P wall cpu mem idle sync [pss]
+    awk -v l="$1" -v p="$2" -v w="$3" -v c="$4" -v m="$5" -v i="$6" -v s="$7" -v q="${8:--}" -v b="$BASE" \
+        'BEGIN { printf "%-52s %3d %8.2f %8.2f %7.2f %5.0f%% %7s %7s %7.0f %7s\n", l, p, w, c, b / w, 100 * b / w / p, i, s, m, q }'
+}
+
+# descendants PID: the PIDs of every process below PID.
+descendants() {
+    local kid
+    for kid in $(cat "/proc/$1/task/$1/children" 2> /dev/null); do
+        echo "$kid"
+        descendants "$kid"
+    done
+}
+
+# pss_watch PARENTS...: until every parent has ended, every 20 ms, the sum of the PSS of
+# the tpiece processes below them (the background jobs run /usr/bin/time, which runs
+# tpiece); prints the largest sum in MB.
+pss_watch() {
+    local max=0
+    while :; do
+        local alive=0 sum=0
+        for parent in "$@"; do
+            [ -d "/proc/$parent" ] || continue
+            alive=1
+            for kid in $(descendants "$parent"); do
+                [ "$(cat "/proc/$kid/comm" 2> /dev/null)" = tpiece ] || continue
+                kb=$(awk '/^Pss:/ { print $2 }' "/proc/$kid/smaps_rollup" 2> /dev/null || echo 0)
+                sum=$((sum + ${kb:-0}))
+            done
+        done
+        [ "$alive" = 1 ] || break
+        [ "$sum" -gt "$max" ] && max=$sum
+        sleep 0.02
+    done
+    awk -v m="$max" 'BEGIN { printf "%.1f\n", m / 1024 }'
 }
 
 job_stats() { # JOB -> "t_idle t_sync"
@@ -65,7 +101,7 @@ echo "bench/scaling.sh: $CORES cores; scene ${SFILES[*]}; ${RARGS[*]}"
 rm -f "$TMP"/*.t
 timed one "$B/tpict" -n 1 "${RARGS[@]}" "${SFILES[@]}" > "$TMP/one.hdr"
 read -r BASE BASE_CPU BASE_MEM < <(sums one)
-printf '%-36s %3s %8s %8s %7s %6s %7s %7s %7s\n' run P wall-s CPU-s speedup eff T_idle T_sync MB
+printf '%-52s %3s %8s %8s %7s %6s %7s %7s %7s %7s\n' run P wall-s CPU-s speedup eff T_idle T_sync MB PSS-MB
 row "tpict -n 1" 1 "$BASE" "$BASE_CPU" "$BASE_MEM" - -
 for P in $WORKERS; do
     if [ "$P" -gt "$CORES" ]; then
@@ -76,26 +112,33 @@ for P in $WORKERS; do
     timed tp "$B/tpict" -n "$P" "${RARGS[@]}" "${SFILES[@]}" > /dev/null
     read -r w c m < <(sums tp)
     row "tpict -n $P" "$P" "$w" "$c" "$m" - -
-    for mode in processes threads; do
+    for mode in processes built threads; do
         job="$TMP/job-$P-$mode"
         rm -rf "$job"
         "$B/tplan" --workers "$P" -o "$job" -- "${RARGS[@]}" "${SFILES[@]}" 2> "$TMP/plan.err"
         tiles=$(grep -o '[0-9]* tiles,' "$TMP/plan.err" | grep -o '[0-9]*')
         pids=()
-        if [ "$mode" = processes ]; then
+        if [ "$mode" != threads ]; then
+            flag=()
+            [ "$mode" = built ] && flag=(--no-scene-image)
             for i in $(seq 1 "$P"); do
-                timed "$mode" "$B/tpiece" "$job" --worker-id "w$i" --threads 1 -q &
+                timed "$mode" "$B/tpiece" "$job" --worker-id "w$i" --threads 1 -q "${flag[@]}" &
                 pids+=("$!")
             done
         else
             timed "$mode" "$B/tpiece" "$job" --worker-id w1 --threads "$P" -q &
             pids+=("$!")
         fi
+        pss=$(pss_watch "${pids[@]}")
         for p in "${pids[@]}"; do wait "$p"; done
         read -r w c m < <(sums "$mode")
         read -r idle sync < <(job_stats "$job")
-        if [ "$mode" = processes ]; then label="$P x tpiece --threads 1"; else label="tpiece --threads $P"; fi
-        row "$label ($tiles tiles)" "$P" "$w" "$c" "$m" "$idle" "$sync"
+        case $mode in
+            processes) label="$P x tpiece --threads 1" ;;
+            built) label="$P x tpiece --threads 1 --no-scene-image" ;;
+            *) label="tpiece --threads $P" ;;
+        esac
+        row "$label ($tiles tiles)" "$P" "$w" "$c" "$m" "$idle" "$sync" "$pss"
         "$B/tassemble" "$job" --force -o "$OUT/job-$P-$mode.hdr" 2> /dev/null
         rm -rf "$job"
     done
