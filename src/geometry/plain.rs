@@ -165,14 +165,6 @@ impl<T: Plain> Slab<T> {
     pub fn push(&mut self, v: T) {
         self.with_vec(|s| s.push(v));
     }
-
-    /// Heap bytes this slab owns (0 when shared).
-    pub fn owned_bytes(&self) -> usize {
-        match &self.owner {
-            Owner::Owned(v) => v.capacity() * std::mem::size_of::<T>(),
-            Owner::Shared(_) => 0,
-        }
-    }
 }
 
 impl<T: Plain> Default for Slab<T> {

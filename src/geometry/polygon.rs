@@ -126,7 +126,7 @@ impl PolygonBuf {
         let mut lo2 = [f64::INFINITY; 2];
         let mut hi2 = [f64::NEG_INFINITY; 2];
         for v in self.verts.iter() {
-            let a = [v.p[rec.iu as usize], v.p[rec.iv as usize]];
+            let a = rec.project(v.p);
             for k in 0..2 {
                 lo2[k] = lo2[k].min(a[k]);
                 hi2[k] = hi2[k].max(a[k]);

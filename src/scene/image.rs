@@ -214,23 +214,15 @@ impl Out {
 
     /// A level's surfaces (its first [`B_NODES`] sections).
     fn objects(&mut self, o: &Objects) {
-        let words = |w: &mut dyn FnMut(&mut Vec<f64>)| {
-            let mut v = Vec::new();
-            w(&mut v);
-            v
-        };
         self.section(&o.list);
         self.section(&o.polys);
         self.section(&o.verts);
-        self.section(&words(&mut |v| {
-            o.spheres.iter().for_each(|s| v.extend(s.to_words()))
-        }));
-        self.section(&words(&mut |v| {
-            o.cones.iter().for_each(|s| v.extend(s.to_words()))
-        }));
-        self.section(&words(&mut |v| {
-            o.rings.iter().for_each(|s| v.extend(s.to_words()))
-        }));
+        let spheres: Vec<f64> = o.spheres.iter().flat_map(|s| s.to_words()).collect();
+        let cones: Vec<f64> = o.cones.iter().flat_map(|c| c.to_words()).collect();
+        let rings: Vec<f64> = o.rings.iter().flat_map(|r| r.to_words()).collect();
+        self.section(&spheres);
+        self.section(&cones);
+        self.section(&rings);
         self.section(&o.names);
         self.section(&o.name_end);
         self.section(&o.modifier);
@@ -583,28 +575,39 @@ impl SceneImage {
         materials: usize,
         modifiers: usize,
     ) -> Result<Objects, String> {
-        let words = |k: usize, w: usize| -> Result<Vec<Vec<f64>>, String> {
-            let s = self.slab::<f64>(level, k)?;
-            if s.len() % w != 0 {
-                return Err(format!("level {level}, section {k}: not whole records"));
+        // The other surfaces' records: `w` words each, decoded (and checked) by `decode`.
+        fn records<T>(
+            s: &[f64],
+            w: usize,
+            decode: impl Fn(&[f64]) -> Option<T>,
+            what: &str,
+        ) -> Result<Vec<T>, String> {
+            if !s.len().is_multiple_of(w) {
+                return Err(format!("damaged {what}s: not whole records"));
             }
-            Ok(s.chunks_exact(w).map(|c| c.to_vec()).collect())
-        };
-        let spheres = words(O_SPHERES, Sphere::WORDS)?
-            .iter()
-            .map(|w| Sphere::from_words(w))
-            .collect::<Option<Vec<_>>>()
-            .ok_or("a damaged sphere")?;
-        let cones = words(O_CONES, Cone::WORDS)?
-            .iter()
-            .map(|w| Cone::from_words(w))
-            .collect::<Option<Vec<_>>>()
-            .ok_or("a damaged cone")?;
-        let rings = words(O_RINGS, Ring::WORDS)?
-            .iter()
-            .map(|w| Ring::from_words(w))
-            .collect::<Option<Vec<_>>>()
-            .ok_or("a damaged ring")?;
+            s.chunks_exact(w)
+                .map(&decode)
+                .collect::<Option<Vec<T>>>()
+                .ok_or_else(|| format!("a damaged {what}"))
+        }
+        let spheres = records(
+            &self.slab(level, O_SPHERES)?,
+            Sphere::WORDS,
+            Sphere::from_words,
+            "sphere",
+        )?;
+        let cones = records(
+            &self.slab(level, O_CONES)?,
+            Cone::WORDS,
+            Cone::from_words,
+            "cone",
+        )?;
+        let rings = records(
+            &self.slab(level, O_RINGS)?,
+            Ring::WORDS,
+            Ring::from_words,
+            "ring",
+        )?;
         let o = Objects {
             list: self.slab(level, O_LIST)?,
             polys: self.slab(level, O_POLYS)?,

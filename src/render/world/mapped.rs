@@ -100,18 +100,7 @@ impl Builder<'_> {
                     Err(e) => return Err(self.refuse(format!("set {k}: {e}"), loc)),
                 };
                 let level = self.in_own_namespace(|b| b.level(&mut prims, framed))?;
-                let mods: Vec<Option<MeshModifier>> = level
-                    .defined
-                    .iter()
-                    .zip(&prims)
-                    .map(|(d, p)| {
-                        d.map(|chain| MeshModifier {
-                            chain,
-                            material: self.mods.terminal(chain),
-                            name: p.name.clone(),
-                        })
-                    })
-                    .collect();
+                let mods = self.mesh_modifiers(&level.defined, &prims);
                 let (mesh, bvh) = match image.set_mesh(k, mods.len()) {
                     Ok(x) => x,
                     Err(e) => return Err(self.refuse(format!("set {k}: {e}"), loc)),

@@ -87,6 +87,25 @@ impl Builder<'_> {
         Ok((id, xf))
     }
 
+    /// A mesh's modifiers by object index of its file: what each of its primitives defined.
+    pub(super) fn mesh_modifiers(
+        &self,
+        defined: &[Option<crate::modifier::ModRef>],
+        prims: &[Primitive],
+    ) -> Vec<Option<MeshModifier>> {
+        defined
+            .iter()
+            .zip(prims)
+            .map(|(d, p)| {
+                d.map(|chain| MeshModifier {
+                    chain,
+                    material: self.mods.terminal(chain),
+                    name: p.name.clone(),
+                })
+            })
+            .collect()
+    }
+
     /// Build `f` with a fresh name space (a file's names are its own).
     pub(super) fn in_own_namespace<T>(&mut self, f: impl FnOnce(&mut Self) -> T) -> T {
         let saved = self.mods.enter();
@@ -156,18 +175,7 @@ impl Builder<'_> {
         let mut prims_text = String::new();
         crate::scene::primitive::write_text(&file.prims, &mut prims_text);
         let level = self.in_own_namespace(|b| b.level(&mut file.prims, None))?;
-        let mods: Vec<Option<MeshModifier>> = level
-            .defined
-            .iter()
-            .zip(&file.prims)
-            .map(|(d, p)| {
-                d.map(|chain| MeshModifier {
-                    chain,
-                    material: self.mods.terminal(chain),
-                    name: p.name.clone(),
-                })
-            })
-            .collect();
+        let mods = self.mesh_modifiers(&level.defined, &file.prims);
         for t in &file.tris {
             if let Ok(k) = usize::try_from(t.modifier) {
                 if mods[k].is_none() {
