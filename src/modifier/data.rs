@@ -355,14 +355,14 @@ impl DataArray {
             Some((i, c0, c1)) => c0 * at(off + i) + c1 * at(off + i + 1),
         };
         match self.axes.as_slice() {
-            [a] => return line(weights_on(a, coords[0]), 0),
+            [a] => line(weights_on(a, coords[0]), 0),
             [a, b] => {
                 let wb = weights_on(b, coords[1]);
                 let m = b.len();
-                return match weights_on(a, coords[0]) {
+                match weights_on(a, coords[0]) {
                     None => line(wb, 0),
                     Some((i, c0, c1)) => c0 * line(wb, i * m) + c1 * line(wb, (i + 1) * m),
-                };
+                }
             }
             _ => self.interp_general(coords),
         }
