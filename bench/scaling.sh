@@ -16,13 +16,23 @@
 # costs of a one-worker run of the same frame (--tile-size 16x16), frame costs scaled to
 # 0.1-1000 CPU-s.
 #
+# At the largest P it also renders the job on `tplan --tiles N` plans for each N of
+# TILES_LIST, by one worker with P loops (the default configuration), and ends with the
+# figures issue 29 asks for: the default plan against tpict -n P and against the best
+# --tiles plan, one worker with P loops against P single-thread workers, and what each
+# loop beyond the first adds to the node's memory.
+#
 # Usage: bash bench/scaling.sh [OUTDIR (default: a temporary directory)]
 # Environment: WORKERS="1 2 4 8 16" (cut to the cores), SCENE (files, default the demo),
 #   VIEW (default -vf demo/demo.vf), RES="-x 320 -y 240",
 #   OPTS="-ab 2 -aa .15 -ad 512 -as 128 -ar 64 -av .02 .02 .02 -ps 1",
+#   TILES_LIST="16 32 64 128 256 512 1024" ("" for none),
 #   SIM_WORKERS="2,4,8,16,32,64,128,256", SYNC (per-tile seconds for the simulation,
 #   default tplan's 0.8 ms), STARTUP (seconds added to every simulated worker, default the
-#   measured start-up of a worker: a job of one tile minus its tile's CPU).
+#   measured start-up of a worker: a job of one tile minus its tile's CPU),
+#   NO_BUILD=1 (use the binaries in BIN, default target/release, as they are: a machine
+#   without cargo), NO_SIM=1 (measure only: costs.json and startup.txt go to OUTDIR for
+#   `cargo bench --bench tilesim -- OUTDIR/costs.json --sweep --startup S` elsewhere).
 set -euo pipefail
 ROOT=$(cd "$(dirname "$0")/.." && pwd)
 CORES=$(nproc)
@@ -31,9 +41,15 @@ SCENE=${SCENE:-"$ROOT/demo/demo.rad"}
 VIEW=${VIEW:-"-vf $ROOT/demo/demo.vf"}
 RES=${RES:-"-x 320 -y 240"}
 OPTS=${OPTS:-"-ab 2 -aa .15 -ad 512 -as 128 -ar 64 -av .02 .02 .02 -ps 1"}
+TILES_LIST=${TILES_LIST-"16 32 64 128 256 512 1024"}
 SIM_WORKERS=${SIM_WORKERS:-"2,4,8,16,32,64,128,256"}
-(cd "$ROOT" && cargo build --release --quiet --bins)
-B=$ROOT/target/release
+if [ -z "${NO_BUILD:-}" ]; then
+    (cd "$ROOT" && cargo build --release --quiet --bins)
+fi
+B=${BIN:-$ROOT/target/release}
+for t in tpict tplan tpiece tstat tassemble; do
+    [ -x "$B/$t" ] || { echo "bench/scaling.sh: no $B/$t" >&2; exit 1; }
+done
 export RAYPATH="$ROOT/demo:${RAYPATH:-.}"
 TMP=$(mktemp -d)
 trap 'rm -rf "$TMP"' EXIT
@@ -112,6 +128,7 @@ for P in $WORKERS; do
     timed tp "$B/tpict" -n "$P" "${RARGS[@]}" "${SFILES[@]}" > /dev/null
     read -r w c m < <(sums tp)
     row "tpict -n $P" "$P" "$w" "$c" "$m" - -
+    w_tp=$w c_tp=$c m_tp=$m
     for mode in processes built threads; do
         job="$TMP/job-$P-$mode"
         rm -rf "$job"
@@ -139,10 +156,49 @@ for P in $WORKERS; do
             *) label="tpiece --threads $P" ;;
         esac
         row "$label ($tiles tiles)" "$P" "$w" "$c" "$m" "$idle" "$sync" "$pss"
+        echo "$P $mode $tiles $w $c $m $pss" >> "$TMP/rows"
         "$B/tassemble" "$job" --force -o "$OUT/job-$P-$mode.hdr" 2> /dev/null
         rm -rf "$job"
     done
+    echo "$P tpict $w_tp $c_tp $m_tp" >> "$TMP/tpict"
 done
+
+# The default configuration (one worker, P loops) on --tiles plans, at the largest P run.
+PMAX=0
+for P in $WORKERS; do [ "$P" -le "$CORES" ] && [ "$P" -gt "$PMAX" ] && PMAX=$P; done
+if [ "$PMAX" -gt 0 ]; then
+    for n in $TILES_LIST; do
+        job="$TMP/job-tiles-$n"
+        rm -rf "$job"
+        "$B/tplan" --workers "$PMAX" --tiles "$n" -o "$job" -- "${RARGS[@]}" "${SFILES[@]}" 2> "$TMP/plan.err"
+        tiles=$(grep -o '[0-9]* tiles,' "$TMP/plan.err" | grep -o '[0-9]*')
+        rm -f "$TMP"/tiles.t
+        timed tiles "$B/tpiece" "$job" --worker-id w1 --threads "$PMAX" -q
+        read -r w c m < <(sums tiles)
+        read -r idle sync < <(job_stats "$job")
+        row "tpiece --threads $PMAX, tplan --tiles $n ($tiles tiles)" "$PMAX" "$w" "$c" "$m" "$idle" "$sync"
+        echo "$n $tiles $w" >> "$TMP/tilesrows"
+        rm -rf "$job"
+    done
+    # What issue 29 asks, at P = PMAX.
+    echo
+    awk -v p="$PMAX" -v base="$BASE" '
+        FILENAME ~ /rows$/ && $1 == p { w[$2] = $4; m[$2] = $6; q[$2] = $7; t[$2] = $3 }
+        FILENAME ~ /tpict$/ && $1 == p { tp = $3 }
+        FILENAME ~ /tilesrows$/ { if (best == "" || $3 < best) { best = $3; bt = $2 } }
+        END {
+            printf "at P = %d: default plan (%d tiles), one worker with %d loops: %.2f s wall\n", p, t["threads"], p, w["threads"]
+            printf "  against tpict -n %d (%.2f s): %.3f (at most 1 asked)\n", p, tp, w["threads"] / tp
+            if (best != "") printf "  against the best --tiles plan (%d tiles, %.2f s): %.3f (at most 1.05 asked)\n", bt, best, w["threads"] / best
+            printf "  against %d single-thread workers (%.2f s): %.3f (at most 1.05 asked)\n", p, w["processes"], w["threads"] / w["processes"]
+        }' "$TMP/rows" "$TMP/tpict" $( [ -f "$TMP/tilesrows" ] && echo "$TMP/tilesrows" )
+fi
+# Memory per extra loop: one worker with P loops against one with one loop (PSS, MB).
+awk '$2 == "threads" { q[$1] = $7 } END {
+        if (!(1 in q)) exit
+        for (p in q) if (p + 0 > 1 && q[1] > 0)
+            printf "  one worker, %d loops: PSS %.1f MB, %.1f%% of the first loop'"'"'s per extra loop (at most 10%% asked)\n", p, q[p], 100 * (q[p] - q[1]) / (p - 1) / q[1]
+    }' "$TMP/rows" | sort -n -k3
 
 # The tile plan simulation on measured costs.
 job="$TMP/costs"
@@ -157,9 +213,19 @@ STARTUP=${STARTUP:-}
 if [ -z "$STARTUP" ] && [ -d "$one" ]; then
     rm -f "$TMP"/*.t
     timed startup "$B/tpiece" "$one" --threads 1 -q
-    STARTUP=$(awk '{ print $1 }' "$TMP/startup.t")
+    # The worker's wall time less its tile's (one pixel, which at -ab 2 still makes the
+    # ambient values that pixel needs).
+    tile_s=$("$B/tstat" "$one" --costs 0 | python3 -c 'import json, sys; print(sum(t["seconds"] for t in json.load(sys.stdin)["tiles"]))')
+    STARTUP=$(awk -v t="$tile_s" '{ s = $1 - t; printf "%.3f\n", s > 0 ? s : 0 }' "$TMP/startup.t")
 fi
 STARTUP=${STARTUP:-0}
+echo "$STARTUP" > "$OUT/startup.txt"
+if [ -n "${NO_SIM:-}" ]; then
+    echo
+    echo "costs: $OUT/costs.json, worker start-up $STARTUP s (NO_SIM: simulate elsewhere with"
+    echo "  cargo bench --bench tilesim -- $OUT/costs.json --sweep --startup $STARTUP)"
+    exit 0
+fi
 SYNCARG=()
 if [ -n "${SYNC:-}" ]; then SYNCARG=(--sync-cost "$SYNC"); fi
 echo

@@ -1,0 +1,58 @@
+#!/usr/bin/env bash
+# Issue 29's measurements on a node with 16 or more cores, as one prepared call: the daylit
+# office of bench/realscenes.sh (gensky sun and sky through glazing, two ies2rad panels,
+# desks, OBJ chairs, wood and plaster patterns) at `-ab 2 -aa .15 -ad 512 -as 128`, run by
+# bench/scaling.sh for P = 1, 2, 4, 8, 16 (tpict -n 1 and -n P; the default plan by P
+# single-thread workers with and without the scene image, and by one worker with P loops;
+# the default configuration on `--tiles` plans), ending with the figures the issue asks for.
+#
+# Prepare (here, where Radiance and cargo are):
+#   bash bench/device.sh --prepare DIR
+# builds the office in DIR with the Radiance library files it reads (source.cal,
+# skybright.cal), so that DIR renders without Radiance; the binaries come from
+# target/release. Then, on the node (no cargo, no Radiance needed):
+#   BIN=target/release bash bench/device.sh DIR [OUTDIR]
+# which writes OUTDIR/scaling.txt (default DIR/out), the assembled pictures, costs.json and
+# startup.txt for `cargo bench --bench tilesim -- OUTDIR/costs.json --sweep --startup S`.
+# Environment: RES (default "-x 512 -y 512": 512x354, about 20 CPU-s a frame on one core
+# here), WORKERS (default "1 2 4 8 16", cut to the cores), TILES_LIST (bench/scaling.sh).
+set -euo pipefail
+ROOT=$(cd "$(dirname "$0")/.." && pwd)
+
+if [ "${1:-}" = --prepare ]; then
+    [ -n "${2:-}" ] || { echo "usage: bash bench/device.sh --prepare DIR" >&2; exit 2; }
+    mkdir -p "$2"
+    dir=$(cd "$2" && pwd)
+    KEEP="$dir" BUILD_ONLY=1 SCENES=office bash "$ROOT/bench/realscenes.sh"
+    for f in source.cal skybright.cal; do
+        found=""
+        IFS=: read -ra paths <<< "${RAYPATH:-}"
+        for p in "${paths[@]}"; do
+            if [ -n "$p" ] && [ -f "$p/$f" ]; then
+                found="$p/$f"
+                break
+            fi
+        done
+        [ -n "$found" ] || { echo "bench/device.sh: $f not found along RAYPATH" >&2; exit 1; }
+        cp "$found" "$dir/"
+    done
+    echo "bench/device.sh: prepared $dir (office.rad, office.view and what they read)"
+    exit 0
+fi
+
+[ -n "${1:-}" ] && [ -f "$1/office.rad" ] || {
+    echo "usage: BIN=DIR bash bench/device.sh SCENEDIR [OUTDIR] (prepare SCENEDIR with --prepare)" >&2
+    exit 2
+}
+dir=$(cd "$1" && pwd)
+OUT=${2:-$dir/out}
+mkdir -p "$OUT"
+BIN=$(cd "${BIN:-$ROOT/target/release}" && pwd)
+{
+    echo "bench/device.sh on $(hostname): $(nproc) cores, $(grep -m1 'model name' /proc/cpuinfo | cut -d: -f2 | sed 's/^ *//')"
+    cd "$dir"
+    RAYPATH="$dir:${RAYPATH:-.}" NO_BUILD=1 NO_SIM=1 BIN="$BIN" SCENE="$dir/office.rad" \
+        VIEW="$(cat "$dir/office.view")" RES="${RES:--x 512 -y 512}" \
+        OPTS="-ab 2 -aa .15 -ad 512 -as 128 -ar 64 -dt .07 -ps 1" \
+        bash "$ROOT/bench/scaling.sh" "$OUT"
+} 2>&1 | tee "$OUT/scaling.txt"
