@@ -710,12 +710,14 @@ struct Args {
     startup: f64,
     /// `--estimate-factor F`: the default plan sees F × the frame's cost.
     estimate: f64,
+    /// `--frame-costs C,...`: the frame costs of the sweep (CPU seconds).
+    frame_costs: Vec<f64>,
 }
 
 const USAGE: &str = "usage: cargo bench --bench tilesim -- COSTS.json [--workers 1,2,4,...] \
 [--tiles-per-worker N] [--sync-cost SECONDS] [--json OUT] [--lpt] [--bands SHARE:SIZE,...]
        cargo bench --bench tilesim -- COSTS.json --sweep [--workers ...] [--sync-cost S]
-         [--startup S] [--estimate-factor F]
+         [--startup S] [--estimate-factor F] [--frame-costs C,...]
        cargo bench --bench tilesim -- --self-test
        cargo bench --bench tilesim -- --write-synthetic OUT.json [--size WxH]
          [--hot-corner tl|tr|bl|br | --hot-at U,V] [--hot-radius FRACTION_OF_HEIGHT]";
@@ -734,6 +736,7 @@ fn parse_args() -> Result<Args, String> {
         sweep: false,
         startup: 0.0,
         estimate: 1.0,
+        frame_costs: sweep::FRAME_COSTS.to_vec(),
         hot: Synthetic {
             width: 640,
             height: 480,
@@ -761,6 +764,15 @@ fn parse_args() -> Result<Args, String> {
                 } else {
                     a.estimate = v.max(1e-9);
                 }
+            }
+            "--frame-costs" => {
+                a.frame_costs = value("--frame-costs")?
+                    .split(',')
+                    .map(|s| match s.trim().parse::<f64>() {
+                        Ok(c) if c.is_finite() && c > 0.0 => Ok(c),
+                        _ => Err(format!("--frame-costs: bad cost {s:?}")),
+                    })
+                    .collect::<Result<_, _>>()?;
             }
             "--workers" => {
                 a.workers = value("--workers")?
@@ -864,7 +876,13 @@ fn run() -> Result<(), String> {
         } else {
             TILE_OVERHEAD
         };
-        let rows = sweep::sweep(&map, &args.workers, sync, args.startup, args.estimate);
+        let rows = sweep::sweep(
+            &map,
+            (&args.frame_costs, &args.workers),
+            sync,
+            args.startup,
+            args.estimate,
+        );
         sweep::print(&rows, sync, args.startup, args.estimate);
         return Ok(());
     }

@@ -11,7 +11,7 @@
 use super::{simulate, CostMap, GRID};
 use tessera::job::plan::{plan_tiles, tiles_for_cost, TILES_PER_WORKER};
 
-/// The frame costs swept, CPU seconds.
+/// The frame costs swept by default, CPU seconds (`--frame-costs` for others).
 pub const FRAME_COSTS: [f64; 5] = [0.1, 1.0, 10.0, 100.0, 1000.0];
 
 /// One row: frame cost, P, default tiles and wall, best tiles and wall.
@@ -38,11 +38,17 @@ fn wall(
 }
 
 /// Sweep the frame costs and worker counts.
-pub fn sweep(map: &CostMap, workers: &[usize], sync: f64, startup: f64, estimate: f64) -> Vec<Row> {
+pub fn sweep(
+    map: &CostMap,
+    (costs, workers): (&[f64], &[usize]),
+    sync: f64,
+    startup: f64,
+    estimate: f64,
+) -> Vec<Row> {
     let mut rows = Vec::new();
     let total = map.total().max(f64::MIN_POSITIVE);
     let area = map.width * map.height;
-    for &cost in &FRAME_COSTS {
+    for &cost in costs {
         let scale = cost / total;
         for &p in workers {
             let n = tiles_for_cost(area, p, cost * estimate, sync);
