@@ -26,7 +26,8 @@
 # Environment: WORKERS="1 2 4 8 16" (cut to the cores), SCENE (files, default the demo),
 #   VIEW (default -vf demo/demo.vf), RES="-x 320 -y 240",
 #   OPTS="-ab 2 -aa .15 -ad 512 -as 128 -ar 64 -av .02 .02 .02 -ps 1",
-#   TILES_LIST="16 32 64 128 256 512 1024" ("" for none),
+#   TILES_LIST="16 32 64 128 256 512 1024" ("" for none), PMAX_REPEAT=3 (runs at the
+#   largest P, and of each --tiles plan; the summary takes the fastest of each),
 #   SIM_WORKERS="2,4,8,16,32,64,128,256", SYNC (per-tile seconds for the simulation,
 #   default tplan's 0.8 ms), STARTUP (seconds added to every simulated worker, default the
 #   measured start-up of a worker: a job of one tile minus its tile's CPU),
@@ -42,6 +43,7 @@ VIEW=${VIEW:-"-vf $ROOT/demo/demo.vf"}
 RES=${RES:-"-x 320 -y 240"}
 OPTS=${OPTS:-"-ab 2 -aa .15 -ad 512 -as 128 -ar 64 -av .02 .02 .02 -ps 1"}
 TILES_LIST=${TILES_LIST-"16 32 64 128 256 512 1024"}
+PMAX_REPEAT=${PMAX_REPEAT:-3}
 SIM_WORKERS=${SIM_WORKERS:-"2,4,8,16,32,64,128,256"}
 if [ -z "${NO_BUILD:-}" ]; then
     (cd "$ROOT" && cargo build --release --quiet --bins)
@@ -119,55 +121,59 @@ timed one "$B/tpict" -n 1 "${RARGS[@]}" "${SFILES[@]}" > "$TMP/one.hdr"
 read -r BASE BASE_CPU BASE_MEM < <(sums one)
 printf '%-52s %3s %8s %8s %7s %6s %7s %7s %7s %7s\n' run P wall-s CPU-s speedup eff T_idle T_sync MB PSS-MB
 row "tpict -n 1" 1 "$BASE" "$BASE_CPU" "$BASE_MEM" - -
+PMAX=0
+for P in $WORKERS; do [ "$P" -le "$CORES" ] && [ "$P" -gt "$PMAX" ] && PMAX=$P; done
 for P in $WORKERS; do
     if [ "$P" -gt "$CORES" ]; then
         echo "(P = $P skipped: $CORES cores)"
         continue
     fi
-    rm -f "$TMP"/*.t
-    timed tp "$B/tpict" -n "$P" "${RARGS[@]}" "${SFILES[@]}" > /dev/null
-    read -r w c m < <(sums tp)
-    row "tpict -n $P" "$P" "$w" "$c" "$m" - -
-    w_tp=$w c_tp=$c m_tp=$m
-    for mode in processes built threads; do
-        job="$TMP/job-$P-$mode"
-        rm -rf "$job"
-        "$B/tplan" --workers "$P" -o "$job" -- "${RARGS[@]}" "${SFILES[@]}" 2> "$TMP/plan.err"
-        tiles=$(grep -o '[0-9]* tiles,' "$TMP/plan.err" | grep -o '[0-9]*')
-        pids=()
-        if [ "$mode" != threads ]; then
-            flag=()
-            [ "$mode" = built ] && flag=(--no-scene-image)
-            for i in $(seq 1 "$P"); do
-                timed "$mode" "$B/tpiece" "$job" --worker-id "w$i" --threads 1 -q "${flag[@]}" &
+    reps=1
+    [ "$P" = "$PMAX" ] && reps=$PMAX_REPEAT
+    for _ in $(seq 1 "$reps"); do
+        rm -f "$TMP"/*.t
+        timed tp "$B/tpict" -n "$P" "${RARGS[@]}" "${SFILES[@]}" > /dev/null
+        read -r w c m < <(sums tp)
+        row "tpict -n $P" "$P" "$w" "$c" "$m" - -
+        w_tp=$w c_tp=$c m_tp=$m
+        for mode in processes built threads; do
+            job="$TMP/job-$P-$mode"
+            rm -rf "$job"
+            "$B/tplan" --workers "$P" -o "$job" -- "${RARGS[@]}" "${SFILES[@]}" 2> "$TMP/plan.err"
+            tiles=$(grep -o '[0-9]* tiles,' "$TMP/plan.err" | grep -o '[0-9]*')
+            pids=()
+            if [ "$mode" != threads ]; then
+                flag=()
+                [ "$mode" = built ] && flag=(--no-scene-image)
+                for i in $(seq 1 "$P"); do
+                    timed "$mode" "$B/tpiece" "$job" --worker-id "w$i" --threads 1 -q "${flag[@]}" &
+                    pids+=("$!")
+                done
+            else
+                timed "$mode" "$B/tpiece" "$job" --worker-id w1 --threads "$P" -q &
                 pids+=("$!")
-            done
-        else
-            timed "$mode" "$B/tpiece" "$job" --worker-id w1 --threads "$P" -q &
-            pids+=("$!")
-        fi
-        pss=$(pss_watch "${pids[@]}")
-        for p in "${pids[@]}"; do wait "$p"; done
-        read -r w c m < <(sums "$mode")
-        read -r idle sync < <(job_stats "$job")
-        case $mode in
-            processes) label="$P x tpiece --threads 1" ;;
-            built) label="$P x tpiece --threads 1 --no-scene-image" ;;
-            *) label="tpiece --threads $P" ;;
-        esac
-        row "$label ($tiles tiles)" "$P" "$w" "$c" "$m" "$idle" "$sync" "$pss"
-        echo "$P $mode $tiles $w $c $m $pss" >> "$TMP/rows"
-        "$B/tassemble" "$job" --force -o "$OUT/job-$P-$mode.hdr" 2> /dev/null
-        rm -rf "$job"
+            fi
+            pss=$(pss_watch "${pids[@]}")
+            for p in "${pids[@]}"; do wait "$p"; done
+            read -r w c m < <(sums "$mode")
+            read -r idle sync < <(job_stats "$job")
+            case $mode in
+                processes) label="$P x tpiece --threads 1" ;;
+                built) label="$P x tpiece --threads 1 --no-scene-image" ;;
+                *) label="tpiece --threads $P" ;;
+            esac
+            row "$label ($tiles tiles)" "$P" "$w" "$c" "$m" "$idle" "$sync" "$pss"
+            echo "$P $mode $tiles $w $c $m $pss" >> "$TMP/rows"
+            "$B/tassemble" "$job" --force -o "$OUT/job-$P-$mode.hdr" 2> /dev/null
+            rm -rf "$job"
+        done
+        echo "$P tpict $w_tp $c_tp $m_tp" >> "$TMP/tpict"
     done
-    echo "$P tpict $w_tp $c_tp $m_tp" >> "$TMP/tpict"
 done
 
 # The default configuration (one worker, P loops) on --tiles plans, at the largest P run.
-PMAX=0
-for P in $WORKERS; do [ "$P" -le "$CORES" ] && [ "$P" -gt "$PMAX" ] && PMAX=$P; done
 if [ "$PMAX" -gt 0 ]; then
-    for n in $TILES_LIST; do
+    for n in $(for _ in $(seq 1 "$PMAX_REPEAT"); do echo $TILES_LIST; done); do
         job="$TMP/job-tiles-$n"
         rm -rf "$job"
         "$B/tplan" --workers "$PMAX" --tiles "$n" -o "$job" -- "${RARGS[@]}" "${SFILES[@]}" 2> "$TMP/plan.err"
@@ -183,10 +189,11 @@ if [ "$PMAX" -gt 0 ]; then
     # What issue 29 asks, at P = PMAX.
     echo
     awk -v p="$PMAX" -v base="$BASE" '
-        FILENAME ~ /rows$/ && $1 == p { w[$2] = $4; m[$2] = $6; q[$2] = $7; t[$2] = $3 }
-        FILENAME ~ /tpict$/ && $1 == p { tp = $3 }
-        FILENAME ~ /tilesrows$/ { if (best == "" || $3 < best) { best = $3; bt = $2 } }
+        FILENAME ~ /rows$/ && $1 == p && (!($2 in w) || $4 < w[$2]) { w[$2] = $4; t[$2] = $3 }
+        FILENAME ~ /tpict$/ && $1 == p && (tp == "" || $3 < tp) { tp = $3 }
+        FILENAME ~ /tilesrows$/ && (!($1 in tw) || $3 < tw[$1]) { tw[$1] = $3; tt[$1] = $2 }
         END {
+            for (n in tw) if (best == "" || tw[n] < best) { best = tw[n]; bt = tt[n] }
             printf "at P = %d: default plan (%d tiles), one worker with %d loops: %.2f s wall\n", p, t["threads"], p, w["threads"]
             printf "  against tpict -n %d (%.2f s): %.3f (at most 1 asked)\n", p, tp, w["threads"] / tp
             if (best != "") printf "  against the best --tiles plan (%d tiles, %.2f s): %.3f (at most 1.05 asked)\n", bt, best, w["threads"] / best
@@ -194,7 +201,7 @@ if [ "$PMAX" -gt 0 ]; then
         }' "$TMP/rows" "$TMP/tpict" $( [ -f "$TMP/tilesrows" ] && echo "$TMP/tilesrows" )
 fi
 # Memory per extra loop: one worker with P loops against one with one loop (PSS, MB).
-awk '$2 == "threads" { q[$1] = $7 } END {
+awk '$2 == "threads" && (!($1 in q) || $7 < q[$1]) { q[$1] = $7 } END {
         if (!(1 in q)) exit
         for (p in q) if (p + 0 > 1 && q[1] > 0)
             printf "  one worker, %d loops: PSS %.1f MB, %.1f%% of the first loop'"'"'s per extra loop (at most 10%% asked)\n", p, q[p], 100 * (q[p] - q[1]) / (p - 1) / q[1]
