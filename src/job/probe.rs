@@ -84,6 +84,8 @@ pub fn probe(scene: &Scene, params: &RenderParams, fs: &FrameSetup, budget: f64)
     let start = Instant::now();
     let mut p = Probe::default();
     let mut rendered = Vec::new();
+    // Each patch's first block: counted only where a frame is too small for more.
+    let (mut first, mut firsts) = ((0.0, 0usize), Vec::new());
     let (made0, _) = crate::ambient::compute::thread_work();
     for &k in &ORDER {
         if p.blocks > 0 && start.elapsed().as_secs_f64() >= budget {
@@ -107,16 +109,25 @@ pub fn probe(scene: &Scene, params: &RenderParams, fs: &FrameSetup, budget: f64)
                 let b = (x0, y0, (x0 + side).min(w), (y0 + side).min(h));
                 let t = block_seconds(&here, &tracer, fs, b);
                 p.blocks += 1;
+                let pixels = (b.2 - b.0) * (b.3 - b.1);
                 if i + j > 0 {
                     p.cpu_seconds += t;
-                    p.pixels += (b.2 - b.0) * (b.3 - b.1);
+                    p.pixels += pixels;
                     rendered.push(b);
+                } else {
+                    first.0 += t;
+                    first.1 += pixels;
+                    firsts.push(b);
                 }
             }
         }
         if let Some(e) = scene.fatal_error() {
             anyhow::bail!("{e}");
         }
+    }
+    if p.pixels == 0 {
+        (p.cpu_seconds, p.pixels) = first;
+        rendered = firsts;
     }
     let (made1, _) = crate::ambient::compute::thread_work();
     p.warm_seconds = if params.ab >= 2 && made1 > made0 {
