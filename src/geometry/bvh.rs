@@ -29,7 +29,7 @@ use obvhs::ray::Ray;
 
 pub(crate) use super::bvh_build::tree_in_bounds;
 use super::bvh_build::{
-    append, build_chunked, build_cw_big_stack, f32_down, f32_up, BoxPrim, CHUNK,
+    append, build_chunked, build_cw_big_stack, f32_down, f32_up, BoxPrim, Quality, CHUNK,
 };
 use super::plain::Slab;
 use crate::FTINY;
@@ -317,7 +317,7 @@ impl Bvh {
             // No usable box: every query misses.
         } else if ids.len() <= CHUNK {
             let prims: Vec<BoxPrim> = ids.iter().map(|&i| boxed(i)).collect();
-            let cw = build_cw_big_stack(&prims);
+            let cw = build_cw_big_stack(&prims, Quality::Fine);
             drop(prims);
             if !cw.nodes.is_empty() {
                 append(&mut nodes, &mut slots, &cw, &ids);

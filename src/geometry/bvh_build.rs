@@ -27,19 +27,30 @@ impl Boundable for BoxPrim {
     }
 }
 
+/// How carefully a tree is built.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(super) enum Quality {
+    /// obvhs's `slow_build` settings (a wider PLOC search and more reinsertion than
+    /// `medium_build`) and one surface per leaf: a surface's f64 test costs more than a
+    /// node's eight f32 boxes. For inputs of one [`CHUNK`] at most. Against `Fast`, the
+    /// render's instructions (callgrind, `-ab 1`, the build's own subtracted) fell 3.3% on
+    /// the office of `bench/realscenes.sh`, 6.4% on its park (2,000 instances) and 0.5% on
+    /// its hall (40,357 polygons), whose build took 21% more (0.74 → 0.89 G instructions,
+    /// about 0.04 s); pictures are bit-identical (ties are resolved whatever the tree).
+    Fine,
+    /// `medium_build` with up to three surfaces per leaf, for the chunks of larger inputs:
+    /// on a 1,008,200-triangle mesh `Fine` took its load and build from 0.9 to 1.45 s and
+    /// its peak memory from 109 to 127 MB.
+    Fast,
+}
+
 /// Build the wide BVH (PLOC, reinsertion, conversion to CwBvh) without obvhs's debug-build
 /// validation, which asserts on trees deeper than its fixed traversal stack.
-///
-/// obvhs's `slow_build` settings (a wider PLOC search and more reinsertion than
-/// `medium_build`) and one surface per leaf: a surface's f64 test costs more than a node's
-/// eight f32 boxes. Against `medium_build` with up to three per leaf, the render's
-/// instructions (callgrind, `-ab 1`, the build's own subtracted) fell 3.3% on the office
-/// of `bench/realscenes.sh`, 6.4% on its park (2,000 instances) and 0.5% on its hall
-/// (40,357 polygons), whose build took 21% more (0.74 → 0.89 G instructions, about 0.04 s;
-/// a 320,000-triangle `gensurf` terrain starts in 1.7–1.9 s against 1.4–1.5); pictures are
-/// bit-identical (ties are resolved whatever the tree).
-fn build_cw(prims: &[BoxPrim]) -> CwBvh {
-    let p = BvhBuildParams::slow_build();
+fn build_cw(prims: &[BoxPrim], quality: Quality) -> CwBvh {
+    let (p, leaf) = match quality {
+        Quality::Fine => (BvhBuildParams::slow_build(), 1),
+        Quality::Fast => (BvhBuildParams::medium_build(), 3),
+    };
     let mut bvh2 = PlocBuilder::with_capacity(prims.len()).build(
         p.ploc_search_distance,
         prims,
@@ -48,7 +59,7 @@ fn build_cw(prims: &[BoxPrim]) -> CwBvh {
         p.search_depth_threshold,
     );
     ReinsertionOptimizer::default().run(&mut bvh2, p.reinsertion_batch_ratio, None);
-    let mut cw = bvh2_to_cwbvh(&bvh2, 1, true, false);
+    let mut cw = bvh2_to_cwbvh(&bvh2, p.max_prims_per_leaf.clamp(1, leaf), true, false);
     // The conversion reserves a node per box; a tree needs far fewer.
     cw.nodes.shrink_to_fit();
     cw.primitive_indices.shrink_to_fit();
@@ -57,17 +68,17 @@ fn build_cw(prims: &[BoxPrim]) -> CwBvh {
 
 /// [`build_cw`] on a thread with a large stack (the conversion recurses once per tree
 /// level, and degenerate inputs make very deep trees); inline if no thread can be started.
-pub(super) fn build_cw_big_stack(prims: &[BoxPrim]) -> CwBvh {
+pub(super) fn build_cw_big_stack(prims: &[BoxPrim], quality: Quality) -> CwBvh {
     let res = std::thread::scope(|s| {
         std::thread::Builder::new()
             .stack_size(256 << 20)
-            .spawn_scoped(s, || build_cw(prims))
+            .spawn_scoped(s, || build_cw(prims, quality))
             .map(|h| h.join())
     });
     match res {
         Ok(Ok(cw)) => cw,
         Ok(Err(e)) => std::panic::resume_unwind(e),
-        Err(_) => build_cw(prims),
+        Err(_) => build_cw(prims, quality),
     }
 }
 
@@ -106,7 +117,7 @@ pub(super) fn build_chunked(
     let mut tops = Vec::new();
     for group in order.chunks(CHUNK) {
         let prims: Vec<BoxPrim> = group.iter().map(|&(_, i)| boxed(i)).collect();
-        let cw = build_cw_big_stack(&prims);
+        let cw = build_cw_big_stack(&prims, Quality::Fast);
         if cw.nodes.is_empty() {
             continue;
         }
@@ -115,7 +126,7 @@ pub(super) fn build_chunked(
         chunks.push((cw, group.iter().map(|&(_, i)| i).collect()));
     }
     drop(order);
-    let top = Some(build_cw_big_stack(&tops)).filter(|cw| !cw.nodes.is_empty());
+    let top = Some(build_cw_big_stack(&tops, Quality::Fine)).filter(|cw| !cw.nodes.is_empty());
     (top, chunks)
 }
 
