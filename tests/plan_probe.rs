@@ -4,7 +4,7 @@
 
 mod common;
 
-use common::run_ok;
+use common::{output_ok, run_ok};
 use std::path::{Path, PathBuf};
 use std::process::Command;
 
@@ -34,18 +34,13 @@ fn args(ab: &str) -> Vec<String> {
 /// tplan's estimate of the frame's CPU seconds (its stderr line).
 fn estimate(dir: &Path, ab: &str) -> f64 {
     let job = dir.join(format!("job{ab}"));
-    let out = Command::new(env!("CARGO_BIN_EXE_tplan"))
-        .env("RAYPATH", demo())
-        .args(["--workers", "16", "-o"])
-        .arg(&job)
-        .arg("--")
-        .args(args(ab))
-        .output()
-        .unwrap();
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
+    let out = output_ok(
+        Command::new(env!("CARGO_BIN_EXE_tplan"))
+            .env("RAYPATH", demo())
+            .args(["--workers", "16", "-o"])
+            .arg(&job)
+            .arg("--")
+            .args(args(ab)),
     );
     let err = String::from_utf8_lossy(&out.stderr).to_string();
     let at = err.find("estimated at ").expect(&err) + "estimated at ".len();

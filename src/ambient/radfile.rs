@@ -580,13 +580,8 @@ mod tests {
         assert_eq!(decode_direction(0), DVec3::ZERO);
         assert_eq!(encode_direction(DVec3::new(0.0, -1.0, 0.0)), 0x1a);
         assert_eq!(encode_direction(DVec3::new(f64::NAN, 0.0, 1.0)), 0);
-        let mut s = 12345u64;
-        let mut rnd = || {
-            s = s
-                .wrapping_mul(6364136223846793005)
-                .wrapping_add(1442695040888963407);
-            ((s >> 11) as f64 / (1u64 << 53) as f64) * 2.0 - 1.0
-        };
+        let mut uniform = crate::hash::test_uniform(12345);
+        let mut rnd = || uniform() * 2.0 - 1.0;
         let mut worst: f64 = 0.0;
         for _ in 0..100_000 {
             let v = DVec3::new(rnd(), rnd(), rnd());

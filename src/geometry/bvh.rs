@@ -613,13 +613,7 @@ mod tests {
     fn chunked_tree_finds_the_same_closest_hits() {
         // More boxes than a chunk: the chunks and the tree over them find what a brute-force
         // search finds.
-        let mut seed = 12345u64;
-        let mut rnd = move || {
-            seed = seed
-                .wrapping_mul(6364136223846793005)
-                .wrapping_add(1442695040888963407);
-            (seed >> 11) as f64 / (1u64 << 53) as f64
-        };
+        let mut rnd = crate::hash::test_uniform(12345);
         let n = CHUNK * 2 + 1000;
         let boxes: Vec<(DVec3, DVec3)> = (0..n)
             .map(|_| {

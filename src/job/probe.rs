@@ -83,9 +83,8 @@ pub fn probe(scene: &Scene, params: &RenderParams, fs: &FrameSetup, budget: f64)
     let side = BLOCK.div_ceil(cell) * cell;
     let start = Instant::now();
     let mut p = Probe::default();
+    // Every block with its CPU seconds and whether it is its patch's first.
     let mut rendered = Vec::new();
-    // Each patch's first block: counted only where a frame is too small for more.
-    let (mut first, mut firsts) = ((0.0, 0usize), Vec::new());
     let (made0, _) = crate::ambient::compute::thread_work();
     for &k in &ORDER {
         if p.blocks > 0 && start.elapsed().as_secs_f64() >= budget {
@@ -107,33 +106,27 @@ pub fn probe(scene: &Scene, params: &RenderParams, fs: &FrameSetup, budget: f64)
                     continue;
                 }
                 let b = (x0, y0, (x0 + side).min(w), (y0 + side).min(h));
-                let t = block_seconds(&here, &tracer, fs, b);
+                rendered.push((b, block_seconds(&here, &tracer, fs, b), i + j == 0));
                 p.blocks += 1;
-                let pixels = (b.2 - b.0) * (b.3 - b.1);
-                if i + j > 0 {
-                    p.cpu_seconds += t;
-                    p.pixels += pixels;
-                    rendered.push(b);
-                } else {
-                    first.0 += t;
-                    first.1 += pixels;
-                    firsts.push(b);
-                }
             }
         }
         if let Some(e) = scene.fatal_error() {
             anyhow::bail!("{e}");
         }
     }
-    if p.pixels == 0 {
-        (p.cpu_seconds, p.pixels) = first;
-        rendered = firsts;
+    // The blocks after each patch's first; the first ones where a frame is too small for
+    // more.
+    let later = rendered.iter().any(|r| !r.2);
+    let counted: Vec<_> = rendered.into_iter().filter(|r| !r.2 || !later).collect();
+    for &(b, t, _) in &counted {
+        p.cpu_seconds += t;
+        p.pixels += (b.2 - b.0) * (b.3 - b.1);
     }
     let (made1, _) = crate::ambient::compute::thread_work();
     p.warm_seconds = if params.ab >= 2 && made1 > made0 {
-        rendered
+        counted
             .iter()
-            .map(|&b| block_seconds(&here, &tracer, fs, b))
+            .map(|&(b, _, _)| block_seconds(&here, &tracer, fs, b))
             .sum::<f64>()
             .min(p.cpu_seconds)
     } else {

@@ -448,13 +448,7 @@ mod tests {
 
     #[test]
     fn one_and_two_dimensions_match_the_general_recursion_bit_for_bit() {
-        let mut seed = 7u64;
-        let mut rnd = move || {
-            seed = seed
-                .wrapping_mul(6364136223846793005)
-                .wrapping_add(1442695040888963407);
-            (seed >> 11) as f64 / (1u64 << 53) as f64
-        };
+        let mut rnd = crate::hash::test_uniform(7);
         for case in 0..200 {
             let dims = 1 + case % 2;
             let axes: Vec<Axis> = (0..dims)

@@ -281,6 +281,15 @@ pub fn instance_transform(p: &Primitive) -> Result<Transform, String> {
     Ok(xf)
 }
 
+/// Surfaces a set holds once expanded: its own `own` and what each of `children` holds,
+/// saturating.
+pub fn expanded_of(sets: &[ObjectSet], own: usize, children: &[Child]) -> u64 {
+    children
+        .iter()
+        .map(|c| sets[c.set].expanded)
+        .fold(own as u64, u64::saturating_add)
+}
+
 /// The placements that `children` make once flattened (each child with geometry of its own
 /// is one, plus what its set's instances make), saturating.
 pub fn placements_of(sets: &[ObjectSet], children: &[Child]) -> u64 {

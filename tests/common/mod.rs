@@ -72,6 +72,11 @@ pub fn tpict_bin() -> PathBuf {
 
 /// Run a command, panicking with its stderr on failure; returns stdout.
 pub fn run_ok(c: &mut Command) -> Vec<u8> {
+    output_ok(c).stdout
+}
+
+/// Run a command, panicking with its stderr on failure; returns its whole output.
+pub fn output_ok(c: &mut Command) -> std::process::Output {
     let out = c.output().expect("cannot start command");
     if !out.status.success() {
         panic!(
@@ -81,7 +86,7 @@ pub fn run_ok(c: &mut Command) -> Vec<u8> {
             String::from_utf8_lossy(&out.stderr)
         );
     }
-    out.stdout
+    out
 }
 
 /// Box-filter a picture down to `w`×`h` (each output pixel averages the input pixels whose

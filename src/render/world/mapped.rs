@@ -77,12 +77,7 @@ impl Builder<'_> {
                         Ok(x) => x,
                         Err(e) => return Err(self.refuse(format!("set {k}: {e}"), loc)),
                     };
-                let expanded = objects.len() as u64
-                    + level
-                        .children
-                        .iter()
-                        .map(|c| self.sets[c.set].expanded)
-                        .fold(0u64, u64::saturating_add);
+                let expanded = expanded_of(&self.sets, objects.len(), &level.children);
                 let placements = placements_of(&self.sets, &level.children);
                 let source = SetSource::Octree { rest, used };
                 Ok(set(

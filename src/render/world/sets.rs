@@ -139,12 +139,7 @@ impl Builder<'_> {
             union(&mut direct, objects.surface(i).bounds());
         }
         let bvh = Bvh::build_from(objects.len(), |i| objects.surface(i).bounds(), level.eps);
-        let expanded = level.objects.len() as u64
-            + level
-                .children
-                .iter()
-                .map(|c| self.sets[c.set].expanded)
-                .fold(0u64, u64::saturating_add);
+        let expanded = expanded_of(&self.sets, level.objects.len(), &level.children);
         let placements = placements_of(&self.sets, &level.children);
         Ok(ObjectSet {
             file: name.to_string(),
