@@ -47,6 +47,8 @@
 //! - claiming a tile and writing its result cost nothing beyond `--sync-cost` per tile
 //!   (no claim latency, no contention).
 
+#[path = "tilesim_split.rs"]
+mod split;
 #[path = "tilesim_sweep.rs"]
 mod sweep;
 
@@ -682,6 +684,36 @@ fn self_test() -> Result<(), String> {
         }
     });
 
+    // 7. Splitting: one tile of uniform cost (1 ms a pixel, 307 s) on P workers ends within
+    //    5% of T1/P; with pieces that may never be made (MIN above
+    //    the frame's cost) it is the replay without splitting.
+    let total = map.total();
+    for p in [1usize, 4, 16] {
+        let sp = split::SplitParams {
+            check: 0.05,
+            min_piece: 0.05,
+            wake: 0.05,
+            cell: tessera::render::cell_size(GRID),
+        };
+        let m = split::simulate_split(&map, 1.0, &one, p, 0.0, sp);
+        let ideal = total / p as f64;
+        check(
+            &format!("single tile split on P={p}: near T1/P"),
+            m >= ideal - 1e-9 && m <= ideal * 1.05,
+            format!(" ({m:.3} s against {ideal:.3})"),
+        );
+        let never = split::SplitParams {
+            min_piece: total,
+            ..sp
+        };
+        let m = split::simulate_split(&map, 1.0, &one, p, 0.0, never);
+        check(
+            &format!("single tile, no split possible, P={p}: T1"),
+            (m - total).abs() < 1e-6,
+            format!(" ({m:.3} s against {total:.3})"),
+        );
+    }
+
     if failures.is_empty() {
         println!("tilesim self-test: all checks passed");
         Ok(())
@@ -712,6 +744,10 @@ struct Args {
     estimate: f64,
     /// `--frame-costs C,...`: the frame costs of the sweep (CPU seconds).
     frame_costs: Vec<f64>,
+    /// `--split CHECK,MIN,WAKE`: replay with tiles split while they render.
+    split: Option<split::SplitParams>,
+    /// `--tail T`: the default plan's tail factor (else `plan::TAIL`).
+    tail: f64,
 }
 
 const USAGE: &str = "usage: cargo bench --bench tilesim -- COSTS.json [--workers 1,2,4,...] \
@@ -737,6 +773,8 @@ fn parse_args() -> Result<Args, String> {
         startup: 0.0,
         estimate: 1.0,
         frame_costs: sweep::FRAME_COSTS.to_vec(),
+        split: None,
+        tail: tessera::job::plan::TAIL,
         hot: Synthetic {
             width: 640,
             height: 480,
@@ -754,6 +792,12 @@ fn parse_args() -> Result<Args, String> {
             "--self-test" => a.self_test = true,
             "--lpt" => a.lpt = true,
             "--sweep" => a.sweep = true,
+            "--tail" => {
+                a.tail = match value("--tail")?.parse::<f64>() {
+                    Ok(t) if t.is_finite() && t > 0.0 => t,
+                    _ => return Err("--tail: expected a number > 0".into()),
+                }
+            }
             "--startup" | "--estimate-factor" => {
                 let v = match value(&arg)?.parse::<f64>() {
                     Ok(s) if s.is_finite() && s >= 0.0 => s,
@@ -764,6 +808,26 @@ fn parse_args() -> Result<Args, String> {
                 } else {
                     a.estimate = v.max(1e-9);
                 }
+            }
+            "--split" => {
+                let v = value("--split")?;
+                let f: Vec<f64> = v
+                    .split(',')
+                    .map(|s| s.trim().parse::<f64>())
+                    .collect::<Result<_, _>>()
+                    .map_err(|_| format!("--split {v}: expected CHECK,MIN,WAKE seconds"))?;
+                let [check, min_piece, wake] = f[..] else {
+                    return Err(format!("--split {v}: expected CHECK,MIN,WAKE seconds"));
+                };
+                if !(check > 0.0 && min_piece >= 0.0 && wake >= 0.0) {
+                    return Err(format!("--split {v}: CHECK > 0, MIN and WAKE >= 0"));
+                }
+                a.split = Some(split::SplitParams {
+                    check,
+                    min_piece,
+                    wake,
+                    cell: tessera::render::cell_size(GRID),
+                });
             }
             "--frame-costs" => {
                 a.frame_costs = value("--frame-costs")?
@@ -882,6 +946,8 @@ fn run() -> Result<(), String> {
             sync,
             args.startup,
             args.estimate,
+            args.split,
+            args.tail,
         );
         sweep::print(&rows, sync, args.startup, args.estimate);
         return Ok(());

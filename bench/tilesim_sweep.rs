@@ -8,8 +8,9 @@
 //! `--startup` seconds (a worker reading its scene). Printed: the best count, its wall time,
 //! the default's, and their ratio.
 
+use super::split::{simulate_split, SplitParams};
 use super::{simulate, CostMap, GRID};
-use tessera::job::plan::{plan_tiles, tiles_for_cost, TILES_PER_WORKER};
+use tessera::job::plan::{plan_tiles, tiles_for_tail, TILES_PER_WORKER};
 
 /// The frame costs swept by default, CPU seconds (`--frame-costs` for others).
 pub const FRAME_COSTS: [f64; 5] = [0.1, 1.0, 10.0, 100.0, 1000.0];
@@ -31,8 +32,15 @@ fn wall(
     p: usize,
     sync: f64,
     startup: f64,
+    split: Option<SplitParams>,
 ) -> (usize, f64) {
     let plan = plan_tiles(map.width, map.height, tiles, GRID);
+    if let Some(sp) = split {
+        return (
+            plan.len(),
+            startup + simulate_split(map, scale, &plan, p, sync, sp),
+        );
+    }
     let costs: Vec<f64> = plan.iter().map(|t| map.cost(t) * scale + sync).collect();
     (plan.len(), startup + simulate(&costs, p).0)
 }
@@ -44,6 +52,8 @@ pub fn sweep(
     sync: f64,
     startup: f64,
     estimate: f64,
+    split: Option<SplitParams>,
+    tail: f64,
 ) -> Vec<Row> {
     let mut rows = Vec::new();
     let total = map.total().max(f64::MIN_POSITIVE);
@@ -51,12 +61,12 @@ pub fn sweep(
     for &cost in costs {
         let scale = cost / total;
         for &p in workers {
-            let n = tiles_for_cost(area, p, cost * estimate, sync);
-            let (default_tiles, default_wall) = wall(map, scale, n, p, sync, startup);
+            let n = tiles_for_tail(area, p, cost * estimate, sync, tail);
+            let (default_tiles, default_wall) = wall(map, scale, n, p, sync, startup, split);
             let (mut best_tiles, mut best_wall) = (default_tiles, default_wall);
             let mut k = 1.0f64;
             while k <= (TILES_PER_WORKER * p) as f64 {
-                let (t, w) = wall(map, scale, k.round() as usize, p, sync, startup);
+                let (t, w) = wall(map, scale, k.round() as usize, p, sync, startup, split);
                 if w < best_wall {
                     (best_tiles, best_wall) = (t, w);
                 }

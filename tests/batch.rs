@@ -64,9 +64,14 @@ fn worker(job: &Path, id: &str, extra: &[&str]) -> Command {
 }
 
 fn run_workers(job: &Path, n: usize, extra: &[&str]) {
+    run_workers_env(job, n, extra, &[]);
+}
+
+fn run_workers_env(job: &Path, n: usize, extra: &[&str], env: &[(&str, &str)]) {
     let mut kids: Vec<Child> = (0..n)
         .map(|i| {
             worker(job, &format!("w{i}"), extra)
+                .envs(env.iter().copied())
                 .stderr(Stdio::piped())
                 .spawn()
                 .expect("start tpiece")
@@ -491,14 +496,18 @@ fn killed_workers_lose_nothing() {
                     .ends_with(".tile")
             })
             .count();
-        assert_eq!(tiles as u64, stat(&job)["tiles"].as_u64().unwrap());
+        // (Pieces split off a tile at the end of the job have results of their own.)
+        let st = stat(&job);
+        let tasks = st["tiles"].as_u64().unwrap() + st["pieces"].as_u64().unwrap();
+        assert_eq!(tiles as u64, tasks, "round {round}");
+        assert_eq!(st["pieces_done"], st["pieces"], "round {round}");
         // Every task has exactly one state entry, and it is `done`: no tile was finished
         // twice into two states, none was left claimed or to do.
         let mut entries = std::collections::HashMap::<String, Vec<String>>::new();
         for e in std::fs::read_dir(job.join("tasks")).unwrap() {
             let name = e.unwrap().file_name().to_string_lossy().into_owned();
             if let Some((task, state)) = name.split_once('.') {
-                if task.starts_with('f') {
+                if task.starts_with('f') && state != "made" {
                     entries.entry(task.into()).or_default().push(state.into());
                 }
             }
@@ -1039,7 +1048,13 @@ fn a_resumed_slow_worker_finishing_a_reclaimed_tile_is_harmless() {
     );
     // Still exactly one entry per task, all done; the picture is as good as before.
     let names = task_entries(&job);
-    assert!(names.iter().all(|n| n.ends_with(".done")), "{names:?}");
+    // (Pieces split off have a marker besides their state: `.made`.)
+    assert!(
+        names
+            .iter()
+            .all(|n| n.ends_with(".done") || n.ends_with(".made")),
+        "{names:?}"
+    );
     let after = assemble(&job);
     within_tolerance(&after, &before, "after the slow worker's late result");
 }
@@ -1333,4 +1348,131 @@ fn tmerge_recreates_a_deleted_merged_directory() {
         String::from_utf8_lossy(&out.stderr)
     );
     assert!(job.join("merged/store.json").is_file());
+}
+
+/// Tiles split while they render (forced, `TESSERA_FAULT_SPLIT_EAGER`: at every cell while
+/// nothing is left to claim and 16 cells or more are): pieces are split off by rows and by
+/// columns, claimed by the other workers and split again, and the picture is tpict's bit
+/// for bit at `-ab 0`; `tstat` counts the pieces with their tiles; `--no-split` makes none.
+#[test]
+fn split_tiles_give_tpicts_pixels() {
+    let eager = [("TESSERA_FAULT_SPLIT_EAGER", "1")];
+    let d = tempfile::tempdir().unwrap();
+    for (ps, x, y) in [("4", 96, 72), ("1", 40, 30)] {
+        let args = view_args(x, y, &["-ab", "0", "-ps", ps]);
+        let reference = tpict(&args);
+        let (mut by_rows, mut by_cols) = (0, 0);
+        // One tile, and tiles of half the picture's rows.
+        for (tiles, workers) in [(1usize, 2usize), (2, 3)] {
+            let job = d.path().join(format!("ps{ps}-t{tiles}"));
+            let w = workers.to_string();
+            let size = format!("{x}x{}", y / 2);
+            let mut p = vec!["--workers", &w];
+            if tiles == 1 {
+                p.extend(["--tiles", "1"]);
+            } else {
+                p.extend(["--tile-size", &size]);
+            }
+            plan(&job, &p, &args);
+            run_workers_env(&job, workers, &[], &eager);
+            let img = assemble(&job);
+            let what = format!("-ps {ps}, {tiles} tile(s), {workers} workers");
+            assert!(img.pixels == reference.pixels, "{what}: picture differs");
+            let st = stat(&job);
+            assert_eq!(st["done"], st["tiles"], "{what}");
+            let pieces = st["pieces"].as_u64().unwrap();
+            assert!(pieces >= 2, "{what}: {pieces} pieces");
+            assert_eq!(st["pieces_done"].as_u64(), Some(pieces), "{what}");
+            assert_eq!(st["aggregate"]["split"].as_u64(), Some(pieces), "{what}");
+            assert_eq!(
+                st["aggregate"]["unreported_tiles"].as_u64(),
+                Some(0),
+                "{what}"
+            );
+            for e in task_entries(&job) {
+                let task = e.split_once('.').unwrap().0;
+                if let Some(id) = tessera::job::piece::parse(task).and_then(|id| id.piece) {
+                    if id.w == x as usize {
+                        by_rows += 1;
+                    } else {
+                        by_cols += 1;
+                    }
+                }
+            }
+        }
+        assert!(
+            by_rows > 0 && by_cols > 0,
+            "-ps {ps}: {by_rows} by rows, {by_cols} by columns"
+        );
+        // Splitting turned off: no pieces, the same picture.
+        let job = d.path().join(format!("ps{ps}-nosplit"));
+        plan(
+            &job,
+            &["--tiles", "1", "--workers", "2", "--no-split"],
+            &args,
+        );
+        run_workers_env(&job, 2, &[], &eager);
+        assert!(assemble(&job).pixels == reference.pixels);
+        assert_eq!(stat(&job)["pieces"].as_u64(), Some(0));
+    }
+}
+
+/// Workers killed while they own tiles and pieces (splitting forced as above): the survivors
+/// take them over after the lease and render each whole, and the picture is still tpict's bit
+/// for bit at `-ab 0`, with every tile and piece done once.
+#[test]
+fn killed_owners_of_pieces_lose_nothing() {
+    let eager = [("TESSERA_FAULT_SPLIT_EAGER", "1")];
+    let args = view_args(400, 300, &["-ab", "0", "-ps", "1"]);
+    let reference = tpict(&args);
+    let d = tempfile::tempdir().unwrap();
+    let mut rng = Rng(0x2545_F491_4F6C_DD1D);
+    let mut reclaimed = 0;
+    for round in 0..6 {
+        let job = d.path().join(format!("job{round}"));
+        plan(
+            &job,
+            &["--tiles", "2", "--workers", "3", "--lease", "0.3"],
+            &args,
+        );
+        let mut kids: Vec<Child> = (0..3)
+            .map(|i| {
+                worker(&job, &format!("r{round}w{i}"), &[])
+                    .envs(eager)
+                    .stderr(Stdio::null())
+                    .spawn()
+                    .unwrap()
+            })
+            .collect();
+        std::thread::sleep(Duration::from_millis(30 + rng.below(120)));
+        let victim = rng.below(3) as usize;
+        kill9(&mut kids[victim]);
+        for (i, c) in kids.iter_mut().enumerate() {
+            if i != victim {
+                assert!(
+                    c.wait().unwrap().success(),
+                    "round {round}: a worker failed"
+                );
+            }
+        }
+        let img = assemble(&job);
+        assert!(
+            img.pixels == reference.pixels,
+            "round {round}: picture differs"
+        );
+        let st = stat(&job);
+        assert_eq!(st["done"], st["tiles"], "round {round}");
+        assert_eq!(st["pieces_done"], st["pieces"], "round {round}");
+        reclaimed += st["aggregate"]["reclaimed"].as_u64().unwrap();
+        for e in task_entries(&job) {
+            assert!(
+                e.ends_with(".done") || e.ends_with(".made"),
+                "round {round}: {e}"
+            );
+        }
+    }
+    eprintln!("{reclaimed} tasks re-claimed in 6 rounds");
+    // The kills land while the victim renders (three workers share two tiles and their
+    // pieces for about half a second): its task is taken over.
+    assert!(reclaimed >= 2, "{reclaimed} re-claims in 6 rounds");
 }

@@ -442,6 +442,7 @@ fn manifest_seed(dir: &Path) -> Vec<u8> {
         views: None,
         path: None,
         lease: None,
+        no_split: false,
         ambient: None,
         amb_force: false,
         args: vec![

@@ -23,6 +23,29 @@ pub fn frame_accuracy(job: &JobDir, m: &Manifest, frame: u32) -> Result<Option<f
     }
 }
 
+/// The pixels of task `name`'s result, checked against its rectangle, frame and job; why
+/// not otherwise.
+fn read_result(
+    job: &JobDir,
+    m: &Manifest,
+    frame: u32,
+    name: &str,
+    rect: &super::plan::TileRect,
+) -> std::result::Result<Vec<[f32; 3]>, String> {
+    let path = job.tile_file(name);
+    if !path.exists() {
+        return Err("no result".into());
+    }
+    let (meta, px) = tile::read(&path).map_err(|e| format!("{e:#}"))?;
+    if (meta.x0, meta.y0, meta.w, meta.h) != (rect.x0, rect.y0, rect.w, rect.h)
+        || meta.frame != frame
+        || meta.fingerprint != m.fingerprint
+    {
+        return Err("result belongs to another plan or scene".into());
+    }
+    Ok(px)
+}
+
 /// Assemble frame `frame`. Returns the picture and the tiles that were missing or invalid
 /// (filled black). The caller decides whether a partial picture is acceptable.
 pub fn assemble_frame(
@@ -36,39 +59,33 @@ pub fn assemble_frame(
         .ok_or_else(|| anyhow!("the job has no frame {frame}"))?;
     let mut img = Image::new(fp.xres, fp.yres);
     let mut missing = Vec::new();
-    for (i, rect) in fp.tiles.iter().enumerate() {
-        let name = task_name(frame, i);
-        let path = job.tile_file(&name);
-        if !path.exists() {
-            missing.push(MissingTile {
-                task: name,
-                reason: "no result".into(),
-            });
-            continue;
-        }
-        let (meta, px) = match tile::read(&path) {
-            Ok(t) => t,
-            Err(e) => {
-                missing.push(MissingTile {
-                    task: name,
-                    reason: format!("{e:#}"),
-                });
-                continue;
+    // Pieces split off tiles while they rendered: pasted after their tile, largest first.
+    let states = super::task::scan(&job.tasks())
+        .map_err(|e| anyhow!("cannot list {}: {e}", job.tasks().display()))?;
+    let pieces = super::task::pieces(&states);
+    for (i, tile_rect) in fp.tiles.iter().enumerate() {
+        let of_tile: Vec<_> = pieces
+            .get(&(frame, i))
+            .map_or(&[][..], |v| &v[..])
+            .iter()
+            .map(|(r, _)| *r)
+            .collect();
+        for rect in super::piece::assemble_order(tile_rect, &of_tile) {
+            let name = if rect == *tile_rect {
+                task_name(frame, i)
+            } else {
+                super::piece::piece_name(frame, i, &rect)
+            };
+            match read_result(job, m, frame, &name, &rect) {
+                Ok(px) => {
+                    for row in 0..rect.h {
+                        let dst = (rect.y0 + row) * fp.xres + rect.x0;
+                        img.pixels[dst..dst + rect.w]
+                            .copy_from_slice(&px[row * rect.w..(row + 1) * rect.w]);
+                    }
+                }
+                Err(reason) => missing.push(MissingTile { task: name, reason }),
             }
-        };
-        if (meta.x0, meta.y0, meta.w, meta.h) != (rect.x0, rect.y0, rect.w, rect.h)
-            || meta.frame != frame
-            || meta.fingerprint != m.fingerprint
-        {
-            missing.push(MissingTile {
-                task: name,
-                reason: "result belongs to another plan or scene".into(),
-            });
-            continue;
-        }
-        for row in 0..rect.h {
-            let dst = (rect.y0 + row) * fp.xres + rect.x0;
-            img.pixels[dst..dst + rect.w].copy_from_slice(&px[row * rect.w..(row + 1) * rect.w]);
         }
     }
     img.header = Header {

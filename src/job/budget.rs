@@ -20,7 +20,7 @@ use serde::{Deserialize, Serialize};
 
 use super::manifest::Manifest;
 use super::task::{self, TaskState};
-use super::{task_name, tile, JobDir};
+use super::{tile, JobDir};
 use crate::options::schedule::TimeBudget;
 
 /// A frame's accuracy under `-axt`, as recorded.
@@ -111,10 +111,15 @@ pub fn frame_accuracy(job: &JobDir, m: &Manifest, frame: u32) -> Result<f64> {
 fn decide(job: &JobDir, m: &Manifest, b: &TimeBudget, frame: u32) -> Result<FrameBudget> {
     let states = task::scan(&job.tasks())
         .with_context(|| format!("cannot list {}", job.tasks().display()))?;
+    let pieces = super::task::pieces(&states);
     let earlier = m.frames.iter().rev().filter(|f| f.index < frame);
     for fp in earlier {
-        let done = (0..fp.tiles.len())
-            .all(|i| matches!(states.get(&task_name(fp.index, i)), Some(TaskState::Done)));
+        let done = (0..fp.tiles.len()).all(|i| {
+            matches!(
+                super::task::tile_state(&states, &pieces, fp.index, i),
+                Some(TaskState::Done)
+            )
+        });
         if !done {
             continue;
         }
@@ -123,8 +128,9 @@ fn decide(job: &JobDir, m: &Manifest, b: &TimeBudget, frame: u32) -> Result<Fram
         };
         let mut cpu = 0.0;
         let mut complete = true;
-        for i in 0..fp.tiles.len() {
-            match tile::read(&job.tile_file(&task_name(fp.index, i))) {
+        let names = (0..fp.tiles.len()).flat_map(|i| super::task::task_names(&pieces, fp.index, i));
+        for name in names {
+            match tile::read(&job.tile_file(&name)) {
                 Ok((meta, _)) if meta.cpu_seconds.is_finite() && meta.cpu_seconds >= 0.0 => {
                     cpu += meta.cpu_seconds
                 }

@@ -77,6 +77,11 @@ struct TplanArgs {
     /// worker takes it over.
     #[arg(long, value_name = "SECONDS", default_value_t = super::manifest::DEFAULT_LEASE, verbatim_doc_comment)]
     lease: f64,
+    /// Never split a tile while it renders (by default a worker gives
+    /// part of its tile to idle workers when nothing is left to claim:
+    /// docs/batch.md).
+    #[arg(long, verbatim_doc_comment)]
+    no_split: bool,
     /// Seed the job's ambient store from a Tessera store/log or a
     /// Radiance ambient file.
     #[arg(long, value_name = "FILE", verbatim_doc_comment)]
@@ -224,6 +229,7 @@ fn tplan(a: TplanArgs) -> Result<i32> {
             .as_ref()
             .map(|p| (p.display().to_string(), a.path_frames.unwrap_or(0))),
         lease: Some(a.lease),
+        no_split: a.no_split,
         ambient: a.ambient.map(|p| p.display().to_string()),
         amb_force: a.amb_force,
         args: if a.allow_commands {

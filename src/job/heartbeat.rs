@@ -7,10 +7,17 @@
 //! modification times, so NFS attribute caching, coarse mtimes and skewed clocks cannot make a
 //! live worker look dead. (The wall-clock times in the file are for people and `tstat`.)
 
+use super::JobDir;
+use crate::ambient::Ambient;
+use crate::runinfo::process_cpu_seconds;
+use crate::session::store::AmbientStore;
+use crate::session::Session;
 use serde::{Deserialize, Serialize};
 use std::collections::HashMap;
 use std::path::Path;
-use std::sync::atomic::AtomicU64;
+use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
+use std::sync::{Arc, Mutex};
+use std::thread::JoinHandle;
 use std::time::{Duration, Instant};
 
 /// A worker's heartbeat file.
@@ -57,6 +64,9 @@ pub struct WorkerRecord {
     /// Tiles this worker took over from a stale (or earlier) owner.
     #[serde(default)]
     pub reclaimed: u64,
+    /// Pieces this worker split off the tiles it rendered ([`super::piece`]).
+    #[serde(default)]
+    pub split: u64,
     /// Ambient records read from other workers' logs or the merged store and skipped as
     /// invalid, and values the cache refused (docs/robustness.md).
     #[serde(default)]
@@ -134,6 +144,8 @@ pub struct Counters {
     pub idle_ns: AtomicU64,
     /// Tiles re-claimed from other owners.
     pub reclaimed: AtomicU64,
+    /// Pieces split off tiles while they rendered ([`super::piece`]).
+    pub split: AtomicU64,
     /// Rays traced.
     pub rays: AtomicU64,
 }
@@ -188,6 +200,134 @@ impl StaleWatcher {
             return false;
         }
         now.duration_since(entry.1) >= self.lease
+    }
+}
+
+/// What the heartbeat thread writes: the worker's record, its counters and those of its
+/// ambient calculation and store.
+pub(super) struct Beat {
+    job: JobDir,
+    record: Mutex<WorkerRecord>,
+    pub(super) counters: Arc<Counters>,
+    ambient: Option<Arc<Ambient>>,
+    store: Option<Arc<AmbientStore>>,
+    threads: usize,
+    start_cpu: f64,
+}
+
+impl Beat {
+    pub(super) fn new(
+        job: &JobDir,
+        worker_id: &str,
+        owner: &str,
+        session: &Session,
+        loops: usize,
+    ) -> Beat {
+        Beat {
+            job: job.clone(),
+            record: Mutex::new(WorkerRecord {
+                worker_id: worker_id.to_string(),
+                owner: owner.to_string(),
+                host: crate::runinfo::host_name(),
+                pid: std::process::id(),
+                state: "running".into(),
+                started_unix: super::unix_now(),
+                threads: loops,
+                ..WorkerRecord::default()
+            }),
+            counters: Arc::new(Counters::default()),
+            ambient: session.ambient.clone(),
+            store: session.store().cloned(),
+            threads: loops,
+            start_cpu: process_cpu_seconds().unwrap_or(0.0),
+        }
+    }
+
+    pub(super) fn set_state(&self, state: &str) {
+        if let Ok(mut r) = self.record.lock() {
+            r.state = state.into();
+        }
+    }
+
+    pub(super) fn write(&self, state: Option<&str>, error: Option<String>) {
+        let mut r = self.record.lock().unwrap_or_else(|e| e.into_inner());
+        if let Some(s) = state {
+            r.state = s.to_string();
+        }
+        if error.is_some() {
+            r.error = error;
+        }
+        let c = &self.counters;
+        let secs = |a: &std::sync::atomic::AtomicU64| a.load(Ordering::Relaxed) as f64 * 1e-9;
+        r.beat += 1;
+        r.updated_unix = super::unix_now();
+        r.tiles_done = c.tiles_done.load(Ordering::Relaxed);
+        // Times are summed over the tile loops: per loop, as for a one-thread worker.
+        let loops = self.threads.max(1) as f64;
+        r.t_render = secs(&c.render_ns) / loops;
+        r.t_idle = secs(&c.idle_ns) / loops;
+        if let Some(s) = &self.store {
+            let sc = s.counters();
+            r.t_sync = secs(&sc.sync_ns);
+            r.shared_in = sc.shared_in.load(Ordering::Relaxed);
+            r.shared_out = sc.shared_out.load(Ordering::Relaxed);
+            r.amb_flush = sc.flush_every.load(Ordering::Relaxed);
+        }
+        r.reclaimed = c.reclaimed.load(Ordering::Relaxed);
+        r.split = c.split.load(Ordering::Relaxed);
+        r.rays = c.rays.load(Ordering::Relaxed);
+        if let Some(a) = &self.ambient {
+            r.new_values = a.stats.made();
+            r.rejected = self.store.as_ref().map_or(0, |s| s.rejected()) + a.cache.refused();
+            // CPU of the threads that made the values: at most the process's CPU.
+            r.t_amb = secs(&a.stats.amb_nanos) / loops;
+        }
+        r.t_spec = (r.t_render - r.t_amb).max(0.0);
+        r.cpu_seconds = process_cpu_seconds()
+            .map(|c| c - self.start_cpu)
+            .unwrap_or(0.0);
+        if let Ok(json) = serde_json::to_vec_pretty(&*r) {
+            let _ = super::write_file_atomic(&self.job.worker_file(&r.owner), &json);
+        }
+    }
+
+    /// Start the heartbeat thread: it writes the record every beat and syncs the ambient
+    /// store twice per beat even when this worker makes no values.
+    pub(super) fn spawn(self: &Arc<Self>, interval: Duration) -> Beater {
+        let stop = Arc::new(AtomicBool::new(false));
+        let (beat, stop2) = (self.clone(), stop.clone());
+        let handle = std::thread::spawn(move || {
+            let half = interval / 2;
+            let mut last_beat = Instant::now();
+            while !stop2.load(Ordering::Relaxed) {
+                std::thread::park_timeout(half);
+                if stop2.load(Ordering::Relaxed) {
+                    break;
+                }
+                if let Some(s) = &beat.store {
+                    s.sync();
+                }
+                if last_beat.elapsed() >= interval {
+                    last_beat = Instant::now();
+                    beat.write(None, None);
+                }
+            }
+        });
+        Beater { stop, handle }
+    }
+}
+
+/// The running heartbeat thread.
+pub(super) struct Beater {
+    stop: Arc<AtomicBool>,
+    handle: JoinHandle<()>,
+}
+
+impl Beater {
+    pub(super) fn stop(self) {
+        self.stop.store(true, Ordering::Relaxed);
+        self.handle.thread().unpark();
+        let _ = self.handle.join();
     }
 }
 

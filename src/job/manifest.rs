@@ -82,8 +82,16 @@ pub struct Manifest {
     /// For a job over a point set: its rays' layout and output ([`super::points`]).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub points: Option<super::points::PointsPlan>,
+    /// Whether workers may split a tile while it renders ([`super::piece`]; `tplan
+    /// --no-split` turns it off; never for point jobs). Manifests without it: yes.
+    #[serde(default = "yes")]
+    pub split: bool,
     /// The frames.
     pub frames: Vec<FramePlan>,
+}
+
+fn yes() -> bool {
+    true
 }
 
 /// A manifest as stored: today's (`params`, `picture`) or one written before the options
@@ -110,6 +118,8 @@ struct ManifestFile {
     finish: Option<super::finish::Finish>,
     #[serde(default)]
     points: Option<super::points::PointsPlan>,
+    #[serde(default = "yes")]
+    split: bool,
     frames: Vec<FramePlan>,
 }
 
@@ -145,6 +155,7 @@ impl TryFrom<ManifestFile> for Manifest {
             frame_cost_estimate: f.frame_cost_estimate,
             finish: f.finish,
             points: f.points,
+            split: f.split,
             frames: f.frames,
         })
     }
@@ -279,6 +290,8 @@ pub struct PlanRequest {
     pub path: Option<(String, usize)>,
     /// `--lease SECONDS`.
     pub lease: Option<f64>,
+    /// `--no-split`: workers never split a tile while it renders.
+    pub no_split: bool,
     /// `--ambient FILE`: seed the job's ambient store.
     pub ambient: Option<String>,
     /// Accept an ambient store with another fingerprint.
@@ -494,6 +507,7 @@ pub fn create_job(dir: &Path, req: &PlanRequest) -> Result<Manifest> {
         workers_expected: workers,
         frame_cost_estimate,
         finish: req.finish.clone(),
+        split: !req.no_split && points.is_none(),
         points,
         frames,
     };
@@ -708,6 +722,7 @@ mod tests {
             frame_cost_estimate: None,
             finish: None,
             points: None,
+            split: true,
             frames: Vec::new(),
         };
         let now = serde_json::to_value(&m).unwrap();

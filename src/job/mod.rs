@@ -10,6 +10,8 @@
 //! JOB/tasks/<task>.todo        a tile nobody has claimed
 //! JOB/tasks/<task>.claim.<owner>   claimed by a worker incarnation
 //! JOB/tasks/<task>.done        finished (its result is in tiles/)
+//! JOB/tasks/<piece>.todo       a part of a tile split off while it rendered (job::piece),
+//!                              in the same states as a tile
 //! JOB/tiles/<task>.tile        a tile's pixels (written to a temporary, fsynced, renamed)
 //! JOB/amb/<owner>.log          each worker's append-only ambient log (one writer)
 //! JOB/workers/<owner>.json     each worker's heartbeat and counters (rewritten atomically)
@@ -34,12 +36,14 @@ mod jobscene;
 pub mod manifest;
 pub mod merge;
 pub mod path;
+pub mod piece;
 pub mod plan;
 pub mod points;
 pub mod probe;
 pub mod rad;
 pub mod share;
 pub mod sheet;
+pub mod split;
 pub mod status;
 pub mod task;
 pub mod tile;

@@ -31,7 +31,7 @@
 use serde::{Deserialize, Serialize};
 
 /// One tile: the pixel rectangle `[x0, x0+w) × [y0, y0+h)`, y counted from the top row.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize, Deserialize)]
 pub struct TileRect {
     /// Left column.
     pub x0: usize,
@@ -103,11 +103,22 @@ pub const TAIL: f64 = 0.35;
 /// few tiles (a tile's overhead would cost more than the balance gains), expensive frames
 /// many.
 pub fn tiles_for_cost(area: usize, workers: usize, frame_cost: f64, overhead: f64) -> usize {
+    tiles_for_tail(area, workers, frame_cost, overhead, TAIL)
+}
+
+/// [`tiles_for_cost`] with another tail factor than [`TAIL`] (for `tilesim --sweep --tail`).
+pub fn tiles_for_tail(
+    area: usize,
+    workers: usize,
+    frame_cost: f64,
+    overhead: f64,
+    tail: f64,
+) -> usize {
     let workers = workers.max(1);
     let most = TILES_PER_WORKER
         .saturating_mul(workers)
         .min((area / 16).max(1));
-    let best = workers as f64 * (TAIL * frame_cost / (PLANNED_PER_TILE * overhead)).sqrt();
+    let best = workers as f64 * (tail * frame_cost / (PLANNED_PER_TILE * overhead)).sqrt();
     if !best.is_finite() || area == 0 {
         return most;
     }

@@ -9,7 +9,7 @@
 use super::heartbeat::{read_record, WorkerRecord};
 use super::manifest::Manifest;
 use super::task::{self, TaskState};
-use super::{task_name, tile, JobDir};
+use super::{tile, JobDir};
 use anyhow::{Context, Result};
 use serde::Serialize;
 
@@ -66,6 +66,9 @@ pub struct Aggregate {
     pub tiles_done: u64,
     /// Tiles re-claimed from stale (or earlier) owners.
     pub reclaimed: u64,
+    /// Pieces split off tiles while they rendered.
+    #[serde(default)]
+    pub split: u64,
     /// ΣT_spec.
     pub t_spec: f64,
     /// ΣT_amb.
@@ -101,8 +104,14 @@ pub struct JobStatus {
     pub frames: Vec<FrameProgress>,
     /// Tiles in all.
     pub tiles: usize,
-    /// Done in all.
+    /// Done in all (a tile with the pieces split off it).
     pub done: usize,
+    /// Pieces split off tiles while they rendered ([`super::piece`]).
+    #[serde(default)]
+    pub pieces: usize,
+    /// Of those, done.
+    #[serde(default)]
+    pub pieces_done: usize,
     /// Estimated seconds left (None before the first tile).
     pub eta_seconds: Option<f64>,
     /// The job's lease (seconds a silent worker keeps its tiles).
@@ -144,6 +153,7 @@ pub fn status(job: &JobDir) -> Result<JobStatus> {
     let m = Manifest::load(job)?;
     let states = task::scan(&job.tasks())
         .with_context(|| format!("cannot list {}", job.tasks().display()))?;
+    let pieces = super::task::pieces(&states);
     let mut st = JobStatus {
         job: job.root().display().to_string(),
         ..JobStatus::default()
@@ -160,16 +170,18 @@ pub fn status(job: &JobDir) -> Result<JobStatus> {
             ..FrameProgress::default()
         };
         for (i, r) in f.tiles.iter().enumerate() {
-            match states.get(&task_name(f.index, i)) {
+            match super::task::tile_state(&states, &pieces, f.index, i) {
                 Some(TaskState::Done) => {
                     p.done += 1;
                     done_px += r.area();
-                    if let Ok((meta, _)) = tile::read(&job.tile_file(&task_name(f.index, i))) {
-                        p.cpu_seconds += meta.cpu_seconds;
-                        p.wall_seconds += meta.wall_seconds;
-                        p.rays += meta.rays;
-                        p.new_values += meta.new_values;
-                        p.ambient_seconds += meta.ambient_seconds;
+                    for name in super::task::task_names(&pieces, f.index, i) {
+                        if let Ok((meta, _)) = tile::read(&job.tile_file(&name)) {
+                            p.cpu_seconds += meta.cpu_seconds;
+                            p.wall_seconds += meta.wall_seconds;
+                            p.rays += meta.rays;
+                            p.new_values += meta.new_values;
+                            p.ambient_seconds += meta.ambient_seconds;
+                        }
                     }
                 }
                 Some(TaskState::Claimed(_)) => {
@@ -189,6 +201,10 @@ pub fn status(job: &JobDir) -> Result<JobStatus> {
         st.tiles += p.tiles;
         st.done += p.done;
         st.frames.push(p);
+    }
+    for v in pieces.values() {
+        st.pieces += v.len();
+        st.pieces_done += v.iter().filter(|(_, s)| *s == TaskState::Done).count();
     }
     let mut names: Vec<_> = std::fs::read_dir(job.workers())
         .with_context(|| format!("cannot list {}", job.workers().display()))?
@@ -228,6 +244,7 @@ pub fn status(job: &JobDir) -> Result<JobStatus> {
         st.shown_state.push(shown);
         a.tiles_done += r.tiles_done;
         a.reclaimed += r.reclaimed;
+        a.split += r.split;
         a.t_spec += r.t_spec;
         a.t_amb += r.t_amb;
         a.t_idle += r.t_idle;
@@ -245,7 +262,8 @@ pub fn status(job: &JobDir) -> Result<JobStatus> {
     if first.is_finite() {
         a.wall_seconds = (last - first).max(0.0);
     }
-    a.unreported_tiles = (st.done as u64).saturating_sub(a.tiles_done);
+    // Results: of the plan's tiles that are done with their pieces, and of the pieces.
+    a.unreported_tiles = ((st.done + st.pieces_done) as u64).saturating_sub(a.tiles_done);
     let busy = a.t_spec + a.t_amb;
     if done_px > 0 && busy > 0.0 {
         let per_px = busy / done_px as f64;
@@ -289,17 +307,28 @@ pub fn costs(job: &JobDir, frame: u32) -> Result<serde_json::Value> {
     let fp = m
         .frame(frame)
         .ok_or_else(|| anyhow::anyhow!("the job has no frame {frame}"))?;
+    let states = task::scan(&job.tasks())
+        .with_context(|| format!("cannot list {}", job.tasks().display()))?;
+    let pieces = super::task::pieces(&states);
     let mut tiles = Vec::new();
-    for i in 0..fp.tiles.len() {
-        if let Ok((meta, _)) = tile::read(&job.tile_file(&task_name(frame, i))) {
-            let secs = if meta.cpu_seconds > 0.0 {
-                meta.cpu_seconds
-            } else {
-                meta.wall_seconds
-            };
+    for (i, r) in fp.tiles.iter().enumerate() {
+        // A tile with the pieces split off it: their costs together, over the tile.
+        let (mut secs, mut values, mut any) = (0.0, 0, false);
+        for name in super::task::task_names(&pieces, frame, i) {
+            if let Ok((meta, _)) = tile::read(&job.tile_file(&name)) {
+                secs += if meta.cpu_seconds > 0.0 {
+                    meta.cpu_seconds
+                } else {
+                    meta.wall_seconds
+                };
+                values += meta.new_values;
+                any = true;
+            }
+        }
+        if any {
             tiles.push(serde_json::json!({
-                "x0": meta.x0, "y0": meta.y0, "w": meta.w, "h": meta.h, "seconds": secs,
-                "new_values": meta.new_values
+                "x0": r.x0, "y0": r.y0, "w": r.w, "h": r.h, "seconds": secs,
+                "new_values": values
             }));
         }
     }
@@ -311,6 +340,13 @@ pub fn render_text(st: &JobStatus) -> String {
     use std::fmt::Write;
     let mut s = String::new();
     let _ = writeln!(s, "job {}: {} of {} tiles done", st.job, st.done, st.tiles);
+    if st.pieces > 0 {
+        let _ = writeln!(
+            s,
+            "  {} piece(s) split off tiles while they rendered, {} done",
+            st.pieces, st.pieces_done
+        );
+    }
     let missing: usize = st.frames.iter().map(|f| f.missing).sum();
     if missing > 0 {
         let _ = writeln!(

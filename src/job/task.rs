@@ -12,7 +12,7 @@
 //! `ENOENT`. On NFS a retransmitted rename can report `ENOENT` although it succeeded, so a
 //! failed rename is followed by a check of whether the target name exists.
 
-use super::{check_owner, parse_task_name};
+use super::check_owner;
 use std::collections::HashMap;
 use std::io;
 use std::path::{Path, PathBuf};
@@ -28,11 +28,11 @@ pub enum TaskState {
     Done,
 }
 
-/// Parse a `tasks/` entry name into (task, state); None for anything else (temporary
-/// files, hand-made junk).
+/// Parse a `tasks/` entry name (a tile's or a piece's, [`super::piece`]) into (task, state);
+/// None for anything else (temporary files, hand-made junk).
 pub fn parse_entry(name: &str) -> Option<(String, TaskState)> {
     let (task, rest) = name.split_once('.')?;
-    parse_task_name(task)?;
+    super::piece::parse(task)?;
     let state = match rest {
         "todo" => TaskState::Todo,
         "done" => TaskState::Done,
@@ -125,6 +125,73 @@ pub fn scan(tasks: &Path) -> io::Result<HashMap<String, TaskState>> {
     Ok(out)
 }
 
+/// A tile's pieces in a snapshot: by (frame, tile), each piece's rectangle and state.
+pub type Pieces = HashMap<(u32, usize), Vec<(super::plan::TileRect, TaskState)>>;
+
+/// The pieces of every tile in a snapshot of `tasks/` ([`super::task::scan`]): by (frame,
+/// tile), each piece's rectangle and state, the rectangles in name order.
+pub fn pieces(states: &HashMap<String, TaskState>) -> Pieces {
+    let mut out: Pieces = HashMap::new();
+    for (name, st) in states {
+        if let Some(super::piece::TaskId {
+            frame,
+            tile,
+            piece: Some(r),
+        }) = super::piece::parse(name)
+        {
+            out.entry((frame, tile)).or_default().push((r, st.clone()));
+        }
+    }
+    for v in out.values_mut() {
+        v.sort_by_key(|(r, _)| (r.y0, r.x0, r.h, r.w));
+    }
+    out
+}
+
+/// The names of tile `tile` of frame `frame` and of the pieces split off it.
+pub fn task_names(pieces: &Pieces, frame: u32, tile: usize) -> Vec<String> {
+    let mut v = vec![super::task_name(frame, tile)];
+    if let Some(ps) = pieces.get(&(frame, tile)) {
+        v.extend(
+            ps.iter()
+                .map(|(r, _)| super::piece::piece_name(frame, tile, r)),
+        );
+    }
+    v
+}
+
+/// The state of a tile with its pieces: done when the tile and every piece are done,
+/// claimed when any of them is claimed (by the first such owner), else the tile's own.
+pub fn tile_state(
+    states: &HashMap<String, TaskState>,
+    pieces: &Pieces,
+    frame: u32,
+    tile: usize,
+) -> Option<TaskState> {
+    let own = states.get(&super::task_name(frame, tile))?.clone();
+    let mut claimed = None;
+    let mut all_done = own == TaskState::Done;
+    for (_, st) in pieces.get(&(frame, tile)).map_or(&[][..], |v| &v[..]) {
+        match st {
+            TaskState::Done => {}
+            TaskState::Claimed(o) => {
+                all_done = false;
+                claimed.get_or_insert_with(|| o.clone());
+            }
+            TaskState::Todo => all_done = false,
+        }
+    }
+    Some(if all_done {
+        TaskState::Done
+    } else if let TaskState::Claimed(o) = own {
+        TaskState::Claimed(o)
+    } else if let Some(o) = claimed {
+        TaskState::Claimed(o)
+    } else {
+        own
+    })
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -151,6 +218,32 @@ mod tests {
         ] {
             assert_eq!(parse_entry(bad), None, "{bad}");
         }
+    }
+
+    #[test]
+    fn tile_state_needs_every_piece() {
+        let mut st = HashMap::new();
+        st.insert("f00000-t00001".to_string(), TaskState::Done);
+        let p = super::super::piece::piece_name(
+            0,
+            1,
+            &super::super::plan::TileRect {
+                x0: 0,
+                y0: 6,
+                w: 12,
+                h: 6,
+            },
+        );
+        st.insert(p.clone(), TaskState::Claimed("w.0000abcd".into()));
+        let pc = pieces(&st);
+        assert_eq!(
+            tile_state(&st, &pc, 0, 1),
+            Some(TaskState::Claimed("w.0000abcd".into()))
+        );
+        st.insert(p, TaskState::Done);
+        let pc = pieces(&st);
+        assert_eq!(tile_state(&st, &pc, 0, 1), Some(TaskState::Done));
+        assert_eq!(tile_state(&st, &pc, 0, 2), None);
     }
 
     #[test]

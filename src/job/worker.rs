@@ -14,25 +14,20 @@
 //!    back to `todo` and the worker exits with the error.
 
 use super::commit::{commit_loop, CommitTarget, Finished};
-use super::heartbeat::{
-    add_time, beat_interval, read_record, Counters, StaleWatcher, WorkerRecord,
-};
+use super::heartbeat::{add_time, beat_interval, read_record, Beat, StaleWatcher};
 use super::manifest::{FramePlan, Manifest};
 use super::plan::TileRect;
 use super::task::{self, TaskState};
 use super::tile::{self, ResultDir, TileMeta};
 use super::{check_worker_id, default_worker_id, JobDir};
-use crate::ambient::Ambient;
 use crate::render::RenderProgress;
-use crate::runinfo::process_cpu_seconds;
-use crate::session::store::{AmbientStore, FlushPolicy};
+use crate::session::store::FlushPolicy;
 use crate::session::{Region, Session};
 use anyhow::{anyhow, bail, Context, Result};
 use std::collections::{HashMap, HashSet};
 use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
 use std::sync::{Arc, Mutex};
-use std::thread::JoinHandle;
 use std::time::{Duration, Instant};
 
 /// Worker settings (`tpiece` options).
@@ -77,127 +72,6 @@ pub struct WorkerSummary {
     pub tiles: u64,
     /// Tiles re-claimed from stale owners.
     pub reclaimed: u64,
-}
-
-/// What the heartbeat thread writes: the worker's record, its counters and those of its
-/// ambient calculation and store.
-struct Beat {
-    job: JobDir,
-    record: Mutex<WorkerRecord>,
-    counters: Arc<Counters>,
-    ambient: Option<Arc<Ambient>>,
-    store: Option<Arc<AmbientStore>>,
-    threads: usize,
-    start_cpu: f64,
-}
-
-impl Beat {
-    fn new(job: &JobDir, worker_id: &str, owner: &str, session: &Session, loops: usize) -> Beat {
-        Beat {
-            job: job.clone(),
-            record: Mutex::new(WorkerRecord {
-                worker_id: worker_id.to_string(),
-                owner: owner.to_string(),
-                host: crate::runinfo::host_name(),
-                pid: std::process::id(),
-                state: "running".into(),
-                started_unix: super::unix_now(),
-                threads: loops,
-                ..WorkerRecord::default()
-            }),
-            counters: Arc::new(Counters::default()),
-            ambient: session.ambient.clone(),
-            store: session.store().cloned(),
-            threads: loops,
-            start_cpu: process_cpu_seconds().unwrap_or(0.0),
-        }
-    }
-
-    fn set_state(&self, state: &str) {
-        if let Ok(mut r) = self.record.lock() {
-            r.state = state.into();
-        }
-    }
-
-    fn write(&self, state: Option<&str>, error: Option<String>) {
-        let mut r = self.record.lock().unwrap_or_else(|e| e.into_inner());
-        if let Some(s) = state {
-            r.state = s.to_string();
-        }
-        if error.is_some() {
-            r.error = error;
-        }
-        let c = &self.counters;
-        let secs = |a: &std::sync::atomic::AtomicU64| a.load(Ordering::Relaxed) as f64 * 1e-9;
-        r.beat += 1;
-        r.updated_unix = super::unix_now();
-        r.tiles_done = c.tiles_done.load(Ordering::Relaxed);
-        // Times are summed over the tile loops: per loop, as for a one-thread worker.
-        let loops = self.threads.max(1) as f64;
-        r.t_render = secs(&c.render_ns) / loops;
-        r.t_idle = secs(&c.idle_ns) / loops;
-        if let Some(s) = &self.store {
-            let sc = s.counters();
-            r.t_sync = secs(&sc.sync_ns);
-            r.shared_in = sc.shared_in.load(Ordering::Relaxed);
-            r.shared_out = sc.shared_out.load(Ordering::Relaxed);
-            r.amb_flush = sc.flush_every.load(Ordering::Relaxed);
-        }
-        r.reclaimed = c.reclaimed.load(Ordering::Relaxed);
-        r.rays = c.rays.load(Ordering::Relaxed);
-        if let Some(a) = &self.ambient {
-            r.new_values = a.stats.made();
-            r.rejected = self.store.as_ref().map_or(0, |s| s.rejected()) + a.cache.refused();
-            // CPU of the threads that made the values: at most the process's CPU.
-            r.t_amb = secs(&a.stats.amb_nanos) / loops;
-        }
-        r.t_spec = (r.t_render - r.t_amb).max(0.0);
-        r.cpu_seconds = process_cpu_seconds()
-            .map(|c| c - self.start_cpu)
-            .unwrap_or(0.0);
-        if let Ok(json) = serde_json::to_vec_pretty(&*r) {
-            let _ = super::write_file_atomic(&self.job.worker_file(&r.owner), &json);
-        }
-    }
-
-    /// Start the heartbeat thread: it writes the record every beat and syncs the ambient
-    /// store twice per beat even when this worker makes no values.
-    fn spawn(self: &Arc<Self>, interval: Duration) -> Beater {
-        let stop = Arc::new(AtomicBool::new(false));
-        let (beat, stop2) = (self.clone(), stop.clone());
-        let handle = std::thread::spawn(move || {
-            let half = interval / 2;
-            let mut last_beat = Instant::now();
-            while !stop2.load(Ordering::Relaxed) {
-                std::thread::park_timeout(half);
-                if stop2.load(Ordering::Relaxed) {
-                    break;
-                }
-                if let Some(s) = &beat.store {
-                    s.sync();
-                }
-                if last_beat.elapsed() >= interval {
-                    last_beat = Instant::now();
-                    beat.write(None, None);
-                }
-            }
-        });
-        Beater { stop, handle }
-    }
-}
-
-/// The running heartbeat thread.
-struct Beater {
-    stop: Arc<AtomicBool>,
-    handle: JoinHandle<()>,
-}
-
-impl Beater {
-    fn stop(self) {
-        self.stop.store(true, Ordering::Relaxed);
-        self.handle.thread().unpark();
-        let _ = self.handle.join();
-    }
 }
 
 /// The shortest wait between two looks at `tasks/` while other workers hold every tile left.
@@ -326,6 +200,8 @@ struct Claim {
     name: String,
     frame: u32,
     tile: usize,
+    /// A piece's rectangle (None: the whole tile).
+    piece: Option<TileRect>,
     /// Taken over from a stale owner.
     reclaimed: bool,
 }
@@ -384,10 +260,12 @@ struct Worker<'a> {
 impl Worker<'_> {
     fn work(&mut self) -> Result<()> {
         // While waiting, look again after 20 ms, then 1.5× longer each time nothing changed
-        // (up to a tenth of the lease, at most 0.25 s), and after 20 ms again whenever another
-        // tile got done: a worker notices the last tile's end within a fraction of the time
-        // it waited, without scanning `tasks/` at a fixed high rate.
-        let cap = (self.m.lease_seconds / 10.0).clamp(0.02, 0.25);
+        // (up to a tenth of the lease, at most 0.25 s, or 0.1 s when tiles may be split and a
+        // new piece is what it waits for), and after 20 ms again whenever another tile got
+        // done: a worker notices the last tile's end within a fraction of the time it waited,
+        // without scanning `tasks/` at a fixed high rate.
+        let most = if self.m.split { 0.1 } else { 0.25 };
+        let cap = (self.m.lease_seconds / 10.0).clamp(0.02, most);
         let mut poll = MIN_POLL;
         let mut done_seen = 0;
         loop {
@@ -500,17 +378,15 @@ impl Worker<'_> {
                     name: name.clone(),
                     frame: *f,
                     tile: *t,
+                    piece: None,
                     reclaimed: false,
                 }));
             }
         }
         let states = self.scan()?;
         self.done_count = states.values().filter(|s| **s == TaskState::Done).count();
-        if self
-            .all
-            .iter()
-            .all(|(n, _, _)| states.get(n) == Some(&TaskState::Done))
-        {
+        // Every entry done: the plan's tasks (all present, `scan` checked) and the pieces.
+        if states.values().all(|s| *s == TaskState::Done) {
             return Ok(Next::Done);
         }
         // A todo entry can reappear only when a worker released its tile.
@@ -521,6 +397,9 @@ impl Worker<'_> {
         {
             self.cursor = 0;
             return Ok(Next::Retry);
+        }
+        if let Some(c) = self.claim_piece(&states)? {
+            return Ok(Next::Tile(c));
         }
         let reclaimed = self.reclaim_stale(&states)?;
         self.first_scan = false;
@@ -560,16 +439,54 @@ impl Worker<'_> {
         Ok(states)
     }
 
-    /// Re-claim a tile whose owner is stale (or an earlier incarnation of this worker id,
-    /// at the first scan).
-    fn reclaim_stale(&mut self, states: &HashMap<String, TaskState>) -> Result<Option<Claim>> {
-        for (name, f, t) in self.all {
-            let Some(TaskState::Claimed(o)) = states.get(name) else {
+    /// Claim a piece split off a tile ([`super::piece`]) that is `todo`, the first in
+    /// name order.
+    fn claim_piece(&mut self, states: &HashMap<String, TaskState>) -> Result<Option<Claim>> {
+        let mut todo: Vec<&String> = states
+            .iter()
+            .filter(|(n, s)| **s == TaskState::Todo && n.len() > 13)
+            .map(|(n, _)| n)
+            .collect();
+        todo.sort();
+        for name in todo {
+            let Some(id) = super::piece::parse(name) else {
                 continue;
             };
-            if o == self.owner {
+            if id.piece.is_none() {
                 continue;
             }
+            let claimed = self.take(name, || {
+                task::claim(&self.tasks_dir, name, self.owner)
+                    .with_context(|| format!("cannot claim {name} in {}", self.tasks_dir.display()))
+            })?;
+            if claimed {
+                return Ok(Some(Claim {
+                    name: name.clone(),
+                    frame: id.frame,
+                    tile: id.tile,
+                    piece: id.piece,
+                    reclaimed: false,
+                }));
+            }
+        }
+        Ok(None)
+    }
+
+    /// Re-claim a tile or piece whose owner is stale (or an earlier incarnation of this
+    /// worker id, at the first scan).
+    fn reclaim_stale(&mut self, states: &HashMap<String, TaskState>) -> Result<Option<Claim>> {
+        let mut held: Vec<(&String, &String)> = states
+            .iter()
+            .filter_map(|(n, s)| match s {
+                TaskState::Claimed(o) if o != self.owner => Some((n, o)),
+                _ => None,
+            })
+            .collect();
+        held.sort();
+        for (name, o) in held {
+            let Some(id) = super::piece::parse(name) else {
+                continue;
+            };
             let same_id = o.rsplit_once('.').map(|(id, _)| id) == Some(self.worker_id);
             let stale = (self.first_scan && same_id)
                 || self
@@ -586,8 +503,9 @@ impl Worker<'_> {
                 }
                 return Ok(Some(Claim {
                     name: name.clone(),
-                    frame: *f,
-                    tile: *t,
+                    frame: id.frame,
+                    tile: id.tile,
+                    piece: id.piece,
                     reclaimed: true,
                 }));
             }
@@ -602,10 +520,15 @@ impl Worker<'_> {
             .m
             .frame(c.frame)
             .ok_or_else(|| anyhow!("task {name}: no frame {}", c.frame))?;
-        let rect = *fp
+        let tile_rect = *fp
             .tiles
             .get(c.tile)
             .ok_or_else(|| anyhow!("task {name}: no tile {}", c.tile))?;
+        let rect = match c.piece {
+            Some(p) if super::piece::in_tile(&p, &tile_rect) => p,
+            Some(_) => bail!("task {name}: the piece lies outside its tile"),
+            None => tile_rect,
+        };
         let out = self.job.tile_file(name);
         // A re-claimed tile whose result was written before its owner died needs no render.
         if c.reclaimed && self.result_exists(&out, &rect) {
@@ -734,6 +657,36 @@ impl Worker<'_> {
                 rect,
                 &progress,
             )?,
+            None if self.m.split => {
+                let last = self.all.last().map_or("", |(n, _, _)| n.as_str());
+                let mut sp = super::split::Splitter::new(
+                    &self.tasks_dir,
+                    (&c.name, self.owner),
+                    last,
+                    c.frame,
+                    c.tile,
+                );
+                let pixels = self.session.render_here_split(
+                    &self.here,
+                    &fs,
+                    region,
+                    &progress,
+                    &mut |at| sp.hook(at),
+                )?;
+                if self.wo.verbose && !sp.made.is_empty() {
+                    eprintln!(
+                        "tpiece {}: {} split off {}",
+                        self.owner,
+                        c.name,
+                        sp.made.join(", ")
+                    );
+                }
+                self.beat
+                    .counters
+                    .split
+                    .fetch_add(sp.made.len() as u64, Ordering::Relaxed);
+                pixels
+            }
             None => self
                 .session
                 .render_here(&self.here, &fs, region, &progress)?,

@@ -6,6 +6,7 @@ pub mod picture;
 pub mod ray;
 pub mod sampler;
 pub mod shading;
+pub mod splitting;
 pub mod srcdraw;
 pub mod trace;
 pub mod world;

@@ -56,8 +56,8 @@ pub struct RenderProgress {
 
 /// A traced sample: colour and distance of the first hit (for the depth test).
 #[derive(Clone, Copy, Debug)]
-struct Sample {
-    color: Color,
+pub(super) struct Sample {
+    pub(super) color: Color,
     dist: f64,
 }
 
@@ -72,7 +72,13 @@ pub(super) fn sample_point(fs: &FrameSetup, px: usize, py_top: usize) -> (Sample
     (rng, x, y)
 }
 
-fn sample_pixel(tr: &Tracer, fs: &FrameSetup, px: usize, py_top: usize, rays: &mut u64) -> Sample {
+pub(super) fn sample_pixel(
+    tr: &Tracer,
+    fs: &FrameSetup,
+    px: usize,
+    py_top: usize,
+    rays: &mut u64,
+) -> Sample {
     let (mut rng, x, y) = sample_point(fs, px, py_top);
     let Some((org, dir, tmax)) = fs.view.ray(x, y) else {
         return Sample {
@@ -342,7 +348,7 @@ pub fn render_region(
 
 /// Buffers [`render_cell`] reuses from cell to cell.
 #[derive(Default)]
-struct CellScratch {
+pub(super) struct CellScratch {
     grid: Vec<Option<Sample>>,
     known: Vec<Option<Sample>>,
     values: Vec<Option<Color>>,
@@ -352,10 +358,10 @@ struct CellScratch {
 /// Samples a cell shares with its neighbours: its top and bottom rows (starting at the cell's
 /// left column, in the band lines shared with the bands above and below) and its left column
 /// (the right column of the cell before it, which the cell replaces with its own).
-struct CellEdges<'a> {
-    top: &'a mut [Option<Sample>],
-    bottom: &'a mut [Option<Sample>],
-    left: &'a mut Vec<Option<Sample>>,
+pub(super) struct CellEdges<'a> {
+    pub(super) top: &'a mut [Option<Sample>],
+    pub(super) bottom: &'a mut [Option<Sample>],
+    pub(super) left: &'a mut Vec<Option<Sample>>,
 }
 
 /// The side in pixels of the cells of the adaptive sampling grid for `-ps` (1: every pixel
@@ -409,7 +415,7 @@ fn split(a: usize, b: usize) -> impl Iterator<Item = (usize, usize)> {
 }
 
 /// The rows `[y0, y1)` of the overture's global grid of step `fs.overture` (none at 0).
-fn overture_rows(fs: &FrameSetup, y0: usize, y1: usize) -> Vec<usize> {
+pub(super) fn overture_rows(fs: &FrameSetup, y0: usize, y1: usize) -> Vec<usize> {
     match fs.overture {
         0 => Vec::new(),
         step => (y0.div_ceil(step) * step..y1).step_by(step).collect(),
@@ -419,7 +425,7 @@ fn overture_rows(fs: &FrameSetup, y0: usize, y1: usize) -> Vec<usize> {
 /// The overture pass of [`render_region`] (see [`FrameSetup::overture`]): samples the pixels
 /// of the grid rows `rows` between columns `x0` and `x1` and discards their colours; the
 /// ambient values they make stay in the cache. Each row counts in `progress`.
-fn overture(
+pub(super) fn overture(
     tr: &Tracer,
     fs: &FrameSetup,
     x0: usize,
@@ -447,7 +453,7 @@ fn overture(
     });
 }
 
-fn to_f32(c: Color) -> [f32; 3] {
+pub(super) fn to_f32(c: Color) -> [f32; 3] {
     // Finite and non-negative, and within f32's range: a radiance beyond it (a light of
     // 1e308) would otherwise become an infinite pixel.
     let c = sanitize(c).min(Color::splat(f32::MAX as f64));
@@ -455,7 +461,7 @@ fn to_f32(c: Color) -> [f32; 3] {
 }
 
 /// Adaptive sampling of one grid cell; emits each pixel the cell owns exactly once.
-fn render_cell(
+pub(super) fn render_cell(
     tr: &Tracer,
     fs: &FrameSetup,
     (cx, cy, ps, full): (usize, usize, usize, bool),

@@ -20,6 +20,7 @@ use crate::ambient::log::{LogHeader, LogReader, LogWriter};
 use crate::ambient::Ambient;
 use crate::light::LightSet;
 use crate::options::RenderParams;
+use crate::render::splitting::{render_region_split, Cut, SplitPoint};
 use crate::render::world::Scene;
 use crate::render::{render_region, FrameSetup, RenderProgress, Tracer};
 use crate::runinfo::{process_origin_id, thread_count};
@@ -309,6 +310,31 @@ impl Session {
         let pixels = here.install(|| match &self.ambient {
             Some(a) => a.with_accuracy(fs.aa, run),
             None => run(),
+        });
+        if let Some(e) = self.scene.fatal_error() {
+            anyhow::bail!("{e}");
+        }
+        Ok(pixels)
+    }
+
+    /// [`Session::render_here`] on the calling thread in reading order, with `hook` asked
+    /// before each cell whether to give part of the region away
+    /// ([`crate::render::splitting`]); the pixels given away stay zero.
+    pub fn render_here_split(
+        &self,
+        here: &rayon::ThreadPool,
+        fs: &FrameSetup,
+        r: Region,
+        progress: &RenderProgress,
+        hook: &mut (dyn FnMut(&SplitPoint) -> Option<Cut> + Send),
+    ) -> Result<Vec<[f32; 3]>> {
+        let tracer = self.tracer();
+        let region = (r.x0, r.y0, r.x1, r.y1);
+        let pixels = here.install(|| match &self.ambient {
+            Some(a) => a.with_accuracy(fs.aa, || {
+                render_region_split(&tracer, fs, region, progress, hook)
+            }),
+            None => render_region_split(&tracer, fs, region, progress, hook),
         });
         if let Some(e) = self.scene.fatal_error() {
             anyhow::bail!("{e}");

@@ -1,0 +1,228 @@
+//! When a worker splits the task it renders ([`super::piece`]; docs/batch.md, "Splitting a
+//! tile in progress").
+//!
+//! Before each cell the renderer asks [`Splitter::hook`]. At most every [`CHECK_SECONDS`] of
+//! rendering it looks whether anything is left to claim: the plan's last task still `todo`
+//! (one `stat`), else any `todo` entry in `tasks/` (one listing). When nothing is, and what is
+//! left of its task, estimated from its seconds per cell so far, is at least twice
+//! [`MIN_PIECE_SECONDS`], it gives away half of what is left: the lower half of the bands
+//! below the one in progress when there are two or more, else the right half of the cells
+//! left in the band in progress (and below it). The new piece's `todo` entry is created
+//! (`O_EXCL`) and the directory synced before the renderer skips those cells; when that
+//! fails (another process made the same piece, a full disk) nothing is cut.
+
+use super::piece::piece_name;
+use super::plan::TileRect;
+use crate::render::splitting::{Cut, SplitPoint};
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+/// Seconds of rendering between two looks at `tasks/`.
+pub const CHECK_SECONDS: f64 = 0.05;
+
+/// The least estimated cost of each part of a split, seconds: a piece costs a claim, a
+/// result and an idle worker's poll (20–250 ms) before it starts.
+pub const MIN_PIECE_SECONDS: f64 = 0.05;
+
+/// Test builds with `TESSERA_FAULT_SPLIT_EAGER`: the fewest cells left that are split.
+const EAGER_MIN_CELLS: usize = 16;
+
+/// One task's splitting while it renders.
+pub struct Splitter {
+    tasks: PathBuf,
+    /// The `todo` entry of the plan's last task.
+    last_todo: PathBuf,
+    /// This task's claim entry (gone when another worker took the task over).
+    claim: PathBuf,
+    frame: u32,
+    tile: usize,
+    start: Instant,
+    last_look: Instant,
+    /// Test builds: split whenever nothing is left to claim and at least
+    /// [`EAGER_MIN_CELLS`] cells are, whatever the estimate (`TESSERA_FAULT_SPLIT_EAGER`).
+    eager: bool,
+    /// Names of the pieces made.
+    pub made: Vec<String>,
+}
+
+impl Splitter {
+    /// A splitter for task `task` of tile `tile` of frame `frame`, claimed by `owner`;
+    /// `last` is the name of the plan's last task.
+    pub fn new(
+        tasks: &Path,
+        (task, owner): (&str, &str),
+        last: &str,
+        frame: u32,
+        tile: usize,
+    ) -> Splitter {
+        let now = Instant::now();
+        Splitter {
+            tasks: tasks.to_path_buf(),
+            last_todo: tasks.join(format!("{last}.todo")),
+            claim: super::task::entry(tasks, task, &super::task::TaskState::Claimed(owner.into())),
+            frame,
+            tile,
+            start: now,
+            last_look: now,
+            eager: crate::fault::injected("SPLIT_EAGER"),
+            made: Vec::new(),
+        }
+    }
+
+    /// The renderer's hook: a cut when part of the task was given away as a new piece.
+    pub fn hook(&mut self, at: &SplitPoint) -> Option<Cut> {
+        if at.done == 0 {
+            return None;
+        }
+        if self.eager && at.cells_left() < EAGER_MIN_CELLS {
+            return None;
+        }
+        if !self.eager {
+            if self.last_look.elapsed().as_secs_f64() < CHECK_SECONDS {
+                return None;
+            }
+            self.last_look = Instant::now();
+            let left = self.start.elapsed().as_secs_f64() / at.done as f64 * at.cells_left() as f64;
+            if left < 2.0 * MIN_PIECE_SECONDS {
+                return None;
+            }
+        }
+        let (cut, rect) = choose(at)?;
+        // Only the task's owner splits it (a worker resumed after its lease ran out does not).
+        if !self.nothing_to_claim() || !self.claim.exists() {
+            return None;
+        }
+        let name = piece_name(self.frame, self.tile, &rect);
+        if !create_todo(&self.tasks, &name) {
+            return None;
+        }
+        self.made.push(name);
+        Some(cut)
+    }
+
+    /// Whether no `todo` entry is left in `tasks/`.
+    fn nothing_to_claim(&self) -> bool {
+        if self.last_todo.exists() {
+            return false;
+        }
+        let Ok(dir) = std::fs::read_dir(&self.tasks) else {
+            return false;
+        };
+        !dir.flatten().any(|e| {
+            e.file_name()
+                .to_str()
+                .is_some_and(|n| n.ends_with(".todo") && !n.starts_with('.'))
+        })
+    }
+}
+
+/// The cut for what is left at `at`, and the piece it makes: half the bands below the one in
+/// progress when there are two or more, else half the cells left in this band (with the
+/// same columns below).
+pub fn choose(at: &SplitPoint) -> Option<(Cut, TileRect)> {
+    let rows = at.rows_left();
+    if rows.len() >= 2 {
+        let k = rows[rows.len() / 2];
+        let rect = TileRect {
+            x0: at.x0,
+            y0: k,
+            w: at.x1 - at.x0,
+            h: at.y1 - k,
+        };
+        return Some((Cut::Rows(k), rect));
+    }
+    let cols = at.columns_left();
+    if cols.len() < 2 {
+        return None;
+    }
+    let q = cols[cols.len() / 2];
+    let rect = TileRect {
+        x0: q,
+        y0: at.band.0,
+        w: at.x1 - q,
+        h: at.y1 - at.band.0,
+    };
+    Some((Cut::Cols(q), rect))
+}
+
+/// Create the piece `name`: first its marker `tasks/<name>.made` (`O_EXCL`: each piece is
+/// made once, whatever state it has reached since, by whichever process), then its
+/// `tasks/<name>.todo`, then sync the directory; whether it was made.
+fn create_todo(tasks: &Path, name: &str) -> bool {
+    let create = |suffix: &str| {
+        let mut o = std::fs::OpenOptions::new();
+        o.write(true).create_new(true);
+        #[cfg(unix)]
+        {
+            use std::os::unix::fs::OpenOptionsExt;
+            o.mode(0o666);
+        }
+        o.open(tasks.join(format!("{name}.{suffix}")))
+    };
+    if create(MADE).is_err() || create("todo").is_err() {
+        return false;
+    }
+    if let Ok(d) = crate::safefile::open_dir(tasks) {
+        let _ = d.sync_all();
+    }
+    true
+}
+
+/// The suffix of a piece's marker in `tasks/` (not a state: listings skip it).
+pub const MADE: &str = "made";
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn at(band: (usize, usize), next_x: usize, x1: usize, y1: usize) -> SplitPoint {
+        SplitPoint {
+            x0: 2,
+            x1,
+            y1,
+            band,
+            next_x,
+            cell: 6,
+            done: 1,
+        }
+    }
+
+    #[test]
+    fn bands_go_first_then_cells() {
+        // Region [2, 40) × [3, 40): band [6, 12) in progress, bands 12, 18, 24, 30, 36 left.
+        let p = at((6, 12), 14, 40, 40);
+        assert_eq!(p.rows_left(), vec![12, 18, 24, 30, 36]);
+        let (cut, r) = choose(&p).unwrap();
+        assert_eq!(cut, Cut::Rows(24));
+        assert_eq!(
+            r,
+            TileRect {
+                x0: 2,
+                y0: 24,
+                w: 38,
+                h: 16
+            }
+        );
+        // The last band in progress: the cells from 14 are 14, 18, 24, 30, 36.
+        let p = at((36, 40), 14, 40, 40);
+        assert_eq!(p.columns_left(), vec![14, 18, 24, 30, 36]);
+        assert_eq!(p.cells_left(), 5);
+        let (cut, r) = choose(&p).unwrap();
+        assert_eq!(cut, Cut::Cols(24));
+        assert_eq!(
+            r,
+            TileRect {
+                x0: 24,
+                y0: 36,
+                w: 16,
+                h: 4
+            }
+        );
+        // One band below: cells of this band and the band below.
+        let p = at((30, 36), 30, 40, 40);
+        assert_eq!(p.cells_left(), 2 + 7);
+        assert_eq!(choose(&p).unwrap().0, Cut::Cols(36));
+        // One cell left: nothing to give.
+        assert_eq!(choose(&at((36, 40), 36, 40, 40)), None);
+    }
+}

@@ -1,0 +1,197 @@
+//! A region rendered on one thread in reading order, whose unstarted part can be given away
+//! while it renders (the batch workers' tile splitting, `job::piece`).
+//!
+//! [`render_region_split`] renders the cells of the sampling grid band by band, top to bottom,
+//! each band's cells left to right, and before each cell asks a hook whether to cut: either
+//! the rows from a band start below the band in progress ([`Cut::Rows`]), or the columns from
+//! a cell start right of the next cell, in the band in progress and every band below
+//! ([`Cut::Cols`]). What is cut is not rendered (its pixels stay zero). Every sample depends on
+//! its pixel alone and cells lie on the picture's grid, so the pixels rendered are exactly
+//! those [`super::render_region`] gives (with indirect light, up to the order in which
+//! ambient values are made: the overture runs band by band here, just ahead of the bands).
+
+use super::picture::{
+    cell_size, overture, overture_rows, render_cell, sample_pixel, to_f32, CellEdges, CellScratch,
+    FrameSetup, RenderProgress, Sample,
+};
+use super::trace::Tracer;
+use std::sync::atomic::Ordering;
+
+/// Where a splittable render stands, before its next cell.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct SplitPoint {
+    /// First column of the region.
+    pub x0: usize,
+    /// End (exclusive) of the columns still to render in this band and those below.
+    pub x1: usize,
+    /// End (exclusive) of the rows still to render.
+    pub y1: usize,
+    /// The rows of the band in progress, `[band.0, band.1)`.
+    pub band: (usize, usize),
+    /// The first column of the next cell (in the band in progress).
+    pub next_x: usize,
+    /// The side of a cell in pixels (1 at `-ps 1`).
+    pub cell: usize,
+    /// Cells rendered so far.
+    pub done: usize,
+}
+
+impl SplitPoint {
+    /// The cell starts of the band in progress from the next cell on.
+    pub fn columns_left(&self) -> Vec<usize> {
+        let c = self.cell.max(1);
+        let mut v = vec![self.next_x];
+        let mut x = (self.next_x / c + 1) * c;
+        while x < self.x1 {
+            v.push(x);
+            x += c;
+        }
+        v.retain(|&x| x < self.x1);
+        v
+    }
+
+    /// The band starts below the band in progress.
+    pub fn rows_left(&self) -> Vec<usize> {
+        let c = self.cell.max(1);
+        let mut v = Vec::new();
+        let mut y = self.band.1;
+        while y < self.y1 {
+            v.push(y);
+            y = (y / c + 1) * c;
+        }
+        v
+    }
+
+    /// Cells still to render (the next one included).
+    pub fn cells_left(&self) -> usize {
+        let c = self.cell.max(1);
+        let per_band = self.x1.div_ceil(c).saturating_sub(self.x0 / c);
+        self.columns_left().len() + self.rows_left().len() * per_band
+    }
+}
+
+/// What a hook gives away.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Cut {
+    /// The rows from this one (a band start below the band in progress) to the end.
+    Rows(usize),
+    /// The columns from this one (a cell start after the next cell's) to the end, in the
+    /// band in progress and every band below.
+    Cols(usize),
+}
+
+/// Render `[x0, x1) × [y0, y1)` as [`super::render_region`] does, on the calling thread in
+/// reading order, asking `hook` before each cell whether to give part of what is left away.
+/// A cut outside what is left is ignored.
+pub fn render_region_split(
+    tr: &Tracer,
+    fs: &FrameSetup,
+    (x0, y0, x1, y1): (usize, usize, usize, usize),
+    progress: &RenderProgress,
+    hook: &mut dyn FnMut(&SplitPoint) -> Option<Cut>,
+) -> Vec<[f32; 3]> {
+    let w = x1.saturating_sub(x0);
+    let h = y1.saturating_sub(y0);
+    let mut out = vec![[0f32; 3]; w * h];
+    if w == 0 || h == 0 {
+        return out;
+    }
+    let ps = cell_size(fs.ps);
+    // The overture runs band by band just ahead of the picture's pass (its rows up to one
+    // overture step below the band), so that what is given away has not been filled yet.
+    let rows = overture_rows(fs, y0, y1);
+    let mut ov = 0;
+    progress
+        .rows_total
+        .store(rows.len() + y1.div_ceil(ps) - y0 / ps, Ordering::Relaxed);
+    let frame_src = match tr.cells {
+        Some(memo) => memo.frame(tr, fs, ps),
+        None => std::sync::Arc::new(super::lightcells::FrameSources::compute(tr, fs, ps)),
+    };
+    let (mut xe, mut ye) = (x1, y1);
+    let mut done = 0;
+    let mut rays = 0;
+    // Band lines shared by neighbouring bands and the cell column shared along a band, as in
+    // render_region; here the bands run in order, so one line carries over.
+    let lx0 = x0 / ps * ps;
+    let line_len = (x1.div_ceil(ps) * ps).min(fs.xres - 1) + 1 - lx0;
+    let mut top: Vec<Option<Sample>> = vec![None; line_len];
+    let mut bottom: Vec<Option<Sample>> = vec![None; line_len];
+    let mut left = Vec::new();
+    let mut scratch = CellScratch::default();
+    let mut cy = y0 / ps;
+    while cy * ps < ye && tr.scene.fatal_error().is_none() {
+        let (by0, by1) = ((cy * ps).max(y0), ((cy + 1) * ps).min(ye));
+        let ahead = rows[ov..]
+            .iter()
+            .take_while(|&&y| y < (by1 + fs.overture).min(ye))
+            .count();
+        overture(tr, fs, x0, xe, &rows[ov..ov + ahead], progress);
+        ov += ahead;
+        left.clear();
+        let mut cx = x0 / ps;
+        while cx * ps < xe {
+            let next_x = (cx * ps).max(x0);
+            let at = SplitPoint {
+                x0,
+                x1: xe,
+                y1: ye,
+                band: (by0, by1),
+                next_x,
+                cell: ps,
+                done,
+            };
+            match hook(&at) {
+                Some(Cut::Rows(k)) if k >= by1 && k < ye && k % ps == 0 => ye = k,
+                Some(Cut::Cols(q)) if q > next_x && q < xe && q % ps == 0 => xe = q,
+                _ => {}
+            }
+            if ps == 1 {
+                let s = sample_pixel(tr, fs, cx, cy, &mut rays);
+                out[(cy - y0) * w + (cx - x0)] = to_f32(s.color);
+            } else {
+                let mut edges = CellEdges {
+                    top: &mut top[cx * ps - lx0..],
+                    bottom: &mut bottom[cx * ps - lx0..],
+                    left: &mut left,
+                };
+                let full = frame_src.cells.contains(&(cx, cy));
+                render_cell(
+                    tr,
+                    fs,
+                    (cx, cy, ps, full),
+                    &mut edges,
+                    &mut scratch,
+                    &mut rays,
+                    &mut |x, y, c| {
+                        if x >= x0 && x < xe && y >= by0 && y < by1 {
+                            out[(y - y0) * w + (x - x0)] = to_f32(c);
+                        }
+                    },
+                );
+            }
+            done += 1;
+            cx += 1;
+        }
+        // The band's bottom line is the next band's top line.
+        std::mem::swap(&mut top, &mut bottom);
+        bottom.iter_mut().for_each(|s| *s = None);
+        progress
+            .rays
+            .fetch_add(std::mem::take(&mut rays), Ordering::Relaxed);
+        progress.rows_done.fetch_add(1, Ordering::Relaxed);
+        cy += 1;
+    }
+    if !frame_src.drawn.is_empty() && tr.scene.fatal_error().is_none() {
+        super::srcdraw::draw(
+            tr,
+            fs,
+            &frame_src.drawn,
+            (x0, y0, x1, y1),
+            &mut out,
+            &mut rays,
+        );
+        progress.rays.fetch_add(rays, Ordering::Relaxed);
+    }
+    out
+}
