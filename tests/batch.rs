@@ -1404,6 +1404,27 @@ fn split_tiles_give_tpicts_pixels() {
             by_rows > 0 && by_cols > 0,
             "-ps {ps}: {by_rows} by rows, {by_cols} by columns"
         );
+        // `tstat --costs` gives each tile once, its pieces' seconds added; a piece's lost
+        // result is named by tassemble, which writes nothing.
+        let job = d.path().join(format!("ps{ps}-t1"));
+        let costs: serde_json::Value =
+            serde_json::from_slice(&run_ok(cmd("tstat").arg(&job).args(["--costs", "0"]))).unwrap();
+        assert_eq!(costs["tiles"].as_array().map(|t| t.len()), Some(1));
+        let piece = task_entries(&job)
+            .into_iter()
+            .find(|e| e.ends_with(".done") && e.len() > 20)
+            .unwrap();
+        let piece = piece.trim_end_matches(".done");
+        std::fs::remove_file(job.join("tiles").join(format!("{piece}.tile"))).unwrap();
+        let out = d.path().join("lost.hdr");
+        let o = cmd("tassemble")
+            .arg(&job)
+            .arg("-o")
+            .arg(&out)
+            .output()
+            .unwrap();
+        assert!(!o.status.success() && !out.exists());
+        assert!(String::from_utf8_lossy(&o.stderr).contains(piece));
         // Splitting turned off: no pieces, the same picture.
         let job = d.path().join(format!("ps{ps}-nosplit"));
         plan(
