@@ -7,9 +7,11 @@
 //! left of its task, estimated from its seconds per cell so far, is at least twice
 //! [`MIN_PIECE_SECONDS`], it gives away half of what is left: the lower half of the bands
 //! below the one in progress when there are two or more, else the right half of the cells
-//! left in the band in progress (and below it). The new piece's `todo` entry is created
-//! (`O_EXCL`) and the directory synced before the renderer skips those cells; when that
-//! fails (another process made the same piece, a full disk) nothing is cut.
+//! left in the band in progress (and below it). The piece is made once (its `.made` marker
+//! created with `O_EXCL`), then its `todo` entry, and the directory is synced before the
+//! renderer skips those cells; when that fails (another process made the same piece, a full
+//! disk), or when this worker no longer holds the task (it was taken over after the lease),
+//! nothing is cut.
 
 use super::piece::piece_name;
 use super::plan::TileRect;
@@ -21,7 +23,7 @@ use std::time::Instant;
 pub const CHECK_SECONDS: f64 = 0.05;
 
 /// The least estimated cost of each part of a split, seconds: a piece costs a claim, a
-/// result and an idle worker's poll (20–250 ms) before it starts.
+/// result and an idle worker's poll (20–100 ms) before it starts.
 pub const MIN_PIECE_SECONDS: f64 = 0.05;
 
 /// Test builds with `TESSERA_FAULT_SPLIT_EAGER`: the fewest cells left that are split.
