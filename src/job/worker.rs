@@ -442,19 +442,14 @@ impl Worker<'_> {
     /// Claim a piece split off a tile ([`super::piece`]) that is `todo`, the first in
     /// name order.
     fn claim_piece(&mut self, states: &HashMap<String, TaskState>) -> Result<Option<Claim>> {
-        let mut todo: Vec<&String> = states
+        let mut todo: Vec<(&String, super::piece::TaskId)> = states
             .iter()
-            .filter(|(n, s)| **s == TaskState::Todo && n.len() > 13)
-            .map(|(n, _)| n)
+            .filter(|(_, s)| **s == TaskState::Todo)
+            .filter_map(|(n, _)| super::piece::parse(n).map(|id| (n, id)))
+            .filter(|(_, id)| id.piece.is_some())
             .collect();
-        todo.sort();
-        for name in todo {
-            let Some(id) = super::piece::parse(name) else {
-                continue;
-            };
-            if id.piece.is_none() {
-                continue;
-            }
+        todo.sort_by(|a, b| a.0.cmp(b.0));
+        for (name, id) in todo {
             let claimed = self.take(name, || {
                 task::claim(&self.tasks_dir, name, self.owner)
                     .with_context(|| format!("cannot claim {name} in {}", self.tasks_dir.display()))
