@@ -8,6 +8,19 @@ use std::io::{self, Read};
 use std::os::unix::fs::OpenOptionsExt;
 use std::path::Path;
 
+/// Options to write a file that every user of a shared job directory may replace (mode
+/// 0666 before the umask); the caller adds how it is created.
+pub fn shared_write() -> std::fs::OpenOptions {
+    let mut o = std::fs::OpenOptions::new();
+    o.write(true);
+    #[cfg(unix)]
+    {
+        use std::os::unix::fs::OpenOptionsExt;
+        o.mode(0o666);
+    }
+    o
+}
+
 /// Open the directory `path` (for `fsync` after a rename): `O_DIRECTORY`, so a FIFO or
 /// anything else put in its place is refused at once instead of blocking the open.
 pub fn open_dir(path: &Path) -> io::Result<File> {

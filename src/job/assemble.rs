@@ -46,11 +46,19 @@ fn read_result(
     Ok(px)
 }
 
-/// Assemble frame `frame`. Returns the picture and the tiles that were missing or invalid
+/// The pieces split off the job's tiles (one listing of `tasks/`, for every frame assembled).
+pub fn job_pieces(job: &JobDir) -> Result<super::task::Pieces> {
+    let states = super::task::scan(&job.tasks())
+        .map_err(|e| anyhow!("cannot list {}: {e}", job.tasks().display()))?;
+    Ok(super::task::pieces(&states))
+}
+
+/// Assemble frame `frame`, `pieces` from [`job_pieces`]. Returns the picture and the tiles that were missing or invalid
 /// (filled black). The caller decides whether a partial picture is acceptable.
 pub fn assemble_frame(
     job: &JobDir,
     m: &Manifest,
+    pieces: &super::task::Pieces,
     frame: u32,
     command: &str,
 ) -> Result<(Image, Vec<MissingTile>)> {
@@ -60,9 +68,6 @@ pub fn assemble_frame(
     let mut img = Image::new(fp.xres, fp.yres);
     let mut missing = Vec::new();
     // Pieces split off tiles while they rendered: pasted after their tile, largest first.
-    let states = super::task::scan(&job.tasks())
-        .map_err(|e| anyhow!("cannot list {}: {e}", job.tasks().display()))?;
-    let pieces = super::task::pieces(&states);
     for (i, tile_rect) in fp.tiles.iter().enumerate() {
         let of_tile: Vec<_> = pieces
             .get(&(frame, i))

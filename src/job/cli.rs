@@ -589,7 +589,8 @@ fn assemble_points(
             );
         }
     }
-    let (img, missing) = super::assemble::assemble_frame(job, m, 0, cmd)?;
+    let pieces = super::assemble::job_pieces(job)?;
+    let (img, missing) = super::assemble::assemble_frame(job, m, &pieces, 0, cmd)?;
     if !missing.is_empty() {
         let list = missing_list(&missing);
         if !a.partial {
@@ -679,8 +680,9 @@ fn tassemble(a: TassembleArgs) -> Result<i32> {
     }
     let mut failed = false;
     let mut pictures = Vec::new();
+    let pieces = super::assemble::job_pieces(&job)?;
     for f in frames {
-        let (mut img, missing) = super::assemble::assemble_frame(&job, &m, f, &cmd)?;
+        let (mut img, missing) = super::assemble::assemble_frame(&job, &m, &pieces, f, &cmd)?;
         if let (Some(fin), false) = (&m.finish, a.raw) {
             img = fin.apply(&img);
         }

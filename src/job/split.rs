@@ -152,14 +152,9 @@ pub fn choose(at: &SplitPoint) -> Option<(Cut, TileRect)> {
 /// `tasks/<name>.todo`, then sync the directory; whether it was made.
 fn create_todo(tasks: &Path, name: &str) -> bool {
     let create = |suffix: &str| {
-        let mut o = std::fs::OpenOptions::new();
-        o.write(true).create_new(true);
-        #[cfg(unix)]
-        {
-            use std::os::unix::fs::OpenOptionsExt;
-            o.mode(0o666);
-        }
-        o.open(tasks.join(format!("{name}.{suffix}")))
+        crate::safefile::shared_write()
+            .create_new(true)
+            .open(tasks.join(format!("{name}.{suffix}")))
     };
     if create(MADE).is_err() || create("todo").is_err() {
         return false;

@@ -173,14 +173,10 @@ impl ResultDir {
         }
         let tmp = self.dir.join(format!(".{name}.{tag}.tmp"));
         let written = (|| {
-            let mut o = std::fs::OpenOptions::new();
-            o.write(true).create(true).truncate(true);
-            #[cfg(unix)]
-            {
-                use std::os::unix::fs::OpenOptionsExt;
-                o.mode(0o666);
-            }
-            let mut f = o.open(&tmp)?;
+            let mut f = crate::safefile::shared_write()
+                .create(true)
+                .truncate(true)
+                .open(&tmp)?;
             f.write_all(&bytes)?;
             Ok(f)
         })();

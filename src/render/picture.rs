@@ -240,18 +240,9 @@ pub fn render_region(
         .rows_total
         .store(overture_rows.len() + rows, Ordering::Relaxed);
     overture(tr, fs, x0, x1, &overture_rows, progress);
-    // The frame's small light sources: cells sampled at every pixel, sources drawn by
-    // their coverage once the pixels are done.
-    let frame_src = match tr.cells {
-        Some(memo) => memo.frame(tr, fs, ps),
-        None => std::sync::Arc::new(super::lightcells::FrameSources::compute(tr, fs, ps)),
-    };
+    let frame_src = frame_sources(tr, fs, ps);
     let draw = |out: &mut Vec<[f32; 3]>| {
-        if !frame_src.drawn.is_empty() && tr.scene.fatal_error().is_none() {
-            let mut rays = 0;
-            super::srcdraw::draw(tr, fs, &frame_src.drawn, (x0, y0, x1, y1), out, &mut rays);
-            progress.rays.fetch_add(rays, Ordering::Relaxed);
-        }
+        draw_sources(tr, fs, &frame_src, (x0, y0, x1, y1), out, progress);
     };
     if ps == 1 {
         // One row per job (with_max_len): rows differ in cost, and rayon's adaptive split
@@ -344,6 +335,35 @@ pub fn render_region(
     odd.into_par_iter().with_max_len(1).for_each(band);
     draw(&mut out);
     out
+}
+
+/// The frame's small light sources: the cells sampled at every pixel, and the sources drawn
+/// by their coverage once a region's pixels are done ([`draw_sources`]).
+pub(super) fn frame_sources(
+    tr: &Tracer,
+    fs: &FrameSetup,
+    ps: usize,
+) -> std::sync::Arc<super::lightcells::FrameSources> {
+    match tr.cells {
+        Some(memo) => memo.frame(tr, fs, ps),
+        None => std::sync::Arc::new(super::lightcells::FrameSources::compute(tr, fs, ps)),
+    }
+}
+
+/// Draw the frame's small light sources over the pixels `out` of `region` (x0, y0, x1, y1).
+pub(super) fn draw_sources(
+    tr: &Tracer,
+    fs: &FrameSetup,
+    src: &super::lightcells::FrameSources,
+    region: (usize, usize, usize, usize),
+    out: &mut [[f32; 3]],
+    progress: &RenderProgress,
+) {
+    if !src.drawn.is_empty() && tr.scene.fatal_error().is_none() {
+        let mut rays = 0;
+        super::srcdraw::draw(tr, fs, &src.drawn, region, out, &mut rays);
+        progress.rays.fetch_add(rays, Ordering::Relaxed);
+    }
 }
 
 /// Buffers [`render_cell`] reuses from cell to cell.

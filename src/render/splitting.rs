@@ -11,8 +11,8 @@
 //! ambient values are made: the overture runs band by band here, just ahead of the bands).
 
 use super::picture::{
-    cell_size, overture, overture_rows, render_cell, sample_pixel, to_f32, CellEdges, CellScratch,
-    FrameSetup, RenderProgress, Sample,
+    cell_size, draw_sources, frame_sources, overture, overture_rows, render_cell, sample_pixel,
+    to_f32, CellEdges, CellScratch, FrameSetup, RenderProgress, Sample,
 };
 use super::trace::Tracer;
 use std::sync::atomic::Ordering;
@@ -104,10 +104,7 @@ pub fn render_region_split(
     progress
         .rows_total
         .store(rows.len() + y1.div_ceil(ps) - y0 / ps, Ordering::Relaxed);
-    let frame_src = match tr.cells {
-        Some(memo) => memo.frame(tr, fs, ps),
-        None => std::sync::Arc::new(super::lightcells::FrameSources::compute(tr, fs, ps)),
-    };
+    let frame_src = frame_sources(tr, fs, ps);
     let (mut xe, mut ye) = (x1, y1);
     let mut done = 0;
     let mut rays = 0;
@@ -182,16 +179,6 @@ pub fn render_region_split(
         progress.rows_done.fetch_add(1, Ordering::Relaxed);
         cy += 1;
     }
-    if !frame_src.drawn.is_empty() && tr.scene.fatal_error().is_none() {
-        super::srcdraw::draw(
-            tr,
-            fs,
-            &frame_src.drawn,
-            (x0, y0, x1, y1),
-            &mut out,
-            &mut rays,
-        );
-        progress.rays.fetch_add(rays, Ordering::Relaxed);
-    }
+    draw_sources(tr, fs, &frame_src, (x0, y0, x1, y1), &mut out, progress);
     out
 }

@@ -305,16 +305,9 @@ impl Session {
         r: Region,
         progress: &RenderProgress,
     ) -> Result<Vec<[f32; 3]>> {
-        let tracer = self.tracer();
-        let run = || render_region(&tracer, fs, r.x0, r.y0, r.x1, r.y1, progress);
-        let pixels = here.install(|| match &self.ambient {
-            Some(a) => a.with_accuracy(fs.aa, run),
-            None => run(),
-        });
-        if let Some(e) = self.scene.fatal_error() {
-            anyhow::bail!("{e}");
-        }
-        Ok(pixels)
+        self.render_on(here, fs, |tracer| {
+            render_region(tracer, fs, r.x0, r.y0, r.x1, r.y1, progress)
+        })
     }
 
     /// [`Session::render_here`] on the calling thread in reading order, with `hook` asked
@@ -328,13 +321,24 @@ impl Session {
         progress: &RenderProgress,
         hook: &mut (dyn FnMut(&SplitPoint) -> Option<Cut> + Send),
     ) -> Result<Vec<[f32; 3]>> {
+        self.render_on(here, fs, |tracer| {
+            render_region_split(tracer, fs, (r.x0, r.y0, r.x1, r.y1), progress, hook)
+        })
+    }
+
+    /// Run `render` through `here` at the frame's `-aa` for this thread only; a fatal scene
+    /// error met while rendering is the result.
+    fn render_on(
+        &self,
+        here: &rayon::ThreadPool,
+        fs: &FrameSetup,
+        render: impl FnOnce(&Tracer) -> Vec<[f32; 3]> + Send,
+    ) -> Result<Vec<[f32; 3]>> {
         let tracer = self.tracer();
-        let region = (r.x0, r.y0, r.x1, r.y1);
+        let run = || render(&tracer);
         let pixels = here.install(|| match &self.ambient {
-            Some(a) => a.with_accuracy(fs.aa, || {
-                render_region_split(&tracer, fs, region, progress, hook)
-            }),
-            None => render_region_split(&tracer, fs, region, progress, hook),
+            Some(a) => a.with_accuracy(fs.aa, run),
+            None => run(),
         });
         if let Some(e) = self.scene.fatal_error() {
             anyhow::bail!("{e}");
