@@ -169,6 +169,23 @@ pub fn check_memory_for(
     }
 }
 
+/// Pictures needing less than this many bytes are not checked against the memory left by
+/// [`check_memory_if_large`]: a process with less than 16 MiB to spare fails anyway, and
+/// the check reads five system files.
+pub const UNCHECKED_PICTURE_BYTES: u64 = 16 << 20;
+
+/// [`check_memory_for`] with [`available_memory`], asked only when the `x × y` picture needs
+/// at least [`UNCHECKED_PICTURE_BYTES`].
+pub fn check_memory_if_large(x: usize, y: usize, advice: &str) -> Result<(), String> {
+    let need = (x as u64)
+        .checked_mul(y as u64)
+        .and_then(|p| p.checked_mul(PICTURE_BYTES_PER_PIXEL));
+    match need {
+        Some(n) if n < UNCHECKED_PICTURE_BYTES => Ok(()),
+        _ => check_memory_for(x, y, available_memory(), advice),
+    }
+}
+
 /// This machine's host name (empty when unknown).
 pub fn host_name() -> String {
     std::fs::read_to_string("/proc/sys/kernel/hostname")
@@ -303,6 +320,17 @@ mod tests {
         assert!(check_picture_memory(100_000, 100_000, None).is_ok());
         assert_eq!(n, cores * MAX_THREADS_PER_CORE);
         assert!(w.unwrap().contains("10000000 threads requested"));
+    }
+
+    /// Small pictures are not checked (no system files read); large ones are, and one too
+    /// large to address is always refused.
+    #[test]
+    fn only_large_pictures_ask_for_memory() {
+        assert!(check_memory_if_large(64, 64, "x").is_ok());
+        assert!(check_memory_if_large(usize::MAX, 3, "x").is_err());
+        let side = ((UNCHECKED_PICTURE_BYTES / PICTURE_BYTES_PER_PIXEL) as f64).sqrt() as usize;
+        assert!((side * side) as u64 * PICTURE_BYTES_PER_PIXEL <= UNCHECKED_PICTURE_BYTES);
+        assert!(check_memory_if_large(side - 1, side - 1, "x").is_ok());
     }
 
     /// A SLURM job's `--mem` (a control group's limit) bounds the memory a process may use:

@@ -532,10 +532,11 @@ impl Worker<'_> {
         }
         // A tile larger than the memory this process may still use (the machine's, its
         // control group's, its address-space limit) is handed back before it is rendered.
-        let fits = crate::runinfo::check_memory_for(
+        // Asking costs five reads of /proc and /sys (a third of a small tile's overhead), so
+        // only tiles that need a noticeable amount ask.
+        let fits = crate::runinfo::check_memory_if_large(
             rect.w,
             rect.h,
-            crate::runinfo::available_memory(),
             "plan the job with smaller tiles (tplan --tiles N or --tile-size)",
         );
         if let Err(e) = fits {
