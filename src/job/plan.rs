@@ -23,10 +23,10 @@
 //! only the samples on an edge between two tiles are traced by both. (Pixels never depend on
 //! the tiling: every pixel is seeded by its position alone.)
 //!
-//! The default tile count ([`default_tiles`]) keeps the per-tile overhead (claiming, writing
-//! and fsyncing the result: [`TILE_OVERHEAD`]) under 2% of the frame's cost, estimated from a
-//! lower bound of the cost of a pixel at the job's `-ab` ([`pixel_cost_floor`]), and is at
-//! most [`TILES_PER_WORKER`] per expected worker.
+//! The default tile count ([`tiles_for_cost`]) balances a worker's share of the per-tile
+//! overhead (claiming, writing and syncing the result: [`TILE_OVERHEAD`]) against the tail
+//! of the frame ([`TAIL`]), for the frame's cost as the cost probe estimates it
+//! (`super::probe`); tiles split while they render (`super::split`) shorten the tail further.
 
 use serde::{Deserialize, Serialize};
 
