@@ -60,6 +60,7 @@ mod library;
 mod noise;
 mod parser;
 mod program;
+mod pure;
 mod vm;
 
 pub use builder::{
@@ -70,6 +71,7 @@ pub use error::{CalError, EvalError};
 pub use eval::{MAX_DEPTH, MAX_STACK};
 pub use noise::{fnoise3, noise3};
 pub use program::{Evaluation, Program};
+pub use pure::Pure;
 
 /// Which host's rules a text follows (§1.1).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]

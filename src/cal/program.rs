@@ -4,6 +4,7 @@
 use super::code::{Code, NodeId};
 use super::compile::Compiled;
 use super::eval::{call_slot, ArgSrc, Entry, Frame, Trap};
+use super::pure::Pure;
 use super::vm::Vm;
 use super::{Env, EvalError, ExprId, FuncRef};
 use std::cell::{Cell, RefCell};
@@ -47,8 +48,7 @@ pub struct Program {
     vm: Compiled,
     /// The block of each expression.
     exprs: Vec<u32>,
-    /// The node of each expression (for the tree walker's cross-check in tests).
-    #[cfg(test)]
+    /// The node of each expression (its pure form; the tree walker's cross-check in tests).
     roots: Vec<NodeId>,
     outputs: Vec<(u32, ExprId)>,
     id: u64,
@@ -61,7 +61,6 @@ impl Program {
             code,
             vm,
             exprs: blocks,
-            #[cfg(test)]
             roots: exprs,
             outputs,
             id: NEXT_ID.fetch_add(1, Ordering::Relaxed),
@@ -100,6 +99,30 @@ impl Program {
     #[cfg(test)]
     pub(crate) fn calls_in(&self, e: ExprId) -> usize {
         self.vm.calls_in(self.exprs[e.0 as usize])
+    }
+
+    /// Expressions `es` (one to [`super::pure::MAX_ROOTS`]) as one [`Pure`] expression with a root each, when
+    /// they are pure (see [`super::pure`]).
+    pub fn pure_exprs(&self, es: &[ExprId]) -> Option<Pure> {
+        let roots = es
+            .iter()
+            .map(|e| self.roots.get(e.0 as usize).copied())
+            .collect::<Option<Vec<_>>>()?;
+        super::pure::expand(&self.code, &roots, false)
+    }
+
+    /// Expression `e` as a [`Pure`] expression, when it is one.
+    pub fn pure_expr(&self, e: ExprId) -> Option<Pure> {
+        self.pure_exprs(&[e])
+    }
+
+    /// Function `f`'s body as a [`Pure`] expression of the call's values, when it is one.
+    pub fn pure_func(&self, f: FuncRef) -> Option<Pure> {
+        use super::code::Def;
+        match self.code.slots.get(f.0 as usize)?.def {
+            Def::Func { body, .. } => super::pure::expand(&self.code, &[body], true),
+            _ => None,
+        }
     }
 
     /// The rcalc-style outputs (`$N = expr`) in definition order.

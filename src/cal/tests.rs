@@ -616,6 +616,7 @@ fn run_time_machine_matches_the_tree_walker() {
     assert!(exprs.len() > 2000, "only {} compiled", exprs.len());
     let prog = b.finish();
     let mut kinds = [0usize; 4];
+    let mut pure = [0usize; 2];
     for (i, (text, e)) in exprs.iter().enumerate() {
         let mut chan = [0.0; 27];
         chan[6] = (i as f64 * 0.37).sin() * 2.0;
@@ -628,6 +629,17 @@ fn run_time_machine_matches_the_tree_walker() {
         };
         let vm = prog.begin(&env).eval(*e);
         let tree = prog.begin(&env).eval_tree(*e);
+        // The pure form, where there is one, gives the machine's value or leaves it to it.
+        if let Some(p) = prog.pure_expr(*e) {
+            pure[0] += 1;
+            if let Some(v) = p.eval(&env.chan, env.args, &[]) {
+                pure[1] += 1;
+                assert!(
+                    matches!(vm, Ok(x) if x.to_bits() == v.to_bits()),
+                    "{text}: machine {vm:?}, pure {v}"
+                );
+            }
+        }
         let same = match (&vm, &tree) {
             (Ok(x), Ok(y)) => x.to_bits() == y.to_bits(),
             (x, y) => x == y,
@@ -642,6 +654,96 @@ fn run_time_machine_matches_the_tree_walker() {
     }
     // Every outcome occurs.
     assert!(kinds.iter().all(|&k| k > 10), "{kinds:?}");
+    // Many expressions are pure, and most of those evaluate without the machine.
+    assert!(
+        pure[0] > 500 && pure[1] > 300,
+        "{pure:?} of {}",
+        exprs.len()
+    );
+}
+
+/// Functions called with values (a pattern's function of its data values): the pure form
+/// of each gives the machine's value bit for bit, or leaves the call to the machine; those
+/// that are not pure are refused, never evaluated differently.
+#[test]
+fn pure_functions_match_the_machine() {
+    const DEFS: &str = "
+        corr(v) = if(AC - .5, A1*v, v); flat(v) = corr(v) / Rdot;
+        theta = Acos(Dz) / DEGREE; phi = mod(Atan2(-Dy, -Dx) / DEGREE, 360);
+        phi2 = tri(phi, 180); two(x, y) = x*A2 + y^.5 + noise3(x, y, Dz);
+        many(x) = max(x, -x, Px) - min(Py, x); rec(n) = if(n, rec(n - 1), 0);
+        name(f, x) = f(x); pick(x) = select(x, 1, 2); bad(x) = nothere + x;
+        miss(x, y) = x + y; v1 = Px*Px; shared(x) = sq(x) + sq(x*v1) + bound(0, x, 1);
+    ";
+    let mut b = CalBuilder::new(&[]).unwrap();
+    b.load_text(DEFS.as_bytes(), "defs", Ctx::GLOBAL).unwrap();
+    let f = |b: &mut CalBuilder, n: &str| b.func(n, Ctx::GLOBAL).unwrap();
+    let pure_ones = [
+        "corr", "flat", "two", "many", "shared", "miss", "sq", "Acos", "tri",
+    ];
+    let refused = ["rec", "name", "pick", "bad"];
+    let fs: Vec<_> = pure_ones
+        .iter()
+        .chain(&refused)
+        .map(|n| (*n, f(&mut b, n)))
+        .collect();
+    let exprs: Vec<_> = ["theta", "phi", "phi2", "Dz*A1"]
+        .iter()
+        .map(|t| b.expr(t, Ctx::GLOBAL, "case").unwrap())
+        .collect();
+    let prog = b.finish();
+    for (n, fr) in &fs {
+        assert_eq!(prog.pure_func(*fr).is_some(), pure_ones.contains(n), "{n}");
+    }
+    let (mut same, mut left) = (0, 0);
+    for i in 0..3000 {
+        let x = |k: f64| ((i as f64 + 1.0) * k).sin();
+        let mut chan = [0.0; 27];
+        let d = glam::DVec3::new(x(0.71), x(0.37), x(1.13) * 1.2).normalize_or_zero();
+        chan[..3].copy_from_slice(&d.to_array());
+        chan[6] = x(2.3) * 3.0;
+        chan[7] = x(0.2);
+        chan[10] = if i % 97 == 0 { 0.0 } else { x(0.9) };
+        let args: &[f64] = match i % 3 {
+            0 => &[],
+            1 => &[2.77778],
+            _ => &[0.5, 2.0, -1.0],
+        };
+        let env = Env {
+            chan,
+            args,
+            brdf: None,
+        };
+        let vals = [x(0.05) * 4.0, x(0.013).abs() * 9.0];
+        let mut check = |p: Option<crate::cal::Pure>, vm: Result<f64, EvalError>, what: &str| {
+            let Some(p) = p else { return };
+            let nv = if what == "miss" { 1 } else { 2 };
+            match p.eval(&chan, args, &vals[..nv]) {
+                Some(v) => {
+                    assert!(
+                        matches!(vm, Ok(w) if w.to_bits() == v.to_bits()),
+                        "{what} case {i}: machine {vm:?}, pure {v}"
+                    );
+                    same += 1;
+                }
+                None => left += 1,
+            }
+        };
+        for (n, fr) in &fs {
+            let nv = if *n == "miss" { 1 } else { 2 };
+            let vm = prog.begin(&env).call(*fr, &vals[..nv]);
+            check(prog.pure_func(*fr), vm, n);
+        }
+        for e in &exprs {
+            let vm = prog.begin(&env).eval(*e);
+            check(prog.pure_expr(*e), vm, "expr");
+        }
+    }
+    // Nearly all evaluate purely; a missing argument, Rdot = 0 and the like go back.
+    assert!(
+        same > 30_000 && left > 100,
+        "{same} pure, {left} left to the machine"
+    );
 }
 
 /// Small functions called with short call-free arguments are compiled inline (no call at

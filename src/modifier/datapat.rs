@@ -19,12 +19,12 @@ use super::data::DataArray;
 use super::func::{compile, finite, function, load_context, FuncCall};
 use super::picdata::PictData;
 use super::{MixCoefficient, ModifierKind, ModifierLookup, Pattern, Texture};
-use crate::cal::{EvalError, Evaluation, ExprId, FuncRef};
+use crate::cal::{EvalError, Evaluation, ExprId, FuncRef, Program, Pure};
 use crate::color::Color;
 use crate::render::shading::ShadingPoint;
 use crate::scene::primitive::Primitive;
 use glam::DVec3;
-use std::sync::Arc;
+use std::sync::{Arc, OnceLock};
 
 /// Where the values come from.
 #[derive(Debug)]
@@ -45,6 +45,32 @@ struct DataCall {
     /// Whether later functions may take their own value (colour types) rather than all
     /// three (texdata).
     own_values: bool,
+    /// The coordinates and functions as pure expressions, when all of them are
+    /// (`crate::cal::Pure`; decided at the first evaluation, once the program is linked).
+    pure: OnceLock<Option<PureCall>>,
+}
+
+/// A [`DataCall`]'s coordinates and functions as pure expressions.
+#[derive(Debug)]
+struct PureCall {
+    /// One root per coordinate.
+    coords: Pure,
+    funcs: Vec<Pure>,
+    /// Whether function `i` takes its own value (see [`DataCall::apply`]).
+    own: Vec<bool>,
+}
+
+impl PureCall {
+    fn new(prog: &Program, c: &DataCall) -> Option<PureCall> {
+        let coords = prog.pure_exprs(&c.coords)?;
+        let funcs = c
+            .funcs
+            .iter()
+            .map(|f| prog.pure_func(*f))
+            .collect::<Option<Vec<_>>>()?;
+        let own = (0..c.funcs.len()).map(|i| c.takes_own(prog, i)).collect();
+        Some(PureCall { coords, funcs, own })
+    }
 }
 
 fn bad_count(p: &Primitive, need: usize) -> String {
@@ -111,6 +137,7 @@ fn parse_call(
         coords,
         funcs,
         own_values: true,
+        pure: OnceLock::new(),
     })
 }
 
@@ -121,8 +148,12 @@ impl DataCall {
         for (xi, e) in x.iter_mut().zip(&self.coords) {
             *xi = finite(ev.eval(*e)?)?;
         }
-        let x = &x[..self.coords.len()];
-        Ok(match &self.source {
+        Ok(self.lookup(&x[..self.coords.len()]))
+    }
+
+    /// The values at coordinates `x`: one or three.
+    fn lookup(&self, x: &[f64]) -> [f64; 3] {
+        match &self.source {
             Source::Picture(p) => p.lookup(x[0], x[1]),
             Source::Data(d) => {
                 let mut v = [0.0; 3];
@@ -136,7 +167,13 @@ impl DataCall {
                 }
                 v
             }
-        })
+        }
+    }
+
+    /// Whether function `i` gets its own value rather than all of them: later functions
+    /// of colour types that take fewer than three parameters.
+    fn takes_own(&self, prog: &Program, i: usize) -> bool {
+        i > 0 && self.own_values && prog.params(self.funcs[i]).is_some_and(|k| k < 3)
     }
 
     /// Function `i` of the values: the first (and a single value's) function gets them
@@ -150,7 +187,7 @@ impl DataCall {
         n: usize,
     ) -> Result<f64, EvalError> {
         let f = self.funcs[i];
-        let own = i > 0 && self.own_values && ev.program().params(f).is_some_and(|k| k < 3);
+        let own = self.takes_own(ev.program(), i);
         let r = if n == 1 || own {
             ev.call(f, &[v[i.min(n - 1)]])?
         } else {
@@ -167,8 +204,39 @@ impl DataCall {
         }
     }
 
-    /// The functions' results (one per function).
+    /// The functions' results by their pure forms: None when they are not all pure or an
+    /// evaluation leaves its result to the machine.
+    fn pure_results(&self, sp: &ShadingPoint) -> Option<[f64; 3]> {
+        let prog = self.call.live_program()?;
+        let pc = self
+            .pure
+            .get_or_init(|| PureCall::new(prog, self))
+            .as_ref()?;
+        let chan = self.call.frame().channels(sp);
+        let args = self.call.args();
+        let mut x = [0.0; 6];
+        let x = x.get_mut(..self.coords.len())?;
+        pc.coords.eval_into(&chan, args, &[], x)?;
+        let v = self.lookup(x);
+        let n = self.width();
+        let mut out = [0.0; 3];
+        for (i, o) in out.iter_mut().enumerate().take(pc.funcs.len()) {
+            let vals = if n == 1 || pc.own[i] {
+                std::slice::from_ref(&v[i.min(n - 1)])
+            } else {
+                &v[..n]
+            };
+            *o = pc.funcs[i].eval(&chan, args, vals)?;
+        }
+        Some(out)
+    }
+
+    /// The functions' results (one per function): by their pure forms where they give
+    /// them, else by the machine (the same values; errors only from the machine).
     fn results(&self, sp: &ShadingPoint) -> Option<[f64; 3]> {
+        if let Some(r) = self.pure_results(sp) {
+            return Some(r);
+        }
         self.call.eval(sp, None, |ev| {
             let v = self.values(ev)?;
             let n = self.width();

@@ -10,7 +10,7 @@
 //! Radiance does.
 
 use super::frame::PatternFrame;
-use crate::cal::{CalBuilder, Ctx, Env, EvalError, Evaluation, ExprId, FuncRef, Program};
+use crate::cal::{CalBuilder, Ctx, Env, EvalError, Evaluation, ExprId, FuncRef, Program, Pure};
 use crate::render::shading::ShadingPoint;
 use crate::scene::primitive::Primitive;
 use std::path::PathBuf;
@@ -156,6 +156,18 @@ impl FuncCall {
         &self.frame
     }
 
+    /// The primitive's real arguments.
+    pub fn args(&self) -> &[f64] {
+        &self.args
+    }
+
+    /// The scene's program, unless none was made or a fatal error was recorded (then
+    /// [`FuncCall::eval`] skips the primitive too).
+    pub fn live_program(&self) -> Option<&Arc<Program>> {
+        let prog = self.shared.program()?;
+        self.shared.fatal().is_none().then_some(prog)
+    }
+
     /// Evaluate at `sp` with `f`, which gets an evaluation; None (the primitive is skipped
     /// for this ray) on a domain or range error, a non-finite result or a fatal error
     /// (which is recorded).
@@ -183,6 +195,25 @@ impl FuncCall {
             }
             Err(_) => None,
         }
+    }
+}
+
+/// A primitive's expressions as one pure expression (`crate::cal::Pure`), when all of
+/// them are; decided at the first evaluation, once the scene's program is linked.
+#[derive(Debug, Default)]
+pub struct PureExprs(OnceLock<Option<Pure>>);
+
+impl PureExprs {
+    /// The values of `exprs` (at most three) at `sp` by their pure form: None when they are
+    /// not all pure or the evaluation leaves them to the machine (then
+    /// [`FuncCall::eval`] gives the same values, or the error).
+    pub fn values(&self, call: &FuncCall, exprs: &[ExprId], sp: &ShadingPoint) -> Option<[f64; 3]> {
+        let prog = call.live_program()?;
+        let pure = self.0.get_or_init(|| prog.pure_exprs(exprs)).as_ref()?;
+        let mut out = [0.0; 3];
+        let o = out.get_mut(..exprs.len())?;
+        pure.eval_into(&call.frame().channels(sp), call.args(), &[], o)?;
+        Some(out)
     }
 }
 

@@ -11,7 +11,7 @@
 //! evaluated in the pattern frame ([`super::frame`]); a texture's vector is taken back to
 //! the world frame.
 
-use super::func::{compile, finite, load_context, FuncCall};
+use super::func::{compile, finite, load_context, FuncCall, PureExprs};
 use super::{MixCoefficient, ModifierKind, ModifierLookup, Pattern, Texture};
 use crate::cal::ExprId;
 use crate::color::Color;
@@ -54,10 +54,18 @@ struct FuncPattern {
     call: FuncCall,
     /// One expression (grey) or three (r, g, b).
     exprs: Vec<ExprId>,
+    pure: PureExprs,
 }
 
 impl Pattern for FuncPattern {
     fn colour(&self, sp: &ShadingPoint) -> Option<Color> {
+        if let Some(c) = self.pure.values(&self.call, &self.exprs, sp) {
+            return Some(if self.exprs.len() == 1 {
+                Color::splat(c[0])
+            } else {
+                Color::new(c[0], c[1], c[2])
+            });
+        }
         self.call.eval(sp, None, |ev| {
             if let [e] = self.exprs[..] {
                 let v = finite(ev.eval(e)?)?;
@@ -78,10 +86,14 @@ impl Pattern for FuncPattern {
 struct FuncTexture {
     call: FuncCall,
     exprs: Vec<ExprId>,
+    pure: PureExprs,
 }
 
 impl Texture for FuncTexture {
     fn perturbation(&self, sp: &ShadingPoint) -> Option<DVec3> {
+        if let Some(c) = self.pure.values(&self.call, &self.exprs, sp) {
+            return Some(self.call.frame().vector_to_world(sp, DVec3::from_array(c)));
+        }
         let v = self.call.eval(sp, None, |ev| {
             let mut c = [0.0; 3];
             for (ci, e) in c.iter_mut().zip(&self.exprs) {
@@ -98,10 +110,14 @@ impl Texture for FuncTexture {
 struct FuncMix {
     call: FuncCall,
     coef: ExprId,
+    pure: PureExprs,
 }
 
 impl MixCoefficient for FuncMix {
     fn coefficient(&self, sp: &ShadingPoint) -> Option<f64> {
+        if let Some(c) = self.pure.values(&self.call, &[self.coef], sp) {
+            return Some(c[0]);
+        }
         self.call.eval(sp, None, |ev| finite(ev.eval(self.coef)?))
     }
 }
@@ -109,19 +125,31 @@ impl MixCoefficient for FuncMix {
 /// Parser of `brightfunc`.
 pub fn parse_brightfunc(p: &Primitive, l: &dyn ModifierLookup) -> Result<ModifierKind, String> {
     let (exprs, call) = expressions(p, l, 0, 1)?;
-    Ok(ModifierKind::Pattern(Box::new(FuncPattern { call, exprs })))
+    Ok(ModifierKind::Pattern(Box::new(FuncPattern {
+        call,
+        exprs,
+        pure: PureExprs::default(),
+    })))
 }
 
 /// Parser of `colorfunc`.
 pub fn parse_colorfunc(p: &Primitive, l: &dyn ModifierLookup) -> Result<ModifierKind, String> {
     let (exprs, call) = expressions(p, l, 0, 3)?;
-    Ok(ModifierKind::Pattern(Box::new(FuncPattern { call, exprs })))
+    Ok(ModifierKind::Pattern(Box::new(FuncPattern {
+        call,
+        exprs,
+        pure: PureExprs::default(),
+    })))
 }
 
 /// Parser of `texfunc`.
 pub fn parse_texfunc(p: &Primitive, l: &dyn ModifierLookup) -> Result<ModifierKind, String> {
     let (exprs, call) = expressions(p, l, 0, 3)?;
-    Ok(ModifierKind::Texture(Box::new(FuncTexture { call, exprs })))
+    Ok(ModifierKind::Texture(Box::new(FuncTexture {
+        call,
+        exprs,
+        pure: PureExprs::default(),
+    })))
 }
 
 /// Parser of `mixfunc`.
@@ -131,6 +159,7 @@ pub fn parse_mixfunc(p: &Primitive, l: &dyn ModifierLookup) -> Result<ModifierKi
         coef: Box::new(FuncMix {
             call,
             coef: exprs[0],
+            pure: PureExprs::default(),
         }),
         foreground: l.modref(&p.sargs[0])?,
         background: l.modref(&p.sargs[1])?,

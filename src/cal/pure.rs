@@ -1,0 +1,407 @@
+//! Pure expressions: a definition's whole meaning as one small tree, evaluated without the
+//! run-time machine.
+//!
+//! Most expressions of a scene's patterns are small pure functions of the ray channels and
+//! the primitive's real arguments: an ies2rad luminaire's `src_theta` (`Acos(Dz)/DEGREE`)
+//! and `flatcorr(v)` (`corr(v)/Rdot`), a texture's coordinates. Evaluating them through
+//! [`super::Program::begin`] costs a cache lookup, a tick, and a machine frame per block,
+//! several times the arithmetic. [`Pure`] is the same expression with every variable and
+//! every call of a defined function replaced by its definition (parameters by their
+//! argument trees), down to numbers, channels, the call's own parameters, `arg`, and
+//! library functions. Pure means: nothing of the evaluation but the channels, the real
+//! arguments and the call's values changes the result, so computing a variable twice (where
+//! the machine caches it once per evaluation) or an argument at each use (where the machine
+//! caches it per call) gives the same value bit for bit, through the same `f64`
+//! operations in the same order and the same library functions.
+//!
+//! An expression is not made pure ([`super::Program::pure_expr`] returns None) when it
+//! reaches a function-name argument, `select`, a BRDF variable, an undefined name, a
+//! variable called as a function or a function used as a variable, recursion deeper than
+//! [`MAX_DEPTH`], or more than [`MAX_NODES`] nodes in all. Evaluation ([`Pure::eval`])
+//! gives up (None) wherever the machine could raise an error: a result that is not finite,
+//! a division by zero, `arg(n)` past the real arguments, a parameter the call did not
+//! pass. The caller then evaluates by the machine, which gives the error exactly as before:
+//! the pure path only ever returns values the machine returns.
+
+use super::code::{Callee, Code, Def, Node, NodeId, Op, SlotId};
+use super::eval::{better, noise_fn};
+use super::library::Lib;
+use std::collections::HashMap;
+
+/// Most nodes of a pure expression (larger ones stay with the machine).
+pub const MAX_NODES: usize = 256;
+
+/// Deepest nesting of definitions expanded into a pure expression.
+pub const MAX_DEPTH: u32 = 48;
+
+/// Most expressions in one pure form (a data file's dimensions).
+pub const MAX_ROOTS: usize = 6;
+
+/// Expressions of at most this many nodes are evaluated in a buffer on the stack.
+const SMALL: usize = 32;
+
+/// One node of a pure expression; children are indices into [`Pure::nodes`], always
+/// smaller than the node's own index (the root is the last).
+#[derive(Debug, Clone, Copy)]
+enum P {
+    Num(f64),
+    /// Ray channel index (0-based, below 27).
+    Chan(u32),
+    /// The call's value `i`.
+    Param(u32),
+    Neg(u32),
+    Add(u32, u32),
+    Sub(u32, u32),
+    Mul(u32, u32),
+    Div(u32, u32),
+    Pow(u32, u32),
+    If(u32, u32, u32),
+    /// A library function of one argument (its plain math, [`Lib::unary`]).
+    Unary(fn(f64) -> f64, u32),
+    Atan2(u32, u32),
+    /// `min` or `max` (true) over a run of [`Pure::list`].
+    MinMax(bool, u32, u16),
+    Noise(Lib, u32, u32, u32),
+    Arg(u32),
+}
+
+/// A pure expression (see the module documentation).
+#[derive(Debug, Clone)]
+pub struct Pure {
+    nodes: Vec<P>,
+    /// Argument runs of `min` and `max`.
+    list: Vec<u32>,
+    /// What an evaluation starts from: each number node's value (0 elsewhere).
+    init: Vec<f64>,
+    /// The nodes that are not numbers, with their indices, in order.
+    ops: Vec<(u32, P)>,
+    /// The expressions' nodes (one or more roots).
+    roots: Vec<u32>,
+}
+
+/// Expansion state: the code, the node budget and the variables expanded so far.
+struct Expand<'a> {
+    code: &'a Code,
+    out: Pure,
+    /// Each variable's node: a variable read several times (within an expression or by
+    /// several roots) is computed once, as the machine computes it once per evaluation.
+    vars: HashMap<SlotId, u32>,
+}
+
+impl Expand<'_> {
+    fn push(&mut self, p: P) -> Option<u32> {
+        if self.out.nodes.len() >= MAX_NODES {
+            return None;
+        }
+        self.out.nodes.push(p);
+        Some((self.out.nodes.len() - 1) as u32)
+    }
+
+    /// Node `n` of the code with parameters bound to `params` (pure node ids; None at the
+    /// top of a function: its parameters are the call's values).
+    fn node(&mut self, n: NodeId, params: Option<&[u32]>, depth: u32) -> Option<u32> {
+        if depth > MAX_DEPTH {
+            return None;
+        }
+        match *self.code.nodes.get(n as usize)? {
+            Node::Num(v) => self.push(P::Num(v)),
+            Node::Chan(c) => {
+                let c = c.checked_sub(1)?;
+                (c < 27).then_some(())?;
+                self.push(P::Chan(c))
+            }
+            Node::Param(i) => match params {
+                Some(p) => p.get(i as usize).copied(),
+                None => self.push(P::Param(u32::from(i))),
+            },
+            Node::Neg(a) => {
+                let a = self.node(a, params, depth + 1)?;
+                self.push(P::Neg(a))
+            }
+            Node::Bin(op, a, b) => {
+                let a = self.node(a, params, depth + 1)?;
+                let b = self.node(b, params, depth + 1)?;
+                self.push(match op {
+                    Op::Add => P::Add(a, b),
+                    Op::Sub => P::Sub(a, b),
+                    Op::Mul => P::Mul(a, b),
+                    Op::Div => P::Div(a, b),
+                    Op::Pow => P::Pow(a, b),
+                })
+            }
+            Node::Var(s) => match self.code.slots.get(s as usize)?.def {
+                Def::Num(v) => self.push(P::Num(v)),
+                Def::Var { expr, .. } => {
+                    if let Some(&k) = self.vars.get(&s) {
+                        return Some(k);
+                    }
+                    let k = self.node(expr, Some(&[]), depth + 1)?;
+                    self.vars.insert(s, k);
+                    Some(k)
+                }
+                _ => None,
+            },
+            Node::Call { callee, first, n } => {
+                let args = self
+                    .code
+                    .arglist
+                    .get(first as usize..first as usize + n as usize)?;
+                match callee {
+                    Callee::Lib(l) => self.lib(l, args, params, depth),
+                    Callee::Slot(s) => {
+                        let slot = self.code.slots.get(s as usize)?;
+                        match slot.def {
+                            Def::Func { nparams, body, .. } => {
+                                // Every parameter the body may read is bound (a missing
+                                // one is the machine's fatal error: not pure).
+                                if (n as usize) < nparams as usize {
+                                    return None;
+                                }
+                                let mut bound = Vec::with_capacity(args.len());
+                                for &a in args {
+                                    bound.push(self.node(a, params, depth + 1)?);
+                                }
+                                self.node(body, Some(&bound), depth + 1)
+                            }
+                            Def::None => self.lib(slot.lib?, args, params, depth),
+                            _ => None,
+                        }
+                    }
+                    Callee::Param(_) => None,
+                }
+            }
+        }
+    }
+
+    fn lib(&mut self, l: Lib, args: &[NodeId], params: Option<&[u32]>, depth: u32) -> Option<u32> {
+        let a = |k: usize, me: &mut Self| me.node(*args.get(k)?, params, depth + 1);
+        match l {
+            Lib::If => {
+                let c = a(0, self)?;
+                let x = a(1, self)?;
+                let y = a(2, self)?;
+                self.push(P::If(c, x, y))
+            }
+            Lib::Atan2 => {
+                let y = a(0, self)?;
+                let x = a(1, self)?;
+                self.push(P::Atan2(y, x))
+            }
+            Lib::Min | Lib::Max => {
+                if args.is_empty() || args.len() > u16::MAX as usize {
+                    return None;
+                }
+                let mut ids = Vec::with_capacity(args.len());
+                for k in 0..args.len() {
+                    ids.push(a(k, self)?);
+                }
+                let at = self.out.list.len() as u32;
+                self.out.list.extend(ids);
+                self.push(P::MinMax(l == Lib::Max, at, args.len() as u16))
+            }
+            Lib::Arg => {
+                let x = a(0, self)?;
+                self.push(P::Arg(x))
+            }
+            Lib::Noise3 | Lib::Noise3x | Lib::Noise3y | Lib::Noise3z | Lib::Fnoise3 => {
+                let x = a(0, self)?;
+                let y = a(1, self)?;
+                let z = a(2, self)?;
+                self.push(P::Noise(l, x, y, z))
+            }
+            Lib::Select => None,
+            _ => {
+                let f = l.unary()?;
+                let x = a(0, self)?;
+                self.push(P::Unary(f, x))
+            }
+        }
+    }
+}
+
+/// The pure form of nodes `roots` of `code`: expressions when `function` is false (they
+/// have no parameters), one function's body when true (its parameters are the call's
+/// values).
+pub(crate) fn expand(code: &Code, roots: &[NodeId], function: bool) -> Option<Pure> {
+    let mut e = Expand {
+        code,
+        out: Pure {
+            nodes: Vec::new(),
+            list: Vec::new(),
+            init: Vec::new(),
+            ops: Vec::new(),
+            roots: Vec::new(),
+        },
+        vars: HashMap::new(),
+    };
+    let params: Option<&[u32]> = if function { None } else { Some(&[]) };
+    if roots.is_empty() || roots.len() > MAX_ROOTS {
+        return None;
+    }
+    for &r in roots {
+        let top = e.node(r, params, 0)?;
+        e.out.roots.push(top);
+    }
+    let mut out = e.out;
+    for (k, p) in out.nodes.iter().enumerate() {
+        match *p {
+            P::Num(x) => out.init.push(x),
+            op => {
+                out.init.push(0.0);
+                out.ops.push((k as u32, op));
+            }
+        }
+    }
+    Some(out)
+}
+
+impl Pure {
+    /// The value for ray channels `chan`, real arguments `args` and the call's values
+    /// `values` (of the first root); None wherever the machine could raise an error (see
+    /// the module documentation).
+    pub fn eval(&self, chan: &[f64; 27], args: &[f64], values: &[f64]) -> Option<f64> {
+        let mut out = [0.0];
+        self.eval_into(chan, args, values, &mut out)?;
+        Some(out[0])
+    }
+
+    /// The values of the roots (as many as `out` holds, at most the roots), or None when
+    /// any of them is left to the machine.
+    pub fn eval_into(
+        &self,
+        chan: &[f64; 27],
+        args: &[f64],
+        values: &[f64],
+        out: &mut [f64],
+    ) -> Option<()> {
+        if self.nodes.is_empty() || out.len() > self.roots.len() {
+            return None;
+        }
+        if self.nodes.len() <= SMALL {
+            let v = &mut [0.0f64; SMALL];
+            self.run(v, chan, args, values);
+            self.read(v, out)
+        } else {
+            let v = &mut [0.0f64; MAX_NODES];
+            self.run(v, chan, args, values);
+            self.read(v, out)
+        }
+    }
+
+    /// The roots' values from an evaluated buffer; None unless all are finite.
+    fn read<const N: usize>(&self, v: &[f64; N], out: &mut [f64]) -> Option<()> {
+        for (o, &r) in out.iter_mut().zip(&self.roots) {
+            let x = v[r as usize & (N - 1)];
+            if !x.is_finite() {
+                return None;
+            }
+            *o = x;
+        }
+        Some(())
+    }
+
+    /// Every node in order (children come before their parents),
+    /// in a buffer of N values (a power of two at least the node count: indices are masked
+    /// by N − 1, which needs no bounds checks).
+    /// A node the machine would refuse (a NaN or infinite library result, a division by
+    /// zero, `arg(n)` or a parameter past the end) or carry on with (an infinite sum) is
+    /// NaN here, and so is every node computed from it; the root is NaN exactly when it
+    /// depends on one. Both branches of an `if` are computed (neither has effects), and
+    /// the one not taken is dropped, as the machine never evaluates it.
+    fn run<const N: usize>(
+        &self,
+        v: &mut [f64; N],
+        chan: &[f64; 27],
+        args: &[f64],
+        values: &[f64],
+    ) {
+        const { assert!(N.is_power_of_two()) };
+        let n = self.init.len();
+        v[..n].copy_from_slice(&self.init);
+        for &(k, node) in &self.ops {
+            let g = |j: u32| v[j as usize & (N - 1)];
+            // Both operands usable, else NaN.
+            let two = |a: u32, b: u32, f: fn(f64, f64) -> f64| {
+                let (x, y) = (g(a), g(b));
+                if x.is_nan() || y.is_nan() {
+                    f64::NAN
+                } else {
+                    f(x, y)
+                }
+            };
+            let r = match node {
+                P::Num(x) => x,
+                P::Chan(c) => chan.get(c as usize).copied().unwrap_or(f64::NAN),
+                P::Param(p) => values.get(p as usize).copied().unwrap_or(f64::NAN),
+                P::Neg(a) => -g(a),
+                P::Add(a, b) => g(a) + g(b),
+                P::Sub(a, b) => g(a) - g(b),
+                P::Mul(a, b) => g(a) * g(b),
+                // A refused operand refuses the operation (`x^0` of a NaN is 1).
+                P::Div(a, b) => two(a, b, |x, y| if y == 0.0 { f64::NAN } else { x / y }),
+                P::Pow(a, b) => two(a, b, f64::powf),
+                P::If(c, a, b) => {
+                    let c = g(c);
+                    if c.is_nan() {
+                        f64::NAN
+                    } else if c > 0.0 {
+                        g(a)
+                    } else {
+                        g(b)
+                    }
+                }
+                P::Unary(f, a) => {
+                    let x = g(a);
+                    if x.is_nan() {
+                        f64::NAN
+                    } else {
+                        f(x)
+                    }
+                }
+                P::Atan2(y, x) => two(y, x, f64::atan2),
+                P::MinMax(max, at, n) => {
+                    // From the last argument backwards, as the machine; a refused
+                    // argument refuses the whole call.
+                    let run = &self.list[at as usize..at as usize + n as usize];
+                    let mut best = g(run[run.len() - 1]);
+                    for &j in run[..run.len() - 1].iter().rev() {
+                        let a = g(j);
+                        best = if a.is_nan() { a } else { better(max, best, a) };
+                    }
+                    best
+                }
+                P::Noise(l, x, y, z) => {
+                    let (x, y, z) = (g(x), g(y), g(z));
+                    if x.is_nan() || y.is_nan() || z.is_nan() {
+                        f64::NAN
+                    } else {
+                        noise_fn(l, x, y, z)
+                    }
+                }
+                P::Arg(a) => {
+                    let x = g(a);
+                    let n = (x + 0.5) as i64;
+                    if x.is_nan() {
+                        f64::NAN
+                    } else if n < 1 {
+                        args.len() as f64
+                    } else {
+                        args.get(n as usize - 1).copied().unwrap_or(f64::NAN)
+                    }
+                }
+            };
+            // Infinities (which the machine carries through sums) are refused too.
+            v[k as usize & (N - 1)] = if r.is_finite() { r } else { f64::NAN };
+        }
+    }
+
+    /// Number of nodes.
+    pub fn len(&self) -> usize {
+        self.nodes.len()
+    }
+
+    /// Whether the expression has no nodes (never, for one made by `expand`).
+    pub fn is_empty(&self) -> bool {
+        self.nodes.is_empty()
+    }
+}
