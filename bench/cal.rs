@@ -5,6 +5,10 @@
 //! every time. With Radiance installed (`TESSERA_RADIANCE_BIN`, or its default location),
 //! Radiance's own skybright.cal and source.cal (what ies2rad luminaires call) are measured
 //! too. `cargo bench --bench cal -- WORD` runs the cases whose name contains WORD.
+//!
+//! The second column is the same expression's pure form ([`tessera::cal::Pure`], what
+//! patterns evaluate first), with the same channels; "–" where the expression is not pure
+//! (it calls a function recursively, or is too large).
 
 use std::hint::black_box;
 use std::path::PathBuf;
@@ -23,21 +27,27 @@ sky = wmean((Dz+1.01)^10, clear, (Dz+1.01)^-10, A3);
 
 const ARGS: [f64; 7] = [1.0, 11.58, 23.74, 0.6922, 0.067850, -0.617254, 0.783832];
 
-fn time(name: &str, prog: &Program, e: ExprId, n: usize) -> f64 {
+/// The channels of evaluation `i`: the ray direction and hit point change every time.
+fn channels(i: usize) -> [f64; 27] {
+    let a = i as f64 * 0.001;
+    let mut chan = [0.0; 27];
+    let (s, c) = a.sin_cos();
+    chan[0] = 0.6 * c;
+    chan[1] = 0.6 * s;
+    chan[2] = 0.8;
+    chan[6] = 3.0 * c + 0.1 * a;
+    chan[7] = 2.0 * s;
+    chan[8] = 0.5 * a;
+    chan
+}
+
+/// ns per evaluation through the machine, and through the pure form if there is one.
+fn time(name: &str, prog: &Program, e: ExprId, n: usize) -> (f64, Option<f64>) {
     let mut sum = 0.0;
     let t = Instant::now();
     for i in 0..n {
-        let a = i as f64 * 0.001;
-        let mut chan = [0.0; 27];
-        let (s, c) = a.sin_cos();
-        chan[0] = 0.6 * c;
-        chan[1] = 0.6 * s;
-        chan[2] = 0.8;
-        chan[6] = 3.0 * c + 0.1 * a;
-        chan[7] = 2.0 * s;
-        chan[8] = 0.5 * a;
         let env = Env {
-            chan,
+            chan: channels(i),
             args: &ARGS,
             brdf: None,
         };
@@ -45,9 +55,17 @@ fn time(name: &str, prog: &Program, e: ExprId, n: usize) -> f64 {
         sum += ev.eval(black_box(e)).unwrap_or(0.0);
     }
     let ns = t.elapsed().as_nanos() as f64 / n as f64;
+    let pure = prog.pure_expr(e).map(|p| {
+        let t = Instant::now();
+        for i in 0..n {
+            sum += black_box(&p).eval(&channels(i), &ARGS, &[]).unwrap_or(0.0);
+        }
+        t.elapsed().as_nanos() as f64 / n as f64
+    });
     black_box(sum);
-    println!("{name:<44} {ns:>8.1} ns/eval");
-    ns
+    let pure_txt = pure.map_or("–".to_string(), |p| format!("{p:.1}"));
+    println!("{name:<44} {ns:>8.1} ns/eval   pure {pure_txt:>8} ns/eval");
+    (ns, pure)
 }
 
 fn main() {

@@ -15,7 +15,7 @@
 //! operations in the same order and the same library functions.
 //!
 //! An expression is not made pure ([`super::Program::pure_expr`] returns None) when it
-//! reaches a function-name argument, `select`, a BRDF variable, an undefined name, a
+//! reaches a function-name argument, a BRDF variable, an undefined name, a
 //! variable called as a function or a function used as a variable, recursion deeper than
 //! [`MAX_DEPTH`], or more than [`MAX_NODES`] nodes in all. Evaluation ([`Pure::eval`])
 //! gives up (None) wherever the machine could raise an error: a result that is not finite,
@@ -24,7 +24,7 @@
 //! the pure path only ever returns values the machine returns.
 
 use super::code::{Callee, Code, Def, Node, NodeId, Op, SlotId};
-use super::eval::{better, noise_fn};
+use super::eval::{better, noise_fn, select_index};
 use super::library::Lib;
 use std::collections::HashMap;
 
@@ -36,6 +36,29 @@ pub const MAX_DEPTH: u32 = 48;
 
 /// Most expressions in one pure form (a data file's dimensions).
 pub const MAX_ROOTS: usize = 6;
+
+/// Most steps of the two branches of an `if` computed both, without jumps, when all of
+/// them are cheap ([`cheap`]).
+const CHEAP_BRANCHES: usize = 8;
+
+/// Whether a step costs no more than a jump: arithmetic without a library call.
+fn cheap(s: &Step) -> bool {
+    matches!(
+        s,
+        Step::Val(
+            _,
+            P::Chan(_)
+                | P::Param(_)
+                | P::Neg(_)
+                | P::Add(..)
+                | P::Sub(..)
+                | P::Mul(..)
+                | P::Div(..)
+                | P::If(..)
+                | P::Arg(_)
+        )
+    )
+}
 
 /// Expressions of at most this many nodes are evaluated in a buffer on the stack.
 const SMALL: usize = 32;
@@ -61,22 +84,44 @@ enum P {
     Atan2(u32, u32),
     /// `min` or `max` (true) over a run of [`Pure::list`].
     MinMax(bool, u32, u16),
+    /// `select` over a run of [`Pure::list`] (the index first).
+    Select(u32, u16),
     Noise(Lib, u32, u32, u32),
     Arg(u32),
+}
+
+/// One step of an evaluation: a node's value, or a forward jump past the branches of an
+/// `if` or `select` that are not taken.
+#[derive(Debug, Clone, Copy)]
+enum Step {
+    /// Compute node `k`.
+    Val(u32, P),
+    /// Unless node `c` is above 0, go to step `to` (the `if`'s second branch).
+    Unless(u32, u32),
+    /// Go to step `to`.
+    Goto(u32),
+    /// Go to the step [`Pure::jumps`]`[at + k - 1]` of the argument `k` that node `c`
+    /// selects among `n`, or to `jumps[at + n]` (the end) when it selects none.
+    Switch(u32, u32, u32),
 }
 
 /// A pure expression (see the module documentation).
 #[derive(Debug, Clone)]
 pub struct Pure {
-    nodes: Vec<P>,
-    /// Argument runs of `min` and `max`.
+    /// Number of nodes.
+    count: usize,
+    /// Argument runs of `min`, `max` and `select`.
     list: Vec<u32>,
+    /// Targets of [`Step::Switch`].
+    jumps: Vec<u32>,
     /// What an evaluation starts from: each number node's value (0 elsewhere).
     init: Vec<f64>,
-    /// The nodes that are not numbers, with their indices, in order.
-    ops: Vec<(u32, P)>,
+    /// The steps, in order; every jump goes forward.
+    ops: Vec<Step>,
     /// The expressions' nodes (one or more roots).
     roots: Vec<u32>,
+    /// Whether there are no jump steps (the simpler loop).
+    straight: bool,
 }
 
 /// Expansion state: the code, the node budget and the variables expanded so far.
@@ -89,12 +134,51 @@ struct Expand<'a> {
 }
 
 impl Expand<'_> {
+    /// A new node: a number goes into the initial values, anything else becomes a step.
     fn push(&mut self, p: P) -> Option<u32> {
-        if self.out.nodes.len() >= MAX_NODES {
+        let k = self.out.count;
+        if k >= MAX_NODES {
             return None;
         }
-        self.out.nodes.push(p);
-        Some((self.out.nodes.len() - 1) as u32)
+        self.out.count += 1;
+        match p {
+            P::Num(x) => self.out.init.push(x),
+            _ => {
+                self.out.init.push(0.0);
+                self.out.ops.push(Step::Val(k as u32, p));
+            }
+        }
+        Some(k as u32)
+    }
+
+    /// A jump step to be aimed later ([`Expand::aim`]); its index.
+    fn jump(&mut self, s: Step) -> usize {
+        self.out.ops.push(s);
+        self.out.ops.len() - 1
+    }
+
+    /// Aim jump step `j` at the next step.
+    fn aim(&mut self, j: usize) {
+        let here = self.out.ops.len() as u32;
+        match &mut self.out.ops[j] {
+            Step::Unless(_, to) | Step::Goto(to) => *to = here,
+            _ => {}
+        }
+    }
+
+    /// Argument `k` expanded as a branch taken only sometimes: variables first met in it
+    /// are forgotten after it (their nodes are computed only when it is taken).
+    fn branch(
+        &mut self,
+        args: &[NodeId],
+        k: usize,
+        params: Option<&[u32]>,
+        depth: u32,
+    ) -> Option<u32> {
+        let saved = self.vars.clone();
+        let r = self.node(*args.get(k)?, params, depth + 1);
+        self.vars = saved;
+        r
     }
 
     /// Node `n` of the code with parameters bound to `params` (pure node ids; None at the
@@ -177,9 +261,23 @@ impl Expand<'_> {
         let a = |k: usize, me: &mut Self| me.node(*args.get(k)?, params, depth + 1);
         match l {
             Lib::If => {
+                if args.len() < 3 {
+                    return None;
+                }
                 let c = a(0, self)?;
-                let x = a(1, self)?;
-                let y = a(2, self)?;
+                let j = self.jump(Step::Unless(c, 0));
+                let x = self.branch(args, 1, params, depth)?;
+                let g = self.jump(Step::Goto(0));
+                self.aim(j);
+                let y = self.branch(args, 2, params, depth)?;
+                self.aim(g);
+                // Branches of a few cheap steps are computed both, without jumps (what
+                // the jumps save is less than they cost; `bound`, `abs`, `corr`).
+                let inside = self.out.ops[j + 1..g].iter().chain(&self.out.ops[g + 1..]);
+                if inside.clone().count() <= CHEAP_BRANCHES && inside.clone().all(cheap) {
+                    self.out.ops.remove(g);
+                    self.out.ops.remove(j);
+                }
                 self.push(P::If(c, x, y))
             }
             Lib::Atan2 => {
@@ -209,7 +307,30 @@ impl Expand<'_> {
                 let z = a(2, self)?;
                 self.push(P::Noise(l, x, y, z))
             }
-            Lib::Select => None,
+            Lib::Select => {
+                if args.is_empty() || args.len() > u16::MAX as usize {
+                    return None;
+                }
+                let n = args.len() - 1;
+                let c = a(0, self)?;
+                let table = self.out.jumps.len();
+                self.out.jumps.resize(table + n + 1, 0);
+                self.jump(Step::Switch(c, table as u32, n as u32));
+                let mut ids = vec![c];
+                let mut gotos = Vec::with_capacity(n);
+                for k in 1..=n {
+                    self.out.jumps[table + k - 1] = self.out.ops.len() as u32;
+                    ids.push(self.branch(args, k, params, depth)?);
+                    gotos.push(self.jump(Step::Goto(0)));
+                }
+                for g in gotos {
+                    self.aim(g);
+                }
+                self.out.jumps[table + n] = self.out.ops.len() as u32;
+                let at = self.out.list.len() as u32;
+                self.out.list.extend(ids);
+                self.push(P::Select(at, args.len() as u16))
+            }
             _ => {
                 let f = l.unary()?;
                 let x = a(0, self)?;
@@ -226,11 +347,13 @@ pub(crate) fn expand(code: &Code, roots: &[NodeId], function: bool) -> Option<Pu
     let mut e = Expand {
         code,
         out: Pure {
-            nodes: Vec::new(),
+            count: 0,
             list: Vec::new(),
+            jumps: Vec::new(),
             init: Vec::new(),
             ops: Vec::new(),
             roots: Vec::new(),
+            straight: false,
         },
         vars: HashMap::new(),
     };
@@ -243,15 +366,7 @@ pub(crate) fn expand(code: &Code, roots: &[NodeId], function: bool) -> Option<Pu
         e.out.roots.push(top);
     }
     let mut out = e.out;
-    for (k, p) in out.nodes.iter().enumerate() {
-        match *p {
-            P::Num(x) => out.init.push(x),
-            op => {
-                out.init.push(0.0);
-                out.ops.push((k as u32, op));
-            }
-        }
-    }
+    out.straight = out.ops.iter().all(|s| matches!(s, Step::Val(..)));
     Some(out)
 }
 
@@ -274,12 +389,16 @@ impl Pure {
         values: &[f64],
         out: &mut [f64],
     ) -> Option<()> {
-        if self.nodes.is_empty() || out.len() > self.roots.len() {
+        if self.count == 0 || out.len() > self.roots.len() {
             return None;
         }
-        if self.nodes.len() <= SMALL {
+        if self.count <= SMALL {
             let v = &mut [0.0f64; SMALL];
-            self.run(v, chan, args, values);
+            if self.straight {
+                self.run_straight(v, chan, args, values);
+            } else {
+                self.run(v, chan, args, values);
+            }
             self.read(v, out)
         } else {
             let v = &mut [0.0f64; MAX_NODES];
@@ -318,90 +437,164 @@ impl Pure {
         const { assert!(N.is_power_of_two()) };
         let n = self.init.len();
         v[..n].copy_from_slice(&self.init);
-        for &(k, node) in &self.ops {
-            let g = |j: u32| v[j as usize & (N - 1)];
-            // Both operands usable, else NaN.
-            let two = |a: u32, b: u32, f: fn(f64, f64) -> f64| {
-                let (x, y) = (g(a), g(b));
-                if x.is_nan() || y.is_nan() {
+        let mut pc = 0;
+        while let Some(&step) = self.ops.get(pc) {
+            pc += 1;
+            let (k, node) = match step {
+                Step::Val(k, p) => (k, p),
+                Step::Unless(c, to) => {
+                    // A NaN condition goes either way: the `if` refuses it.
+                    let c = v[c as usize & (N - 1)];
+                    if c.is_nan() || c <= 0.0 {
+                        pc = to as usize;
+                    }
+                    continue;
+                }
+                Step::Goto(to) => {
+                    pc = to as usize;
+                    continue;
+                }
+                Step::Switch(c, at, n) => {
+                    let d = v[c as usize & (N - 1)] + 0.5;
+                    let k = match select_index(d, n as usize) {
+                        Ok(k) if k >= 1 => k - 1,
+                        _ => n as usize,
+                    };
+                    pc = self.jumps[at as usize + k] as usize;
+                    continue;
+                }
+            };
+            v[k as usize & (N - 1)] = self.value(node, v, chan, args, values);
+        }
+    }
+
+    /// Every node in order, when there are no jumps (see [`Pure::run`]).
+    fn run_straight<const N: usize>(
+        &self,
+        v: &mut [f64; N],
+        chan: &[f64; 27],
+        args: &[f64],
+        values: &[f64],
+    ) {
+        const { assert!(N.is_power_of_two()) };
+        let n = self.init.len();
+        v[..n].copy_from_slice(&self.init);
+        for step in &self.ops {
+            if let Step::Val(k, node) = *step {
+                v[k as usize & (N - 1)] = self.value(node, v, chan, args, values);
+            }
+        }
+    }
+
+    /// Node `node`'s value from the values `v` of its children; NaN where the machine
+    /// would refuse it (see [`Pure::run`]).
+    #[inline(always)]
+    fn value<const N: usize>(
+        &self,
+        node: P,
+        v: &[f64; N],
+        chan: &[f64; 27],
+        args: &[f64],
+        values: &[f64],
+    ) -> f64 {
+        let g = |j: u32| v[j as usize & (N - 1)];
+        // Both operands usable, else NaN.
+        let two = |a: u32, b: u32, f: fn(f64, f64) -> f64| {
+            let (x, y) = (g(a), g(b));
+            if x.is_nan() || y.is_nan() {
+                f64::NAN
+            } else {
+                f(x, y)
+            }
+        };
+        let r = match node {
+            P::Num(x) => x,
+            P::Chan(c) => chan.get(c as usize).copied().unwrap_or(f64::NAN),
+            P::Param(p) => values.get(p as usize).copied().unwrap_or(f64::NAN),
+            P::Neg(a) => -g(a),
+            P::Add(a, b) => g(a) + g(b),
+            P::Sub(a, b) => g(a) - g(b),
+            P::Mul(a, b) => g(a) * g(b),
+            // A refused operand refuses the operation (`x^0` of a NaN is 1).
+            P::Div(a, b) => two(a, b, |x, y| if y == 0.0 { f64::NAN } else { x / y }),
+            P::Pow(a, b) => two(a, b, f64::powf),
+            P::If(c, a, b) => {
+                let c = g(c);
+                if c.is_nan() {
+                    f64::NAN
+                } else if c > 0.0 {
+                    g(a)
+                } else {
+                    g(b)
+                }
+            }
+            P::Unary(f, a) => {
+                let x = g(a);
+                if x.is_nan() {
                     f64::NAN
                 } else {
-                    f(x, y)
+                    f(x)
                 }
-            };
-            let r = match node {
-                P::Num(x) => x,
-                P::Chan(c) => chan.get(c as usize).copied().unwrap_or(f64::NAN),
-                P::Param(p) => values.get(p as usize).copied().unwrap_or(f64::NAN),
-                P::Neg(a) => -g(a),
-                P::Add(a, b) => g(a) + g(b),
-                P::Sub(a, b) => g(a) - g(b),
-                P::Mul(a, b) => g(a) * g(b),
-                // A refused operand refuses the operation (`x^0` of a NaN is 1).
-                P::Div(a, b) => two(a, b, |x, y| if y == 0.0 { f64::NAN } else { x / y }),
-                P::Pow(a, b) => two(a, b, f64::powf),
-                P::If(c, a, b) => {
-                    let c = g(c);
-                    if c.is_nan() {
-                        f64::NAN
-                    } else if c > 0.0 {
-                        g(a)
-                    } else {
-                        g(b)
-                    }
+            }
+            P::Atan2(y, x) => two(y, x, f64::atan2),
+            P::MinMax(max, at, n) => {
+                // From the last argument backwards, as the machine; a refused
+                // argument refuses the whole call.
+                let run = &self.list[at as usize..at as usize + n as usize];
+                let mut best = g(run[run.len() - 1]);
+                for &j in run[..run.len() - 1].iter().rev() {
+                    let a = g(j);
+                    best = if a.is_nan() { a } else { better(max, best, a) };
                 }
-                P::Unary(f, a) => {
-                    let x = g(a);
-                    if x.is_nan() {
-                        f64::NAN
-                    } else {
-                        f(x)
-                    }
+                best
+            }
+            P::Select(at, n) => {
+                // The chosen argument (0: their count); a refused index or one out of
+                // range is the machine's domain error. All were computed; the others
+                // are dropped, as the machine never evaluates them.
+                let run = &self.list[at as usize..at as usize + n as usize];
+                let count = run.len() - 1;
+                match select_index(g(run[0]) + 0.5, count) {
+                    Ok(0) => count as f64,
+                    Ok(k) => g(run[k]),
+                    Err(_) => f64::NAN,
                 }
-                P::Atan2(y, x) => two(y, x, f64::atan2),
-                P::MinMax(max, at, n) => {
-                    // From the last argument backwards, as the machine; a refused
-                    // argument refuses the whole call.
-                    let run = &self.list[at as usize..at as usize + n as usize];
-                    let mut best = g(run[run.len() - 1]);
-                    for &j in run[..run.len() - 1].iter().rev() {
-                        let a = g(j);
-                        best = if a.is_nan() { a } else { better(max, best, a) };
-                    }
-                    best
+            }
+            P::Noise(l, x, y, z) => {
+                let (x, y, z) = (g(x), g(y), g(z));
+                if x.is_nan() || y.is_nan() || z.is_nan() {
+                    f64::NAN
+                } else {
+                    noise_fn(l, x, y, z)
                 }
-                P::Noise(l, x, y, z) => {
-                    let (x, y, z) = (g(x), g(y), g(z));
-                    if x.is_nan() || y.is_nan() || z.is_nan() {
-                        f64::NAN
-                    } else {
-                        noise_fn(l, x, y, z)
-                    }
+            }
+            P::Arg(a) => {
+                let x = g(a);
+                let n = (x + 0.5) as i64;
+                if x.is_nan() {
+                    f64::NAN
+                } else if n < 1 {
+                    args.len() as f64
+                } else {
+                    args.get(n as usize - 1).copied().unwrap_or(f64::NAN)
                 }
-                P::Arg(a) => {
-                    let x = g(a);
-                    let n = (x + 0.5) as i64;
-                    if x.is_nan() {
-                        f64::NAN
-                    } else if n < 1 {
-                        args.len() as f64
-                    } else {
-                        args.get(n as usize - 1).copied().unwrap_or(f64::NAN)
-                    }
-                }
-            };
-            // Infinities (which the machine carries through sums) are refused too.
-            v[k as usize & (N - 1)] = if r.is_finite() { r } else { f64::NAN };
+            }
+        };
+        // Infinities (which the machine carries through sums) are refused too.
+        if r.is_finite() {
+            r
+        } else {
+            f64::NAN
         }
     }
 
     /// Number of nodes.
     pub fn len(&self) -> usize {
-        self.nodes.len()
+        self.count
     }
 
     /// Whether the expression has no nodes (never, for one made by `expand`).
     pub fn is_empty(&self) -> bool {
-        self.nodes.is_empty()
+        self.count == 0
     }
 }
