@@ -588,6 +588,12 @@ impl Pure {
         }
     }
 
+    /// Whether some branches are skipped by jumps (for tests).
+    #[cfg(test)]
+    pub(crate) fn has_jumps(&self) -> bool {
+        !self.straight
+    }
+
     /// Number of nodes.
     pub fn len(&self) -> usize {
         self.count
