@@ -101,8 +101,8 @@ impl Program {
         self.vm.calls_in(self.exprs[e.0 as usize])
     }
 
-    /// Expressions `es` (one to [`super::pure::MAX_ROOTS`]) as one [`Pure`] expression with a root each, when
-    /// they are pure (see [`super::pure`]).
+    /// Expressions `es` (one to six) as one [`Pure`] expression with a root each, when
+    /// they are pure (see [`Pure`]).
     pub fn pure_exprs(&self, es: &[ExprId]) -> Option<Pure> {
         let roots = es
             .iter()

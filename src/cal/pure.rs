@@ -1,18 +1,23 @@
-//! Pure expressions: a definition's whole meaning as one small tree, evaluated without the
-//! run-time machine.
+//! Pure expressions: a definition's whole meaning as one list of small steps, evaluated
+//! without the run-time machine.
 //!
 //! Most expressions of a scene's patterns are small pure functions of the ray channels and
 //! the primitive's real arguments: an ies2rad luminaire's `src_theta` (`Acos(Dz)/DEGREE`)
-//! and `flatcorr(v)` (`corr(v)/Rdot`), a texture's coordinates. Evaluating them through
-//! [`super::Program::begin`] costs a cache lookup, a tick, and a machine frame per block,
-//! several times the arithmetic. [`Pure`] is the same expression with every variable and
-//! every call of a defined function replaced by its definition (parameters by their
-//! argument trees), down to numbers, channels, the call's own parameters, `arg`, and
-//! library functions. Pure means: nothing of the evaluation but the channels, the real
-//! arguments and the call's values changes the result, so computing a variable twice (where
-//! the machine caches it once per evaluation) or an argument at each use (where the machine
-//! caches it per call) gives the same value bit for bit, through the same `f64`
-//! operations in the same order and the same library functions.
+//! and `flatcorr(v)` (`corr(v)/Rdot`), a sky's `skybr`, a texture's coordinates. Evaluating
+//! them through [`super::Program::begin`] costs a cache lookup, a tick, and a machine frame
+//! per block, several times the arithmetic. [`Pure`] is the same expression with every
+//! variable and every call of a defined function replaced by its definition (parameters by
+//! their arguments), down to numbers, channels, the call's own values, `arg`, and library
+//! functions, as steps (children before parents) that fill an array of values. A variable
+//! is computed once, and so is each argument of a call; a variable first met inside a
+//! branch of `if` or `select` is computed again if it is read after the branch (the branch
+//! may be skipped). Pure means: nothing of the evaluation but the channels, the real
+//! arguments and the call's values changes the result, so computing a value again, or
+//! computing a branch the machine would not take, gives the same values bit for bit,
+//! through the same `f64` operations in the same order and the same library functions.
+//! Branches with a library call are skipped by forward jumps when not taken
+//! ([`Step::Unless`], [`Step::Switch`]); branches of a few cheap steps are computed either
+//! way ([`CHEAP_BRANCHES`]).
 //!
 //! An expression is not made pure ([`super::Program::pure_expr`] returns None) when it
 //! reaches a function-name argument, a BRDF variable, an undefined name, a
