@@ -145,6 +145,14 @@ pub fn check_picture_memory(x: usize, y: usize, available: Option<u64>) -> Resul
     )
 }
 
+/// Bytes an `x`×`y` picture needs ([`PICTURE_BYTES_PER_PIXEL`] each); None when that
+/// overflows.
+fn picture_bytes(x: usize, y: usize) -> Option<u64> {
+    (x as u64)
+        .checked_mul(y as u64)
+        .and_then(|p| p.checked_mul(PICTURE_BYTES_PER_PIXEL))
+}
+
 /// Refuse a picture or tile of `x`×`y` pixels that cannot fit in `available` bytes (None:
 /// unknown, then only an overflowing size is refused); `advice` says what to do instead.
 pub fn check_memory_for(
@@ -153,9 +161,7 @@ pub fn check_memory_for(
     available: Option<u64>,
     advice: &str,
 ) -> Result<(), String> {
-    let need = (x as u64)
-        .checked_mul(y as u64)
-        .and_then(|p| p.checked_mul(PICTURE_BYTES_PER_PIXEL));
+    let need = picture_bytes(x, y);
     let gib = |b: u64| b as f64 / (1u64 << 30) as f64;
     match (need, available) {
         (None, _) => Err(format!("a {x}x{y} picture is too large to address")),
@@ -177,10 +183,7 @@ pub const UNCHECKED_PICTURE_BYTES: u64 = 16 << 20;
 /// [`check_memory_for`] with [`available_memory`], asked only when the `x × y` picture needs
 /// at least [`UNCHECKED_PICTURE_BYTES`].
 pub fn check_memory_if_large(x: usize, y: usize, advice: &str) -> Result<(), String> {
-    let need = (x as u64)
-        .checked_mul(y as u64)
-        .and_then(|p| p.checked_mul(PICTURE_BYTES_PER_PIXEL));
-    match need {
+    match picture_bytes(x, y) {
         Some(n) if n < UNCHECKED_PICTURE_BYTES => Ok(()),
         _ => check_memory_for(x, y, available_memory(), advice),
     }

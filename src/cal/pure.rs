@@ -398,22 +398,30 @@ impl Pure {
             return None;
         }
         if self.count <= SMALL {
-            let v = &mut [0.0f64; SMALL];
-            if self.straight {
-                self.run_straight(v, chan, args, values);
-            } else {
-                self.run(v, chan, args, values);
-            }
-            self.read(v, out)
+            self.fill(&mut [0.0f64; SMALL], chan, args, values, out)
         } else {
-            let v = &mut [0.0f64; MAX_NODES];
-            self.run(v, chan, args, values);
-            self.read(v, out)
+            self.fill(&mut [0.0f64; MAX_NODES], chan, args, values, out)
         }
     }
 
-    /// The roots' values from an evaluated buffer; None unless all are finite.
-    fn read<const N: usize>(&self, v: &[f64; N], out: &mut [f64]) -> Option<()> {
+    /// Evaluate into a buffer of N values (a power of two at least the node count: indices
+    /// are masked by N − 1, which needs no bounds checks) and read the roots; None unless
+    /// all are finite.
+    fn fill<const N: usize>(
+        &self,
+        v: &mut [f64; N],
+        chan: &[f64; 27],
+        args: &[f64],
+        values: &[f64],
+        out: &mut [f64],
+    ) -> Option<()> {
+        const { assert!(N.is_power_of_two()) };
+        v[..self.init.len()].copy_from_slice(&self.init);
+        if self.straight {
+            self.run_straight(v, chan, args, values);
+        } else {
+            self.run(v, chan, args, values);
+        }
         for (o, &r) in out.iter_mut().zip(&self.roots) {
             let x = v[r as usize & (N - 1)];
             if !x.is_finite() {
@@ -424,14 +432,12 @@ impl Pure {
         Some(())
     }
 
-    /// Every node in order (children come before their parents),
-    /// in a buffer of N values (a power of two at least the node count: indices are masked
-    /// by N − 1, which needs no bounds checks).
-    /// A node the machine would refuse (a NaN or infinite library result, a division by
-    /// zero, `arg(n)` or a parameter past the end) or carry on with (an infinite sum) is
-    /// NaN here, and so is every node computed from it; the root is NaN exactly when it
-    /// depends on one. Both branches of an `if` are computed (neither has effects), and
-    /// the one not taken is dropped, as the machine never evaluates it.
+    /// The steps in order (children come before their parents), jumps included, over the
+    /// values `v` (numbers already in place). A node the machine would refuse (a NaN or
+    /// infinite library result, a division by zero, `arg(n)` or a parameter past the end)
+    /// or carry on with (an infinite sum) is NaN here, and so is every node computed from
+    /// it; a root is NaN exactly when it depends on one. A branch skipped by a jump, or
+    /// computed and not taken, is never read, as the machine never evaluates it.
     fn run<const N: usize>(
         &self,
         v: &mut [f64; N],
@@ -439,9 +445,6 @@ impl Pure {
         args: &[f64],
         values: &[f64],
     ) {
-        const { assert!(N.is_power_of_two()) };
-        let n = self.init.len();
-        v[..n].copy_from_slice(&self.init);
         let mut pc = 0;
         while let Some(&step) = self.ops.get(pc) {
             pc += 1;
@@ -481,9 +484,6 @@ impl Pure {
         args: &[f64],
         values: &[f64],
     ) {
-        const { assert!(N.is_power_of_two()) };
-        let n = self.init.len();
-        v[..n].copy_from_slice(&self.init);
         for step in &self.ops {
             if let Step::Val(k, node) = *step {
                 v[k as usize & (N - 1)] = self.value(node, v, chan, args, values);
@@ -597,15 +597,5 @@ impl Pure {
     #[cfg(test)]
     pub(crate) fn has_jumps(&self) -> bool {
         !self.straight
-    }
-
-    /// Number of nodes.
-    pub fn len(&self) -> usize {
-        self.count
-    }
-
-    /// Whether the expression has no nodes (never, for one made by `expand`).
-    pub fn is_empty(&self) -> bool {
-        self.count == 0
     }
 }

@@ -59,26 +59,33 @@ struct FuncPattern {
 
 impl Pattern for FuncPattern {
     fn colour(&self, sp: &ShadingPoint) -> Option<Color> {
-        if let Some(c) = self.pure.values(&self.call, &self.exprs, sp) {
-            return Some(if self.exprs.len() == 1 {
-                Color::splat(c[0])
-            } else {
-                Color::new(c[0], c[1], c[2])
-            });
-        }
-        self.call.eval(sp, None, |ev| {
-            if let [e] = self.exprs[..] {
-                let v = finite(ev.eval(e)?)?;
-                Ok(Color::splat(v))
-            } else {
-                let mut c = [0.0; 3];
-                for (ci, e) in c.iter_mut().zip(&self.exprs) {
-                    *ci = finite(ev.eval(*e)?)?;
-                }
-                Ok(Color::new(c[0], c[1], c[2]))
-            }
+        let c = values(&self.call, &self.exprs, &self.pure, sp)?;
+        Some(if self.exprs.len() == 1 {
+            Color::splat(c[0])
+        } else {
+            Color::new(c[0], c[1], c[2])
         })
     }
+}
+
+/// The values of `exprs` (one to three) at `sp`: by their pure form where it gives them,
+/// else by the machine (the same values; errors only from the machine).
+fn values(
+    call: &FuncCall,
+    exprs: &[ExprId],
+    pure: &PureExprs,
+    sp: &ShadingPoint,
+) -> Option<[f64; 3]> {
+    if let Some(c) = pure.values(call, exprs, sp) {
+        return Some(c);
+    }
+    call.eval(sp, None, |ev| {
+        let mut c = [0.0; 3];
+        for (ci, e) in c.iter_mut().zip(exprs) {
+            *ci = finite(ev.eval(*e)?)?;
+        }
+        Ok(c)
+    })
 }
 
 /// `texfunc`.
@@ -91,17 +98,8 @@ struct FuncTexture {
 
 impl Texture for FuncTexture {
     fn perturbation(&self, sp: &ShadingPoint) -> Option<DVec3> {
-        if let Some(c) = self.pure.values(&self.call, &self.exprs, sp) {
-            return Some(self.call.frame().vector_to_world(sp, DVec3::from_array(c)));
-        }
-        let v = self.call.eval(sp, None, |ev| {
-            let mut c = [0.0; 3];
-            for (ci, e) in c.iter_mut().zip(&self.exprs) {
-                *ci = finite(ev.eval(*e)?)?;
-            }
-            Ok(DVec3::from_array(c))
-        })?;
-        Some(self.call.frame().vector_to_world(sp, v))
+        let v = values(&self.call, &self.exprs, &self.pure, sp)?;
+        Some(self.call.frame().vector_to_world(sp, DVec3::from_array(v)))
     }
 }
 
@@ -115,10 +113,7 @@ struct FuncMix {
 
 impl MixCoefficient for FuncMix {
     fn coefficient(&self, sp: &ShadingPoint) -> Option<f64> {
-        if let Some(c) = self.pure.values(&self.call, &[self.coef], sp) {
-            return Some(c[0]);
-        }
-        self.call.eval(sp, None, |ev| finite(ev.eval(self.coef)?))
+        values(&self.call, &[self.coef], &self.pure, sp).map(|c| c[0])
     }
 }
 
