@@ -35,6 +35,21 @@ fn cells(l: u32, lo: DVec3, hi: DVec3) -> impl Iterator<Item = Key> {
     })
 }
 
+/// Ask the processor to bring `v`'s cache lines in.
+#[inline(always)]
+fn prefetch(v: &CachedValue) {
+    #[cfg(target_arch = "x86_64")]
+    {
+        use std::arch::x86_64::{_mm_prefetch, _MM_HINT_T0};
+        let p = v as *const CachedValue as *const i8;
+        for off in [0, 64, 128, 192] {
+            // SAFETY: a prefetch is a hint that reads nothing and cannot fault, whatever the
+            // address; SSE is part of every x86_64 target.
+            unsafe { _mm_prefetch::<_MM_HINT_T0>(p.wrapping_add(off)) };
+        }
+    }
+}
+
 /// Whether `p` is inside the reach sphere `r` (centre and squared radius).
 #[inline(always)]
 fn within(p: DVec3, r: &[f64; 4]) -> bool {
@@ -47,8 +62,9 @@ fn within(p: DVec3, r: &[f64; 4]) -> bool {
 #[derive(Default)]
 struct Private {
     vals: Vec<CachedValue>,
-    /// Per cell: each value's position and squared reach, and its index in `vals`.
-    cells: HashMap<Key, Vec<([f64; 4], u32)>>,
+    /// Per cell: each value's position and squared reach, its level and weight, and its
+    /// index in `vals`.
+    cells: HashMap<Key, Vec<([f64; 4], Tag, u32)>, BuildHasherDefault<KeyHasher>>,
     /// Levels in use (bit l).
     levels: u64,
 }
@@ -159,11 +175,22 @@ impl Hasher for KeyHasher {
     }
 }
 
-/// The values of one grid cell, with a compact copy of what the lookup's first test needs.
+/// A value's level and weight, which decide whether a lookup may use it at all: kept beside
+/// the reach so that a lookup reads the value itself (another cache line, often a miss) only
+/// when it may.
+#[derive(Clone, Copy)]
+struct Tag {
+    weight: f64,
+    lvl: u32,
+}
+
+/// The values of one grid cell, with a compact copy of what the lookup's first tests need.
 #[derive(Default)]
 struct CellList {
     /// Position and squared reach (`(aa·reach·max(rad))²`) of each value.
     reach: Vec<[f64; 4]>,
+    /// Level and weight of each value.
+    tags: Vec<Tag>,
     vals: Vec<Arc<CachedValue>>,
 }
 
@@ -319,13 +346,17 @@ impl AmbientCache {
         let lo = ((v.pos - DVec3::splat(pad)) / s).floor();
         let hi = ((v.pos + DVec3::splat(pad)) / s).floor();
         let entry = [v.pos.x, v.pos.y, v.pos.z, rr * rr];
+        let tag = Tag {
+            weight: v.weight,
+            lvl: v.lvl,
+        };
         let kept = PRIVATE.with(|p| match p.try_borrow_mut().ok().as_deref_mut() {
             Some(Some(own)) => {
                 let k = own.vals.len() as u32;
                 own.vals.push(v);
                 own.levels |= 1u64 << l;
                 for key in cells(l, lo, hi) {
-                    own.cells.entry(key).or_default().push((entry, k));
+                    own.cells.entry(key).or_default().push((entry, tag, k));
                 }
                 true
             }
@@ -339,6 +370,7 @@ impl AmbientCache {
             if let Ok(mut shard) = self.shards[shard_of(&key)].0.write() {
                 let cell = shard.entry(key).or_default();
                 cell.reach.push(entry);
+                cell.tags.push(tag);
                 cell.vals.push(Arc::clone(&shared));
             }
         }
@@ -368,8 +400,15 @@ impl AmbientCache {
         )
     }
 
-    /// Call `f` for every value whose reach sphere (radius `aa·reach·max(rad)`) holds `p`.
-    pub fn for_each_near(&self, p: DVec3, mut f: impl FnMut(&CachedValue)) {
+    /// Call `f` for every value whose reach sphere (radius `aa·reach·max(rad)`) holds `p`
+    /// and whose level and weight `usable` accepts, in the order of their levels and, within
+    /// a level, of their filing.
+    pub fn for_each_near(
+        &self,
+        p: DVec3,
+        usable: impl Fn(u32, f64) -> bool,
+        mut f: impl FnMut(&CachedValue),
+    ) {
         let used = self.levels_used.load(Ordering::Relaxed);
         let top = self.max_level_seen.load(Ordering::Relaxed);
         for l in 0..=top {
@@ -379,11 +418,20 @@ impl AmbientCache {
             let key = self.key_at(l, p);
             if let Ok(grid) = self.shards[shard_of(&key)].0.read() {
                 if let Some(cell) = grid.get(&key) {
+                    let mut hits = [0u32; 32];
+                    let mut n = 0;
                     for (k, r) in cell.reach.iter().enumerate() {
-                        if within(p, r) {
-                            f(&cell.vals[k]);
+                        if within(p, r) && usable(cell.tags[k].lvl, cell.tags[k].weight) {
+                            prefetch(&*cell.vals[k]);
+                            hits[n] = k as u32;
+                            n += 1;
+                            if n == hits.len() {
+                                hits.iter().for_each(|&k| f(&cell.vals[k as usize]));
+                                n = 0;
+                            }
                         }
                     }
+                    hits[..n].iter().for_each(|&k| f(&cell.vals[k as usize]));
                 }
             }
         }
@@ -396,8 +444,8 @@ impl AmbientCache {
                     continue;
                 }
                 if let Some(cell) = own.cells.get(&self.key_at(l, p)) {
-                    for (r, k) in cell {
-                        if within(p, r) {
+                    for (r, t, k) in cell {
+                        if within(p, r) && usable(t.lvl, t.weight) {
                             f(&own.vals[*k as usize]);
                         }
                     }
@@ -531,7 +579,7 @@ mod tests {
         }
         assert_eq!(c.len(), 1);
         let mut found = 0;
-        c.for_each_near(DVec3::ZERO, |_| found += 1);
+        c.for_each_near(DVec3::ZERO, |_, _| true, |_| found += 1);
         assert_eq!(found, 1);
     }
 
@@ -563,7 +611,7 @@ mod tests {
             let t = if rnd() < 0.3 { 0.999_999 } else { rnd() };
             let p = v.pos + dir * (r * t);
             let mut found = Vec::new();
-            cache.for_each_near(p, |c| found.push(c.id.seq));
+            cache.for_each_near(p, |_, _| true, |c| found.push(c.id.seq));
             found.sort_unstable();
             let mut want: Vec<u64> = vals
                 .iter()
