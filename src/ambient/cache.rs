@@ -57,6 +57,9 @@ fn within(p: DVec3, r: &[f64; 4]) -> bool {
     d[0] * d[0] + d[1] * d[1] + d[2] * d[2] < r[3]
 }
 
+/// A private value in a cell: its position and squared reach, level and weight, and index.
+type PrivateEntry = ([f64; 4], Tag, u32);
+
 /// Values a thread made privately, filed like the shared cells (by level and cell) so
 /// that a lookup reads one cell per level.
 #[derive(Default)]
@@ -64,7 +67,7 @@ struct Private {
     vals: Vec<CachedValue>,
     /// Per cell: each value's position and squared reach, its level and weight, and its
     /// index in `vals`.
-    cells: HashMap<Key, Vec<([f64; 4], Tag, u32)>, BuildHasherDefault<KeyHasher>>,
+    cells: HashMap<Key, Vec<PrivateEntry>, BuildHasherDefault<KeyHasher>>,
     /// Levels in use (bit l).
     levels: u64,
 }
@@ -422,7 +425,7 @@ impl AmbientCache {
                     let mut n = 0;
                     for (k, r) in cell.reach.iter().enumerate() {
                         if within(p, r) && usable(cell.tags[k].lvl, cell.tags[k].weight) {
-                            prefetch(&*cell.vals[k]);
+                            prefetch(&cell.vals[k]);
                             hits[n] = k as u32;
                             n += 1;
                             if n == hits.len() {
