@@ -37,6 +37,7 @@ pub mod light;
 pub mod material;
 pub mod modifier;
 pub mod options;
+pub mod prefetch;
 pub mod render;
 pub mod rif;
 pub mod runinfo;

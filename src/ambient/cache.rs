@@ -5,8 +5,10 @@
 //! twice its reach (`aa·reach·r`), filed (as a shared pointer) in every cell of that level its
 //! reach sphere touches — at most 2×2×2. A lookup at point P reads, per level in use, the one
 //! cell holding P: every value whose reach covers P is there. A cell keeps each value's
-//! position and squared reach in a compact array beside the values, and a lookup scans that
-//! array, handing on only the values whose reach sphere holds P.
+//! position and squared reach in a compact array beside the values, and its level and weight
+//! in another; a lookup scans the first, reads the second for the values in reach, and reads
+//! a value itself only when its level and weight let the lookup use it (prefetching the
+//! usable values of a block together, so that their cache misses overlap).
 //! The grid is split into shards, each behind its own `RwLock`: lookups only take short read
 //! locks on the shards they touch (no global lock), inserts write locks on the shards of
 //! their cells, one at a time. A shard holds blocks of 8×8×8 cells of a level.
@@ -33,21 +35,6 @@ fn cells(l: u32, lo: DVec3, hi: DVec3) -> impl Iterator<Item = Key> {
     (lo.x..=hi.x).flat_map(move |x| {
         (lo.y..=hi.y).flat_map(move |y| (lo.z..=hi.z).map(move |z| (l, x, y, z)))
     })
-}
-
-/// Ask the processor to bring `v`'s cache lines in.
-#[inline(always)]
-fn prefetch(v: &CachedValue) {
-    #[cfg(target_arch = "x86_64")]
-    {
-        use std::arch::x86_64::{_mm_prefetch, _MM_HINT_T0};
-        let p = v as *const CachedValue as *const i8;
-        for off in [0, 64, 128, 192] {
-            // SAFETY: a prefetch is a hint that reads nothing and cannot fault, whatever the
-            // address; SSE is part of every x86_64 target.
-            unsafe { _mm_prefetch::<_MM_HINT_T0>(p.wrapping_add(off)) };
-        }
-    }
 }
 
 /// Whether `p` is inside the reach sphere `r` (centre and squared radius).
@@ -425,7 +412,7 @@ impl AmbientCache {
                     let mut n = 0;
                     for (k, r) in cell.reach.iter().enumerate() {
                         if within(p, r) && usable(cell.tags[k].lvl, cell.tags[k].weight) {
-                            prefetch(&cell.vals[k]);
+                            crate::prefetch::prefetch::<CachedValue>(&cell.vals[k]);
                             hits[n] = k as u32;
                             n += 1;
                             if n == hits.len() {

@@ -127,6 +127,12 @@ fn direct_with(
         Some(_) => tr.ambient.and_then(|a| a.shadow_table()),
         None => None,
     };
+    // The shadow-reuse slots of the first tests, fetched together.
+    if let Some(q) = vis {
+        for &(_, _, k) in cands.iter().take(8) {
+            viscache::prefetch(table, q, samples[k].src);
+        }
+    }
     let mut untested_from = n;
     for (tested, i) in (0..n).enumerate() {
         if thresh > 0.0 && tested >= MIN_SHADOW_TESTS {

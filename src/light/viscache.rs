@@ -142,6 +142,14 @@ impl Default for VisTable {
 }
 
 impl VisTable {
+    /// Ask the processor to bring the slot of `tag` in (the slots are spread over 1.5 MiB, so
+    /// a query's first read is usually a cache miss).
+    #[inline]
+    fn prefetch(&self, tag: u64) {
+        let slot = &self.slots[(tag >> (64 - SLOTS_LOG2)) as usize];
+        crate::prefetch::prefetch(slot);
+    }
+
     /// The transmission toward the source of `tag`: the cube's mean when it is trusted, else
     /// `trace()`, whose answer the cube learns; and whether a ray was traced.
     fn query(&self, tag: u64, trace: impl FnOnce() -> Color) -> (Color, bool) {
@@ -211,6 +219,16 @@ thread_local! {
 /// other, traced before; epoch 0 goes back to the shared table.
 pub fn new_epoch(epoch: u64) {
     EPOCH.with(|e| e.set(epoch));
+}
+
+/// Bring in the slot that [`shadow`] will read for `q` toward `src` (nothing for a thread's
+/// private table, which is small and warm).
+pub fn prefetch(shared: Option<&VisTable>, q: &VisQuery, src: usize) {
+    if let Some(t) = shared {
+        if EPOCH.with(|e| e.get()) == 0 {
+            t.prefetch(q.tag(src));
+        }
+    }
 }
 
 /// The transmission toward source `src` for a query: reused from its cube when the cube is
