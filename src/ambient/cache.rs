@@ -619,4 +619,56 @@ mod tests {
         assert_eq!(all, (0..400).collect::<Vec<_>>());
         assert_eq!(cache.len(), 400);
     }
+
+    #[test]
+    fn lookups_hand_on_only_usable_values_in_filing_order() {
+        // Values of levels 0-3 and weights 0.1-1 around one point, shared and private: the
+        // level-and-weight test sees each value's own level and weight, and the values that
+        // pass come in the order of an unfiltered lookup.
+        let cache = AmbientCache::new(0.01, 0.2, 1);
+        let mut rng = crate::render::sampler::Sampler::for_pixel(4, 5, 6, 7);
+        let mut rnd = || rng.uniform();
+        let mut make = |seq: u64| {
+            let pos = DVec3::new(rnd(), rnd(), rnd()) * 0.2;
+            let mut v = value(pos, 0.5 + rnd(), 1.0, seq);
+            v.lvl = (seq % 4) as u32;
+            v.weight = 0.1 + 0.9 * rnd();
+            v
+        };
+        let vals: Vec<CachedValue> = (0..300).map(&mut make).collect();
+        vals.iter().for_each(|v| cache.insert(*v));
+        begin_private();
+        let own: Vec<CachedValue> = (300..400).map(&mut make).collect();
+        own.iter().for_each(|v| cache.insert(*v));
+        let by_seq = |seq: u64| {
+            let k = seq as usize;
+            if k < 300 {
+                vals[k]
+            } else {
+                own[k - 300]
+            }
+        };
+        let p = DVec3::splat(0.1);
+        let mut every = Vec::new();
+        cache.for_each_near(p, |_, _| true, |c| every.push(c.id.seq));
+        assert!(every.len() > 200, "{} values in reach", every.len());
+        for (level, rweight) in [(0, 1.0), (1, 0.5), (2, 0.3), (3, 0.9)] {
+            let usable = |lvl: u32, w: f64| lvl < level || (lvl == level && w >= 0.9 * rweight);
+            let mut seen = Vec::new();
+            cache.for_each_near(p, usable, |c| {
+                assert!(usable(c.lvl, c.weight), "value {} handed on", c.id.seq);
+                seen.push(c.id.seq);
+            });
+            let want: Vec<u64> = every
+                .iter()
+                .copied()
+                .filter(|&q| {
+                    let v = by_seq(q);
+                    usable(v.lvl, v.weight)
+                })
+                .collect();
+            assert_eq!(seen, want, "level {level}, weight {rweight}");
+        }
+        assert_eq!(end_private().len(), 100);
+    }
 }
