@@ -408,6 +408,8 @@ impl AmbientCache {
             let key = self.key_at(l, p);
             if let Ok(grid) = self.shards[shard_of(&key)].0.read() {
                 if let Some(cell) = grid.get(&key) {
+                    // The usable values of up to 32 candidates are brought in together,
+                    // then handed on in filing order: their cache misses overlap.
                     let mut hits = [0u32; 32];
                     let mut n = 0;
                     for (k, r) in cell.reach.iter().enumerate() {
