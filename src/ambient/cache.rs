@@ -410,20 +410,22 @@ impl AmbientCache {
                 if let Some(cell) = grid.get(&key) {
                     // The usable values of up to 32 candidates are brought in together,
                     // then handed on in filing order: their cache misses overlap.
+                    let mut hand_on =
+                        |ks: &[u32]| ks.iter().for_each(|&k| f(&cell.vals[k as usize]));
                     let mut hits = [0u32; 32];
                     let mut n = 0;
-                    for (k, r) in cell.reach.iter().enumerate() {
-                        if within(p, r) && usable(cell.tags[k].lvl, cell.tags[k].weight) {
+                    for (k, (r, t)) in cell.reach.iter().zip(&cell.tags).enumerate() {
+                        if within(p, r) && usable(t.lvl, t.weight) {
                             crate::prefetch::prefetch::<CachedValue>(&cell.vals[k]);
                             hits[n] = k as u32;
                             n += 1;
                             if n == hits.len() {
-                                hits.iter().for_each(|&k| f(&cell.vals[k as usize]));
+                                hand_on(&hits);
                                 n = 0;
                             }
                         }
                     }
-                    hits[..n].iter().for_each(|&k| f(&cell.vals[k as usize]));
+                    hand_on(&hits[..n]);
                 }
             }
         }

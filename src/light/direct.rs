@@ -128,9 +128,9 @@ fn direct_with(
         None => None,
     };
     // The shadow-reuse slots of the first tests, fetched together.
-    if let Some(q) = vis {
+    if let (Some(q), Some(t)) = (vis, table) {
         for &(_, _, k) in cands.iter().take(8) {
-            viscache::prefetch(table, q, samples[k].src);
+            viscache::prefetch(t, q, samples[k].src);
         }
     }
     let mut untested_from = n;

@@ -142,18 +142,16 @@ impl Default for VisTable {
 }
 
 impl VisTable {
-    /// Ask the processor to bring the slot of `tag` in (the slots are spread over 1.5 MiB, so
-    /// a query's first read is usually a cache miss).
+    /// The slot of `tag`: the tag's top bits.
     #[inline]
-    fn prefetch(&self, tag: u64) {
-        let slot = &self.slots[(tag >> (64 - SLOTS_LOG2)) as usize];
-        crate::prefetch::prefetch(slot);
+    fn slot(&self, tag: u64) -> &[AtomicU64; 3] {
+        &self.slots[(tag >> (64 - SLOTS_LOG2)) as usize]
     }
 
     /// The transmission toward the source of `tag`: the cube's mean when it is trusted, else
     /// `trace()`, whose answer the cube learns; and whether a ray was traced.
     fn query(&self, tag: u64, trace: impl FnOnce() -> Color) -> (Color, bool) {
-        let slot = &self.slots[(tag >> (64 - SLOTS_LOG2)) as usize];
+        let slot = self.slot(tag);
         let low = tag & 0xFFFF_FFFF;
         let w = slot[0].load(Relaxed);
         let (traced, mut uses, seen) = if w & 0xFFFF_FFFF == low {
@@ -221,13 +219,12 @@ pub fn new_epoch(epoch: u64) {
     EPOCH.with(|e| e.set(epoch));
 }
 
-/// Bring in the slot that [`shadow`] will read for `q` toward `src` (nothing for a thread's
-/// private table, which is small and warm).
-pub fn prefetch(shared: Option<&VisTable>, q: &VisQuery, src: usize) {
-    if let Some(t) = shared {
-        if EPOCH.with(|e| e.get()) == 0 {
-            t.prefetch(q.tag(src));
-        }
+/// Bring in the slot of the shared table that [`shadow`] will read for `q` toward `src` (the
+/// slots are spread over 1.5 MiB, so a query's first read is usually a cache miss); nothing
+/// in an epoch, whose queries go to the thread's private table.
+pub fn prefetch(shared: &VisTable, q: &VisQuery, src: usize) {
+    if EPOCH.with(|e| e.get()) == 0 {
+        crate::prefetch::prefetch(shared.slot(q.tag(src)));
     }
 }
 
