@@ -694,6 +694,8 @@ fn self_test() -> Result<(), String> {
             min_piece: 0.05,
             wake: 0.05,
             cell: tessera::render::cell_size(GRID),
+            loops: 1,
+            local: (0.0, 0.0, 0.0),
         };
         let m = split::simulate_split(&map, 1.0, &one, p, 0.0, sp);
         let ideal = total / p as f64;
@@ -711,6 +713,19 @@ fn self_test() -> Result<(), String> {
             &format!("single tile, no split possible, P={p}: T1"),
             (m - total).abs() < 1e-6,
             format!(" ({m:.3} s against {total:.3})"),
+        );
+        // The same tile on one process of P loops whose siblings take pieces at once:
+        // within 1% of T1/P, and not slower than P processes.
+        let local = split::SplitParams {
+            loops: p,
+            local: (1e-4, 0.05, 1e-4),
+            ..sp
+        };
+        let ml = split::simulate_split(&map, 1.0, &one, p, 0.0, local);
+        check(
+            &format!("single tile split among P={p} sibling loops: near T1/P"),
+            ml >= ideal - 1e-9 && ml <= ideal * 1.01 && ml <= m.min(ideal * 1.05) + 1e-9,
+            format!(" ({ml:.3} s against {ideal:.3})"),
         );
     }
 
@@ -748,12 +763,17 @@ struct Args {
     split: Option<split::SplitParams>,
     /// `--tail T`: the default plan's tail factor (else `plan::TAIL`).
     tail: f64,
+    /// `--loops N`: tile loops per worker process in the `--split` replay.
+    loops: usize,
+    /// `--counts FILE`: the sweep's wall time of every tile count tried.
+    counts: Option<String>,
 }
 
 const USAGE: &str = "usage: cargo bench --bench tilesim -- COSTS.json [--workers 1,2,4,...] \
 [--tiles-per-worker N] [--sync-cost SECONDS] [--json OUT] [--lpt] [--bands SHARE:SIZE,...]
        cargo bench --bench tilesim -- COSTS.json --sweep [--workers ...] [--sync-cost S]
-         [--startup S] [--estimate-factor F] [--frame-costs C,...]
+         [--startup S] [--estimate-factor F] [--frame-costs C,...] [--tail T]
+         [--split CHECK,MIN,WAKE [--loops N]] [--counts FILE]
        cargo bench --bench tilesim -- --self-test
        cargo bench --bench tilesim -- --write-synthetic OUT.json [--size WxH]
          [--hot-corner tl|tr|bl|br | --hot-at U,V] [--hot-radius FRACTION_OF_HEIGHT]";
@@ -775,6 +795,8 @@ fn parse_args() -> Result<Args, String> {
         frame_costs: sweep::FRAME_COSTS.to_vec(),
         split: None,
         tail: tessera::job::plan::TAIL,
+        loops: 1,
+        counts: None,
         hot: Synthetic {
             width: 640,
             height: 480,
@@ -827,7 +849,19 @@ fn parse_args() -> Result<Args, String> {
                     min_piece,
                     wake,
                     cell: tessera::render::cell_size(GRID),
+                    loops: 1,
+                    local: (
+                        tessera::job::split::SIBLING_CHECK_SECONDS,
+                        tessera::job::split::SIBLING_MIN_PIECE_SECONDS,
+                        SIBLING_WAKE,
+                    ),
                 });
+            }
+            "--loops" => {
+                a.loops = match value("--loops")?.parse() {
+                    Ok(n) if n > 0 => n,
+                    _ => return Err("--loops: expected a positive integer".into()),
+                }
             }
             "--frame-costs" => {
                 a.frame_costs = value("--frame-costs")?
@@ -860,6 +894,7 @@ fn parse_args() -> Result<Args, String> {
                 }
             }
             "--json" => a.json = Some(value("--json")?),
+            "--counts" => a.counts = Some(value("--counts")?),
             "--bands" => a.bands = Some(parse_bands(&value("--bands")?)?),
             "--write-synthetic" => a.synthetic = Some(value("--write-synthetic")?),
             "--hot-corner" => {
@@ -901,8 +936,17 @@ fn parse_args() -> Result<Args, String> {
             }
         }
     }
+    if let Some(sp) = &mut a.split {
+        sp.loops = a.loops;
+    } else if a.loops > 1 {
+        return Err("--loops needs --split".into());
+    }
     Ok(a)
 }
+
+/// Seconds before a woken sibling loop takes a new piece (a condition variable's wake-up
+/// and its claim's rename; the claim's cost is the per-tile cost).
+const SIBLING_WAKE: f64 = 1e-4;
 
 fn run() -> Result<(), String> {
     let args = parse_args().map_err(|e| {
@@ -940,6 +984,12 @@ fn run() -> Result<(), String> {
         } else {
             TILE_OVERHEAD
         };
+        let mut file = match &args.counts {
+            Some(p) => Some(std::io::BufWriter::new(
+                std::fs::File::create(p).map_err(|e| format!("{p}: {e}"))?,
+            )),
+            None => None,
+        };
         let rows = sweep::sweep(
             &map,
             (&args.frame_costs, &args.workers),
@@ -948,7 +998,12 @@ fn run() -> Result<(), String> {
             args.estimate,
             args.split,
             args.tail,
+            file.as_mut().map(|f| f as &mut dyn std::io::Write),
         );
+        if let Some(mut f) = file {
+            use std::io::Write;
+            f.flush().map_err(|e| format!("--counts: {e}"))?;
+        }
         sweep::print(&rows, sync, args.startup, args.estimate);
         return Ok(());
     }

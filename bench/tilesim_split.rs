@@ -13,7 +13,12 @@
 //!   below (`job::split::choose`);
 //! - an idle worker sees a new piece `wake` seconds after it was made (its poll); the
 //!   owner, when it ends its part first, takes the piece itself;
-//! - every piece costs `sync` seconds more (claim, result write).
+//! - every piece costs `sync` seconds more (claim, result write);
+//! - with `loops` > 1, workers are tile loops of processes of `loops` each
+//!   (`job::siblings`): when a loop finds nothing to claim, each busy sibling looks again
+//!   `local.0` seconds later and splits down to pieces of `local.1` seconds, and an idle
+//!   sibling takes a piece `local.2` seconds after it was made (its wake-up), where loops
+//!   of other processes wait for their poll (`wake`).
 
 use super::CostMap;
 use std::cmp::Ordering;
@@ -31,6 +36,11 @@ pub struct SplitParams {
     pub wake: f64,
     /// Rows of a band of sampling cells (`cell_size(-ps)`).
     pub cell: usize,
+    /// Tile loops per worker process (1: single-thread processes).
+    pub loops: usize,
+    /// For a process's own loops: the delay before a busy loop sees an idle sibling, the
+    /// least piece, and the delay before a woken sibling takes a piece.
+    pub local: (f64, f64, f64),
 }
 
 /// A cell of a piece's work in render order: its pixels and cost.
@@ -57,6 +67,8 @@ impl Piece {
 enum Kind {
     Finish,
     Check,
+    /// A busy loop's look after a sibling found nothing to claim.
+    LocalCheck,
     Wake,
 }
 
@@ -114,6 +126,7 @@ struct Sim {
     todo: VecDeque<Piece>,
     busy: Vec<Option<Busy>>,
     gen: Vec<u64>,
+    cgen: Vec<u64>,
     heap: BinaryHeap<Ev>,
     seq: u64,
     makespan: f64,
@@ -122,24 +135,52 @@ struct Sim {
 impl Sim {
     fn push(&mut self, t: f64, k: Kind, w: usize) {
         self.seq += 1;
-        self.heap.push(Ev(t, self.seq, k, w, self.gen[w]));
+        // A split changes when a piece ends (`gen`), not when its owner looks (`cgen`).
+        let g = match k {
+            Kind::Finish => self.gen[w],
+            _ => self.cgen[w],
+        };
+        self.heap.push(Ev(t, self.seq, k, w, g));
+    }
+
+    /// The tile loops of worker `w`'s process (`w` among them).
+    fn siblings(&self, w: usize) -> std::ops::Range<usize> {
+        let n = self.sp.loops.max(1);
+        let base = w / n * n;
+        base..(base + n).min(self.busy.len())
     }
 
     fn start(&mut self, w: usize, t: f64) {
         let Some(p) = self.todo.pop_front() else {
             self.busy[w] = None;
+            for s in self.siblings(w) {
+                if self.busy[s].is_some() {
+                    self.push(t + self.sp.local.0, Kind::LocalCheck, s);
+                }
+            }
             return;
         };
         self.gen[w] += 1;
+        self.cgen[w] += 1;
         let end = t + p.cost() + self.sync;
         self.busy[w] = Some(Busy { piece: p, start: t });
         self.push(end, Kind::Finish, w);
         self.push(t + self.sp.check, Kind::Check, w);
+        if self.siblings(w).any(|s| self.busy[s].is_none()) {
+            self.push(t + self.sp.local.0, Kind::LocalCheck, w);
+        }
     }
 
-    fn check(&mut self, w: usize, t: f64) {
-        if self.todo.is_empty() {
-            if let Some((mine, child)) = self.split(w, t) {
+    /// Owner `w`'s look at `t`: its periodic one, or (`local`) one after a sibling went idle.
+    fn check(&mut self, w: usize, t: f64, local: bool) {
+        let waiting = self.siblings(w).any(|s| self.busy[s].is_none());
+        if self.todo.is_empty() && (waiting || !local) {
+            let least = if waiting {
+                self.sp.local.1
+            } else {
+                self.sp.min_piece
+            };
+            if let Some((mine, child)) = self.split(w, t, least) {
                 let s = self.busy[w].as_ref().map_or(t, |b| b.start);
                 self.gen[w] += 1;
                 let end = s + mine.cost() + self.sync;
@@ -149,19 +190,30 @@ impl Sim {
                 });
                 self.todo.push_back(child);
                 self.push(end, Kind::Finish, w);
+                let mine = self.siblings(w);
                 for i in 0..self.busy.len() {
                     if self.busy[i].is_none() {
-                        self.push(t + self.sp.wake, Kind::Wake, i);
+                        let d = if mine.contains(&i) {
+                            self.sp.local.2
+                        } else {
+                            self.sp.wake
+                        };
+                        self.push(t + d, Kind::Wake, i);
                     }
+                }
+                if waiting {
+                    self.push(t + self.sp.local.0, Kind::LocalCheck, w);
                 }
             }
         }
-        self.push(t + self.sp.check, Kind::Check, w);
+        if !local {
+            self.push(t + self.sp.check, Kind::Check, w);
+        }
     }
 
     /// The split worker `w`'s owner would make at `t` (at the end of the cell in progress,
     /// as `job::split` decides before each cell): the part it keeps and the new piece.
-    fn split(&self, w: usize, t: f64) -> Option<(Piece, Piece)> {
+    fn split(&self, w: usize, t: f64, least: f64) -> Option<(Piece, Piece)> {
         let bz = self.busy[w].as_ref()?;
         let cells = &bz.piece.cells;
         let spent = t - bz.start;
@@ -177,7 +229,7 @@ impl Sim {
             return None;
         }
         let left = spent / next as f64 * (cells.len() - next) as f64;
-        if left < 2.0 * self.sp.min_piece {
+        if left < 2.0 * least {
             return None;
         }
         let nx = cells[next];
@@ -223,7 +275,12 @@ impl Sim {
                     self.busy[w] = None;
                     self.start(w, t);
                 }
-                Kind::Check if g == self.gen[w] && self.busy[w].is_some() => self.check(w, t),
+                Kind::Check if g == self.cgen[w] && self.busy[w].is_some() => {
+                    self.check(w, t, false)
+                }
+                Kind::LocalCheck if g == self.cgen[w] && self.busy[w].is_some() => {
+                    self.check(w, t, true)
+                }
                 Kind::Wake if self.busy[w].is_none() => self.start(w, t),
                 _ => {}
             }
@@ -261,6 +318,7 @@ pub fn simulate_split(
             .collect(),
         busy: (0..workers).map(|_| None).collect(),
         gen: vec![0; workers],
+        cgen: vec![0; workers],
         heap: BinaryHeap::new(),
         seq: 0,
         makespan: 0.0,

@@ -10,6 +10,7 @@
 
 use super::split::{simulate_split, SplitParams};
 use super::{simulate, CostMap, GRID};
+use std::io::Write;
 use tessera::job::plan::{plan_tiles, tiles_for_tail, TILES_PER_WORKER};
 
 /// The frame costs swept by default, CPU seconds (`--frame-costs` for others).
@@ -45,7 +46,9 @@ fn wall(
     (plan.len(), startup + simulate(&costs, p).0)
 }
 
-/// Sweep the frame costs and worker counts.
+/// Sweep the frame costs and worker counts; with `counts`, one line per frame cost, P and
+/// tile count tried (`cost P requested planned wall`, tab-separated).
+#[allow(clippy::too_many_arguments)]
 pub fn sweep(
     map: &CostMap,
     (costs, workers): (&[f64], &[usize]),
@@ -54,6 +57,7 @@ pub fn sweep(
     estimate: f64,
     split: Option<SplitParams>,
     tail: f64,
+    mut counts: Option<&mut dyn std::io::Write>,
 ) -> Vec<Row> {
     let mut rows = Vec::new();
     let total = map.total().max(f64::MIN_POSITIVE);
@@ -67,6 +71,9 @@ pub fn sweep(
             let mut k = 1.0f64;
             while k <= (TILES_PER_WORKER * p) as f64 {
                 let (t, w) = wall(map, scale, k.round() as usize, p, sync, startup, split);
+                if let Some(out) = counts.as_mut() {
+                    let _ = writeln!(out, "{cost}\t{p}\t{}\t{t}\t{w}", k.round());
+                }
                 if w < best_wall {
                     (best_tiles, best_wall) = (t, w);
                 }

@@ -1438,6 +1438,35 @@ fn split_tiles_give_tpicts_pixels() {
     }
 }
 
+/// One worker with two tile loops on a one-tile plan, splitting as it does by default (no
+/// fault injection): the idle loop's wait lets its sibling split a tile of about 70 ms
+/// (on the machine this was written on), too short for a split between processes (the
+/// first look after 50 ms, each half at least 50 ms: the worker of the commit before made
+/// no piece in 5 runs of this frame), and the picture is tpict's bit for bit at `-ab 0`.
+#[test]
+fn a_worker_splits_a_lone_tile_among_its_loops() {
+    let args = view_args(400, 300, &["-ab", "0"]);
+    let reference = tpict(&args);
+    let d = tempfile::tempdir().unwrap();
+    let job = d.path().join("job");
+    plan(&job, &["--tiles", "1", "--workers", "2"], &args);
+    let out = cmd("tpiece")
+        .arg(&job)
+        .args(["--worker-id", "pair", "--threads", "2", "-q"])
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    assert!(assemble(&job).pixels == reference.pixels, "picture differs");
+    let st = stat(&job);
+    let pieces = st["pieces"].as_u64().unwrap();
+    assert!(pieces >= 1, "{pieces} pieces: {st}");
+    assert_eq!(st["pieces_done"].as_u64(), Some(pieces));
+}
+
 /// Workers killed while they own tiles and pieces (splitting forced as above): the survivors
 /// take them over after the lease and render each whole, and the picture is still tpict's bit
 /// for bit at `-ab 0`, with every tile and piece done once.

@@ -43,6 +43,7 @@ pub mod probe;
 pub mod rad;
 pub mod share;
 pub mod sheet;
+pub mod siblings;
 pub mod split;
 pub mod status;
 pub mod task;

@@ -12,6 +12,11 @@
 //! renderer skips those cells; when that fails (another process made the same piece, a full
 //! disk), or when this worker no longer holds the task (it was taken over after the lease),
 //! nothing is cut.
+//!
+//! While another tile loop of the same worker waits for work ([`super::siblings`]), the
+//! renderer looks every [`SIBLING_CHECK_SECONDS`] instead, without reading `tasks/` (the
+//! waiting loop found nothing to claim there), splits down to pieces of
+//! [`SIBLING_MIN_PIECE_SECONDS`], and wakes the waiting loops when it has made one.
 
 use super::piece::piece_name;
 use super::plan::TileRect;
@@ -26,11 +31,20 @@ pub const CHECK_SECONDS: f64 = 0.05;
 /// result and an idle worker's poll (20–100 ms) before it starts.
 pub const MIN_PIECE_SECONDS: f64 = 0.05;
 
+/// Seconds of rendering between two looks at `tasks/` while a sibling loop of this worker
+/// waits for work ([`super::siblings`]).
+pub const SIBLING_CHECK_SECONDS: f64 = 0.002;
+
+/// The least estimated cost of each part of a split while a sibling loop waits: the sibling
+/// is woken at once, so a piece costs its claim, its result and the `tasks/` sync its
+/// making takes (about 1–10 ms).
+pub const SIBLING_MIN_PIECE_SECONDS: f64 = 0.01;
+
 /// Test builds with `TESSERA_FAULT_SPLIT_EAGER`: the fewest cells left that are split.
 const EAGER_MIN_CELLS: usize = 16;
 
 /// One task's splitting while it renders.
-pub struct Splitter {
+pub struct Splitter<'a> {
     tasks: PathBuf,
     /// The `todo` entry of the plan's last task.
     last_todo: PathBuf,
@@ -43,11 +57,13 @@ pub struct Splitter {
     /// Test builds: split whenever nothing is left to claim and at least
     /// [`EAGER_MIN_CELLS`] cells are, whatever the estimate (`TESSERA_FAULT_SPLIT_EAGER`).
     eager: bool,
+    /// The worker's other tile loops, when it has any to tell.
+    siblings: Option<&'a super::siblings::Siblings>,
     /// Names of the pieces made.
     pub made: Vec<String>,
 }
 
-impl Splitter {
+impl<'a> Splitter<'a> {
     /// A splitter for task `task` of tile `tile` of frame `frame`, claimed by `owner`;
     /// `last` is the name of the plan's last task.
     pub fn new(
@@ -56,7 +72,7 @@ impl Splitter {
         last: &str,
         frame: u32,
         tile: usize,
-    ) -> Splitter {
+    ) -> Splitter<'a> {
         let now = Instant::now();
         Splitter {
             tasks: tasks.to_path_buf(),
@@ -67,8 +83,16 @@ impl Splitter {
             start: now,
             last_look: now,
             eager: crate::fault::injected("SPLIT_EAGER"),
+            siblings: None,
             made: Vec::new(),
         }
+    }
+
+    /// Split sooner and finer while one of the worker's other loops waits, and wake them
+    /// when a piece is made.
+    pub fn with_siblings(mut self, siblings: &'a super::siblings::Siblings) -> Splitter<'a> {
+        self.siblings = Some(siblings);
+        self
     }
 
     /// The renderer's hook: a cut when part of the task was given away as a new piece.
@@ -79,19 +103,26 @@ impl Splitter {
         if self.eager && at.cells_left() < EAGER_MIN_CELLS {
             return None;
         }
+        // A sibling loop waits only when its last look at `tasks/` found nothing to claim.
+        let waiting = self.siblings.is_some_and(|s| s.idle() > 0);
         if !self.eager {
-            if self.last_look.elapsed().as_secs_f64() < CHECK_SECONDS {
+            let (gap, least) = if waiting {
+                (SIBLING_CHECK_SECONDS, SIBLING_MIN_PIECE_SECONDS)
+            } else {
+                (CHECK_SECONDS, MIN_PIECE_SECONDS)
+            };
+            if self.last_look.elapsed().as_secs_f64() < gap {
                 return None;
             }
             self.last_look = Instant::now();
             let left = self.start.elapsed().as_secs_f64() / at.done as f64 * at.cells_left() as f64;
-            if left < 2.0 * MIN_PIECE_SECONDS {
+            if left < 2.0 * least {
                 return None;
             }
         }
         let (cut, rect) = choose(at)?;
         // Only the task's owner splits it (a worker resumed after its lease ran out does not).
-        if !self.nothing_to_claim() || !self.claim.exists() {
+        if (!waiting && !self.nothing_to_claim()) || !self.claim.exists() {
             return None;
         }
         let name = piece_name(self.frame, self.tile, &rect);
@@ -99,6 +130,9 @@ impl Splitter {
             return None;
         }
         self.made.push(name);
+        if let Some(s) = self.siblings {
+            s.made_piece();
+        }
         Some(cut)
     }
 
@@ -182,6 +216,59 @@ mod tests {
             cell: 6,
             done: 1,
         }
+    }
+
+    /// A task `f0000-t0000` claimed by `me` in a fresh `tasks/`, with another task's `todo`
+    /// entry left to claim, and a split point whose estimate leaves `left` seconds.
+    fn claimed_task() -> (tempfile::TempDir, PathBuf) {
+        let dir = tempfile::tempdir().unwrap();
+        let tasks = dir.path().join("tasks");
+        std::fs::create_dir(&tasks).unwrap();
+        std::fs::write(tasks.join("f0000-t0000.claim.me"), b"").unwrap();
+        std::fs::write(tasks.join("f0000-t0001.todo"), b"").unwrap();
+        (dir, tasks)
+    }
+
+    #[test]
+    fn a_waiting_sibling_makes_the_owner_split_soon_and_finely() {
+        let (_dir, tasks) = claimed_task();
+        // 40 bands of 6 rows: a band done after 3 ms leaves an estimate of 0.12 s, which
+        // is under the 0.1 s × 2 a split needs without a waiting sibling, and above the
+        // sibling threshold of 2 × 10 ms.
+        let point = SplitPoint {
+            x0: 0,
+            x1: 6,
+            y1: 246,
+            band: (0, 6),
+            next_x: 6,
+            cell: 6,
+            done: 1,
+        };
+        let siblings = super::super::siblings::Siblings::default();
+        let mut alone = Splitter::new(&tasks, ("f0000-t0000", "me"), "f0000-t0001", 0, 0);
+        let mut helped = Splitter::new(&tasks, ("f0000-t0000", "me"), "f0000-t0001", 0, 0)
+            .with_siblings(&siblings);
+        std::thread::sleep(std::time::Duration::from_millis(3));
+        assert_eq!(alone.hook(&point), None, "no look before 50 ms");
+        assert_eq!(helped.hook(&point), None, "no sibling waits");
+        siblings.begin_idle();
+        let before = siblings.pieces();
+        std::thread::sleep(std::time::Duration::from_millis(3));
+        let cut = helped.hook(&point);
+        // The plan's last task is still `todo` in `tasks/`: only the waiting sibling's word
+        // that nothing is left to claim lets the owner split.
+        assert_eq!(cut, Some(Cut::Rows(126)), "{:?}", helped.made);
+        assert_eq!(helped.made.len(), 1);
+        assert!(tasks.join(format!("{}.todo", helped.made[0])).is_file());
+        assert_eq!(
+            siblings.pieces(),
+            before + 1,
+            "the waiting loops were woken"
+        );
+        // Once the claim is gone (another worker took the task over), nothing is cut.
+        std::fs::remove_file(tasks.join("f0000-t0000.claim.me")).unwrap();
+        std::thread::sleep(std::time::Duration::from_millis(3));
+        assert_eq!(helped.hook(&point), None);
     }
 
     #[test]

@@ -106,6 +106,7 @@ pub fn run_worker(job: &JobDir, wo: &WorkerOptions) -> Result<WorkerSummary> {
     };
     let stop = AtomicBool::new(false);
     let taken = Mutex::new(HashSet::new());
+    let siblings = super::siblings::Siblings::default();
     let pending = AtomicUsize::new(0);
     let results = ResultDir::open(&job.tiles())?;
     let tasks_dir = job.tasks();
@@ -125,6 +126,7 @@ pub fn run_worker(job: &JobDir, wo: &WorkerOptions) -> Result<WorkerSummary> {
                 let (m, owner, worker_id, session, beat, all, stop, taken, pending, rays) = (
                     &m, &owner, &worker_id, &session, &beat, &all, &stop, &taken, &pending, &rays,
                 );
+                let siblings = &siblings;
                 let commit = tx.clone();
                 scope.spawn(move || -> Result<()> {
                     let here = Session::here_pool()?;
@@ -141,6 +143,7 @@ pub fn run_worker(job: &JobDir, wo: &WorkerOptions) -> Result<WorkerSummary> {
                         index,
                         stop,
                         taken,
+                        siblings,
                         all,
                         cursor: 0,
                         first_scan: true,
@@ -237,6 +240,8 @@ struct Worker<'a> {
     /// Tasks the worker's loops have claimed (they share one owner name, so a loop must
     /// not take a sibling's claim for its own: see [`Worker::take`]).
     taken: &'a Mutex<HashSet<String>>,
+    /// What the worker's loops tell each other: who waits, and when a piece was made.
+    siblings: &'a super::siblings::Siblings,
     /// Every task in plan order.
     all: &'a [(String, u32, usize)],
     /// The next task to try to claim (todo entries never come back unless released, so the
@@ -291,9 +296,15 @@ impl Worker<'_> {
                         poll = (poll * 1.5).min(cap);
                     }
                     done_seen = self.done_count;
-                    self.idle_since.get_or_insert_with(Instant::now);
+                    if self.idle_since.is_none() {
+                        self.idle_since = Some(Instant::now());
+                        self.siblings.begin_idle();
+                    }
                     self.beat.set_state("idle");
-                    std::thread::sleep(Duration::from_secs_f64(poll));
+                    // A sibling loop's new piece ends the wait at once.
+                    if self.siblings.wait(Duration::from_secs_f64(poll)) {
+                        poll = MIN_POLL;
+                    }
                     continue;
                 }
             };
@@ -356,6 +367,7 @@ impl Worker<'_> {
     fn end_idle(&mut self) -> bool {
         match self.idle_since.take() {
             Some(since) => {
+                self.siblings.end_idle();
                 add_time(&self.beat.counters.idle_ns, since.elapsed());
                 true
             }
@@ -661,7 +673,8 @@ impl Worker<'_> {
                     last,
                     c.frame,
                     c.tile,
-                );
+                )
+                .with_siblings(self.siblings);
                 let pixels = self.session.render_here_split(
                     &self.here,
                     &fs,
