@@ -8,7 +8,8 @@
 //! [`super::split::CHECK_SECONDS`], without reading `tasks/` (the waiting sibling found
 //! nothing to claim there), down to pieces of [`super::split::SIBLING_MIN_PIECE_SECONDS`];
 //! when it has made a piece it wakes the waiting siblings at once, and they claim it through
-//! `tasks/` like any other task. Other processes find pieces by their poll, as before.
+//! `tasks/` like any other task. Other processes find pieces by their poll, as before. The
+//! loops make one piece for each waiting sibling ([`Siblings::offer`]), not one each.
 
 use std::sync::atomic::{AtomicUsize, Ordering};
 use std::sync::{Condvar, Mutex};
@@ -18,9 +19,17 @@ use std::time::Duration;
 #[derive(Default)]
 pub struct Siblings {
     idle: AtomicUsize,
-    /// Pieces made so far (a loop's wait ends when it changes).
-    made: Mutex<u64>,
+    state: Mutex<State>,
     wake: Condvar,
+}
+
+#[derive(Default)]
+struct State {
+    /// Pieces made so far (a loop's wait ends when it changes).
+    made: u64,
+    /// Pieces being made or made for waiting loops and not yet claimed by one: a busy loop
+    /// splits for a waiting sibling only while fewer are than loops wait.
+    offers: usize,
 }
 
 impl Siblings {
@@ -34,33 +43,62 @@ impl Siblings {
         self.idle.fetch_add(1, Ordering::Relaxed);
     }
 
-    /// A loop stops waiting (it claimed a task, or the job ended).
+    /// A loop stops waiting (it claimed a task, most likely a piece offered to it, or the
+    /// job ended).
     pub fn end_idle(&self) {
         let _ = self
             .idle
             .fetch_update(Ordering::Relaxed, Ordering::Relaxed, |n| n.checked_sub(1));
+        let mut s = self.lock();
+        s.offers = s.offers.saturating_sub(1);
     }
 
-    /// Wait up to `timeout` or until a sibling makes a piece; whether one was made.
+    /// Take the right to make a piece for a waiting loop: whether fewer pieces are offered
+    /// than loops wait.
+    pub fn offer(&self) -> bool {
+        let mut s = self.lock();
+        let free = s.offers < self.idle();
+        if free {
+            s.offers += 1;
+        }
+        free
+    }
+
+    /// Give back an [`Siblings::offer`] whose piece was not made.
+    pub fn withdraw(&self) {
+        let mut s = self.lock();
+        s.offers = s.offers.saturating_sub(1);
+    }
+
+    /// Wait up to `timeout` or until a sibling makes a piece; whether one was made. A wait
+    /// that ends without one forgets the offers: their pieces went to other workers.
     pub fn wait(&self, timeout: Duration) -> bool {
-        let made = self.made.lock().unwrap_or_else(|e| e.into_inner());
-        let before = *made;
-        let (made, _) = self
+        let s = self.lock();
+        let before = s.made;
+        let (mut s, _) = self
             .wake
-            .wait_timeout_while(made, timeout, |m| *m == before)
+            .wait_timeout_while(s, timeout, |s| s.made == before)
             .unwrap_or_else(|e| e.into_inner());
-        *made != before
+        let woken = s.made != before;
+        if !woken {
+            s.offers = 0;
+        }
+        woken
     }
 
     /// Pieces announced so far.
     pub fn pieces(&self) -> u64 {
-        *self.made.lock().unwrap_or_else(|e| e.into_inner())
+        self.lock().made
     }
 
     /// A piece was made: wake every waiting loop.
     pub fn made_piece(&self) {
-        *self.made.lock().unwrap_or_else(|e| e.into_inner()) += 1;
+        self.lock().made += 1;
         self.wake.notify_all();
+    }
+
+    fn lock(&self) -> std::sync::MutexGuard<'_, State> {
+        self.state.lock().unwrap_or_else(|e| e.into_inner())
     }
 }
 
@@ -80,6 +118,24 @@ mod tests {
         assert_eq!(s.idle(), 2);
         s.end_idle();
         assert_eq!(s.idle(), 1);
+    }
+
+    #[test]
+    fn one_offer_for_each_waiting_loop() {
+        let s = Siblings::default();
+        assert!(!s.offer(), "nobody waits");
+        s.begin_idle();
+        s.begin_idle();
+        assert!(s.offer() && s.offer());
+        assert!(!s.offer(), "two loops wait, two pieces are coming");
+        s.withdraw();
+        assert!(s.offer(), "a piece not made frees its offer");
+        // A loop that claims a task takes an offer with it.
+        s.end_idle();
+        assert!(!s.offer(), "one loop waits, one piece is coming");
+        // A wait that ends without a piece forgets the offers (others took the pieces).
+        assert!(!s.wait(Duration::from_millis(1)));
+        assert!(s.offer());
     }
 
     #[test]

@@ -125,8 +125,16 @@ impl<'a> Splitter<'a> {
         if (!waiting && !self.nothing_to_claim()) || !self.claim.exists() {
             return None;
         }
+        // One piece for each waiting sibling, whichever loops make them.
+        let sibling = self.siblings.filter(|_| waiting);
+        if sibling.is_some_and(|s| !s.offer()) {
+            return None;
+        }
         let name = piece_name(self.frame, self.tile, &rect);
         if !create_todo(&self.tasks, &name) {
+            if let Some(s) = sibling {
+                s.withdraw();
+            }
             return None;
         }
         self.made.push(name);
