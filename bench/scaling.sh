@@ -26,7 +26,7 @@
 # Environment: WORKERS="1 2 4 8 16" (cut to the cores), SCENE (files, default the demo),
 #   VIEW (default -vf demo/demo.vf), RES="-x 320 -y 240",
 #   OPTS="-ab 2 -aa .15 -ad 512 -as 128 -ar 64 -av .02 .02 .02 -ps 1",
-#   TILES_LIST="16 32 64 128 256 512 1024" ("" for none), PMAX_REPEAT=3 (runs at the
+#   TILES_LIST="1 4 16 32 64 128 256 512 1024" ("" for none; 1 and 4: where splitting among the loops decides), PMAX_REPEAT=3 (runs at the
 #   largest P, and of each --tiles plan; the summary takes the fastest of each),
 #   SIM_WORKERS="2,4,8,16,32,64,128,256", SYNC (per-tile seconds for the simulation,
 #   default tplan's 0.8 ms), STARTUP (seconds added to every simulated worker, default the
@@ -42,7 +42,7 @@ SCENE=${SCENE:-"$ROOT/demo/demo.rad"}
 VIEW=${VIEW:-"-vf $ROOT/demo/demo.vf"}
 RES=${RES:-"-x 320 -y 240"}
 OPTS=${OPTS:-"-ab 2 -aa .15 -ad 512 -as 128 -ar 64 -av .02 .02 .02 -ps 1"}
-TILES_LIST=${TILES_LIST-"16 32 64 128 256 512 1024"}
+TILES_LIST=${TILES_LIST-"1 4 16 32 64 128 256 512 1024"}
 PMAX_REPEAT=${PMAX_REPEAT:-3}
 SIM_WORKERS=${SIM_WORKERS:-"2,4,8,16,32,64,128,256"}
 if [ -z "${NO_BUILD:-}" ]; then
