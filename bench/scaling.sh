@@ -27,7 +27,8 @@
 #   VIEW (default -vf demo/demo.vf), RES="-x 320 -y 240",
 #   OPTS="-ab 2 -aa .15 -ad 512 -as 128 -ar 64 -av .02 .02 .02 -ps 1",
 #   TILES_LIST="1 4 16 32 64 128 256 512 1024" ("" for none; 1 and 4: where splitting
-#   among the loops decides), PMAX_REPEAT=3 (runs at the largest P, and of each --tiles plan; the summary takes the fastest of each),
+#   among the loops decides), PMAX_REPEAT=3 (runs at the largest P, and of each --tiles
+#   plan; the summary takes the fastest of each),
 #   SIM_WORKERS="2,4,8,16,32,64,128,256", SYNC (per-tile seconds for the simulation,
 #   default tplan's 0.8 ms), STARTUP (seconds added to every simulated worker, default the
 #   measured start-up of a worker: a job of one tile minus its tile's CPU),
