@@ -1450,15 +1450,10 @@ fn a_worker_splits_a_lone_tile_among_its_loops() {
     let d = tempfile::tempdir().unwrap();
     let job = d.path().join("job");
     plan(&job, &["--tiles", "1", "--workers", "2"], &args);
-    let out = cmd("tpiece")
-        .arg(&job)
-        .args(["--worker-id", "pair", "--threads", "2", "-q"])
-        .output()
-        .unwrap();
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
+    run_ok(
+        cmd("tpiece")
+            .arg(&job)
+            .args(["--worker-id", "pair", "--threads", "2", "-q"]),
     );
     assert!(assemble(&job).pixels == reference.pixels, "picture differs");
     let st = stat(&job);
