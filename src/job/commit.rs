@@ -9,7 +9,9 @@
 //! Instead the tile loops hand each finished tile to one committer thread per worker and
 //! go on rendering. The committer takes every tile handed over since its last round, writes
 //! their temporaries, syncs each one's data, renames them to their names, syncs `tiles/`
-//! **once** for the whole batch, and only then marks each task done. The order of the
+//! **once** for the whole batch, and only then marks each task done. When a tile of the
+//! batch gave pieces away, `tasks/` is synced first, so that their entries are durable
+//! before a result with their holes is. The order of the
 //! protocol is unchanged (data durable before the name, the name durable before `done`);
 //! a tile waiting in the committer is still claimed, so a worker killed meanwhile loses it
 //! to the lease like a tile it was rendering. If a result cannot be written (a full disk),
@@ -32,6 +34,9 @@ pub struct Finished {
     pub meta: TileMeta,
     /// Its pixels.
     pub pixels: Vec<[f32; 3]>,
+    /// It gave pieces away while it rendered: their entries in `tasks/` are made durable
+    /// before its result is written ([`super::split`]).
+    pub gave_pieces: bool,
 }
 
 /// Where the committer writes and whom it tells.
@@ -64,6 +69,12 @@ pub fn commit_loop(rx: Receiver<Finished>, results: ResultDir, t: CommitTarget) 
         let mut batch = vec![one];
         batch.extend(rx.try_iter());
         let batch_len = batch.len();
+        // A result with holes is written only once the pieces that fill them are durable.
+        if batch.iter().any(|f| f.gave_pieces) {
+            if let Ok(d) = crate::safefile::open_dir(t.tasks_dir) {
+                let _ = d.sync_all();
+            }
+        }
         let mut staged = Vec::with_capacity(batch.len());
         let mut kept = Vec::with_capacity(batch.len());
         for f in batch {

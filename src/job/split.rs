@@ -8,8 +8,8 @@
 //! [`MIN_PIECE_SECONDS`], it gives away half of what is left: the lower half of the bands
 //! below the one in progress when there are two or more, else the right half of the cells
 //! left in the band in progress (and below it). The piece is made once (its `.made` marker
-//! created with `O_EXCL`), then its `todo` entry, and the directory is synced before the
-//! renderer skips those cells; when that fails (another process made the same piece, a full
+//! created with `O_EXCL`), then its `todo` entry, before the renderer skips those cells (the
+//! worker's committer syncs `tasks/` before it writes the task's result); when that fails (another process made the same piece, a full
 //! disk), or when this worker no longer holds the task (it was taken over after the lease),
 //! nothing is cut.
 //!
@@ -36,8 +36,7 @@ pub const MIN_PIECE_SECONDS: f64 = 0.05;
 pub const SIBLING_CHECK_SECONDS: f64 = 0.002;
 
 /// The least estimated cost of each part of a split while a sibling loop waits: the sibling
-/// is woken at once, so a piece costs its claim, its result and the `tasks/` sync its
-/// making takes (about 1–10 ms).
+/// is woken at once, so a piece costs two creates, a claim and a result (about 1 ms).
 pub const SIBLING_MIN_PIECE_SECONDS: f64 = 0.01;
 
 /// Test builds with `TESSERA_FAULT_SPLIT_EAGER`: the fewest cells left that are split.
@@ -191,20 +190,16 @@ pub fn choose(at: &SplitPoint) -> Option<(Cut, TileRect)> {
 
 /// Create the piece `name`: first its marker `tasks/<name>.made` (`O_EXCL`: each piece is
 /// made once, whatever state it has reached since, by whichever process), then its
-/// `tasks/<name>.todo`, then sync the directory; whether it was made.
+/// `tasks/<name>.todo`; whether it was made. Other processes see both at once; the worker's
+/// committer syncs `tasks/` before it writes the result of the task the piece came from
+/// (`super::commit`), so the render thread does not wait for the disk.
 fn create_todo(tasks: &Path, name: &str) -> bool {
     let create = |suffix: &str| {
         crate::safefile::shared_write()
             .create_new(true)
             .open(tasks.join(format!("{name}.{suffix}")))
     };
-    if create(MADE).is_err() || create("todo").is_err() {
-        return false;
-    }
-    if let Ok(d) = crate::safefile::open_dir(tasks) {
-        let _ = d.sync_all();
-    }
-    true
+    create(MADE).is_ok() && create("todo").is_ok()
 }
 
 /// The suffix of a piece's marker in `tasks/` (not a state: listings skip it).

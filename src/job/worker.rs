@@ -555,7 +555,7 @@ impl Worker<'_> {
             let _ = task::release(&self.tasks_dir, name, self.owner);
             bail!("tile {name}: {e} (tile released)");
         }
-        let (meta, pixels) = self.render_tile(c, fp, &rect)?;
+        let (meta, pixels, gave_pieces) = self.render_tile(c, fp, &rect)?;
         // Values made for this tile go out before it counts as done (a write, no peer read:
         // the heartbeat thread and the value sink read the peers).
         if let Some(s) = self.session.store() {
@@ -572,6 +572,7 @@ impl Worker<'_> {
                 name: name.clone(),
                 meta,
                 pixels,
+                gave_pieces,
             })
             .map_err(|_| anyhow!("tile {name}: the worker's committer has stopped"))?;
         Ok(())
@@ -609,7 +610,7 @@ impl Worker<'_> {
         c: &Claim,
         fp: &FramePlan,
         rect: &TileRect,
-    ) -> Result<(TileMeta, Vec<[f32; 3]>)> {
+    ) -> Result<(TileMeta, Vec<[f32; 3]>, bool)> {
         let vf = fp
             .view
             .frame()
@@ -657,6 +658,7 @@ impl Worker<'_> {
             x1: rect.x0 + rect.w,
             y1: rect.y0 + rect.h,
         };
+        let mut gave_pieces = false;
         let pixels = match &self.m.points {
             Some(p) => super::points::trace_chunk(
                 (self.session, &self.here),
@@ -694,6 +696,7 @@ impl Worker<'_> {
                     .counters
                     .split
                     .fetch_add(sp.made.len() as u64, Ordering::Relaxed);
+                gave_pieces = !sp.made.is_empty();
                 pixels
             }
             None => self
@@ -722,6 +725,6 @@ impl Worker<'_> {
             new_values: made1 - made0,
             ambient_seconds: (nanos1 - nanos0) as f64 * 1e-9,
         };
-        Ok((meta, pixels))
+        Ok((meta, pixels, gave_pieces))
     }
 }
