@@ -11,10 +11,10 @@
 //! their temporaries, syncs each one's data, renames them to their names, syncs `tiles/`
 //! **once** for the whole batch, and only then marks each task done. When a tile of the
 //! batch gave pieces away, `tasks/` is synced first, so that their entries are durable
-//! before a result with their holes is. The order of the
-//! protocol is unchanged (data durable before the name, the name durable before `done`);
-//! a tile waiting in the committer is still claimed, so a worker killed meanwhile loses it
-//! to the lease like a tile it was rendering. If a result cannot be written (a full disk),
+//! before a result with their holes is. The order of the protocol is unchanged (data
+//! durable before the name, the name durable before `done`); a tile waiting in the
+//! committer is still claimed, so a worker killed meanwhile loses it to the lease like a
+//! tile it was rendering. If a result cannot be written (a full disk),
 //! its tile is released to `todo`, the worker's loops stop after their tile, and the worker
 //! exits with the error.
 

@@ -9,9 +9,9 @@
 //! below the one in progress when there are two or more, else the right half of the cells
 //! left in the band in progress (and below it). The piece is made once (its `.made` marker
 //! created with `O_EXCL`), then its `todo` entry, before the renderer skips those cells (the
-//! worker's committer syncs `tasks/` before it writes the task's result); when that fails (another process made the same piece, a full
-//! disk), or when this worker no longer holds the task (it was taken over after the lease),
-//! nothing is cut.
+//! worker's committer syncs `tasks/` before it writes the task's result); when that fails
+//! (another process made the same piece, a full disk), or when this worker no longer holds
+//! the task (it was taken over after the lease), nothing is cut.
 //!
 //! While another tile loop of the same worker waits for work ([`super::siblings`]), the
 //! renderer looks every [`SIBLING_CHECK_SECONDS`] instead, without reading `tasks/` (the
@@ -221,8 +221,8 @@ mod tests {
         }
     }
 
-    /// A task `f0000-t0000` claimed by `me` in a fresh `tasks/`, with another task's `todo`
-    /// entry left to claim, and a split point whose estimate leaves `left` seconds.
+    /// A task `f0000-t0000` claimed by `me` in a fresh `tasks/`, with the plan's last task
+    /// still `todo`.
     fn claimed_task() -> (tempfile::TempDir, PathBuf) {
         let dir = tempfile::tempdir().unwrap();
         let tasks = dir.path().join("tasks");
