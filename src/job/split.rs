@@ -120,17 +120,18 @@ impl<'a> Splitter<'a> {
             }
         }
         let (cut, rect) = choose(at)?;
-        // Only the task's owner splits it (a worker resumed after its lease ran out does not).
-        if (!waiting && !self.nothing_to_claim()) || !self.claim.exists() {
+        if !waiting && !self.nothing_to_claim() {
             return None;
         }
-        // One piece for each waiting sibling, whichever loops make them.
+        // One piece for each waiting sibling, whichever loops make them (asked before any
+        // file is looked at: while the pieces are on their way, the other loops read none).
         let sibling = self.siblings.filter(|_| waiting);
         if sibling.is_some_and(|s| !s.offer()) {
             return None;
         }
+        // Only the task's owner splits it (a worker resumed after its lease ran out does not).
         let name = piece_name(self.frame, self.tile, &rect);
-        if !create_todo(&self.tasks, &name) {
+        if !self.claim.exists() || !create_todo(&self.tasks, &name) {
             if let Some(s) = sibling {
                 s.withdraw();
             }
@@ -235,9 +236,9 @@ mod tests {
     #[test]
     fn a_waiting_sibling_makes_the_owner_split_soon_and_finely() {
         let (_dir, tasks) = claimed_task();
-        // 40 bands of 6 rows: a band done after 3 ms leaves an estimate of 0.12 s, which
-        // is under the 0.1 s × 2 a split needs without a waiting sibling, and above the
-        // sibling threshold of 2 × 10 ms.
+        // 40 bands of 6 rows, one done after 3–6 ms: an estimate of 0.12–0.24 s left, above
+        // the sibling threshold of 2 × 10 ms; without a waiting sibling the owner does not
+        // look before 50 ms.
         let point = SplitPoint {
             x0: 0,
             x1: 6,
