@@ -594,7 +594,8 @@ proptest! {
     /// folding makes `0*x` +0 whatever the sign of x, as Radiance; without noise calls,
     /// whose high octaves turn a last-bit difference of an argument into a visible one:
     /// `fnoise3(1.625, a / 8.75, 3187500)` differs by 0.0016 when `a / 8.75` is folded into
-    /// `a * (1 / 8.75)`; without sin, cos and tan, for the same reason far from the origin:
+    /// `a * (1 / 8.75)`; without sin, cos, tan and rand, for the same reason, rand
+    /// everywhere and the others far from the origin:
     /// `4.81 / sin(rand(1.125) ^ (c + b ^ 9) / atan2(7.94, .5558))`, at about `sin(2.3e63)`,
     /// gave −57.8 folded against −12.3).
     #[test]

@@ -22,7 +22,7 @@
 use super::ValueId;
 use crate::color::Color;
 use crate::hash::fx_mix;
-use glam::DVec3;
+use glam::{DVec3, Vec4};
 use std::cell::RefCell;
 use std::collections::HashMap;
 use std::hash::{BuildHasherDefault, Hasher};
@@ -37,6 +37,37 @@ fn cells(l: u32, lo: DVec3, hi: DVec3) -> impl Iterator<Item = Key> {
     })
 }
 
+/// The rounding the single-precision reach test of [`CellList::scan`] allows for, in squared
+/// cell sizes: a value nearer to the edge of its reach sphere than this is tested again in
+/// double precision. The coordinates it compares lie within two cell sizes of the cell's
+/// corner, where single precision is good to about 2·10⁻⁶ of a squared cell size.
+const NEAR_MARGIN: f32 = 1e-5;
+
+/// Beyond this many cell sizes from the origin, the single-precision test is not trusted
+/// and every value is tested in double precision.
+const NEAR_RANGE: f64 = 1e9;
+
+/// `q` (a point in units of the level's cell size, `p / s` as [`AmbientCache::key_at`]
+/// divides) relative to the corner of cell `key`, in single precision.
+#[inline(always)]
+fn local(key: &Key, q: DVec3) -> [f32; 3] {
+    [
+        (q.x - key.1 as f64) as f32,
+        (q.y - key.2 as f64) as f32,
+        (q.z - key.3 as f64) as f32,
+    ]
+}
+
+/// The margin of the single-precision test in cell `key` ([`NEAR_MARGIN`], or infinite
+/// where the cell lies beyond [`NEAR_RANGE`]).
+fn margin(key: &Key) -> f32 {
+    if key.1.abs().max(key.2.abs()).max(key.3.abs()) as f64 > NEAR_RANGE {
+        f32::INFINITY
+    } else {
+        NEAR_MARGIN
+    }
+}
+
 /// Whether `p` is inside the reach sphere `r` (centre and squared radius).
 #[inline(always)]
 fn within(p: DVec3, r: &[f64; 4]) -> bool {
@@ -44,17 +75,13 @@ fn within(p: DVec3, r: &[f64; 4]) -> bool {
     d[0] * d[0] + d[1] * d[1] + d[2] * d[2] < r[3]
 }
 
-/// A private value in a cell: its position and squared reach, level and weight, and index.
-type PrivateEntry = ([f64; 4], Tag, u32);
-
 /// Values a thread made privately, filed like the shared cells (by level and cell) so
 /// that a lookup reads one cell per level.
 #[derive(Default)]
 struct Private {
     vals: Vec<CachedValue>,
-    /// Per cell: each value's position and squared reach, its level and weight, and its
-    /// index in `vals`.
-    cells: HashMap<Key, Vec<PrivateEntry>, BuildHasherDefault<KeyHasher>>,
+    /// Per cell: the indices in `vals` of the values filed there.
+    cells: HashMap<Key, CellList<u32>, BuildHasherDefault<KeyHasher>>,
     /// Levels in use (bit l).
     levels: u64,
 }
@@ -92,6 +119,19 @@ pub const REACH_MAX: f64 = 2.0;
 
 const SHARDS: usize = 64;
 const MAX_LEVELS: u32 = 40;
+/// Words of a level's occupancy bits ([`AmbientCache::occupied`]): 32,768 bits, 4 KiB.
+const OCCUPIED_WORDS: usize = 512;
+
+/// The word and bit of cell `key` in the occupancy bits.
+#[inline(always)]
+fn occupancy(key: &Key) -> (usize, u64) {
+    let h = fx_mix(fx_mix(fx_mix(0, key.1 as u64), key.2 as u64), key.3 as u64);
+    let bits = (h >> 49) as usize; // 15 bits
+    (
+        key.0 as usize * OCCUPIED_WORDS + bits / 64,
+        1u64 << (bits % 64),
+    )
+}
 
 /// One cached value in the renderer's frame (relative to the scene origin).
 #[derive(Clone, Copy, Debug)]
@@ -174,17 +214,135 @@ struct Tag {
     lvl: u32,
 }
 
-/// The values of one grid cell, with a compact copy of what the lookup's first tests need.
-#[derive(Default)]
-struct CellList {
-    /// Position and squared reach (`(aa·reach·max(rad))²`) of each value.
-    reach: Vec<[f64; 4]>,
-    /// Level and weight of each value.
-    tags: Vec<Tag>,
-    vals: Vec<Arc<CachedValue>>,
+/// The values of one grid cell (`V`: a shared pointer to each, or an index), with a
+/// compact copy of what the lookup's first tests need, in arrays scanned in order.
+struct CellList<V> {
+    /// Each value's position relative to the cell's corner and its squared reach
+    /// (`(aa·reach·max(rad))²`), in cell sizes and single precision, four values to a
+    /// cache line (16 bytes a value), tested four at a time.
+    quads: Vec<Quad>,
+    /// Each value's level.
+    lvls: Vec<u32>,
+    /// Each value's weight.
+    weights: Vec<f64>,
+    vals: Vec<V>,
 }
 
-type Grid = HashMap<Key, CellList, BuildHasherDefault<KeyHasher>>;
+/// Four values' positions and squared reaches ([`CellList::quads`]); an unused lane's
+/// squared reach is −∞, which no test passes.
+#[derive(Clone, Copy)]
+#[repr(C, align(64))]
+struct Quad {
+    x: [f32; 4],
+    y: [f32; 4],
+    z: [f32; 4],
+    r2: [f32; 4],
+}
+
+const EMPTY_QUAD: Quad = Quad {
+    x: [0.0; 4],
+    y: [0.0; 4],
+    z: [0.0; 4],
+    r2: [f32::NEG_INFINITY; 4],
+};
+
+impl<V> Default for CellList<V> {
+    fn default() -> Self {
+        CellList {
+            quads: Vec::new(),
+            lvls: Vec::new(),
+            weights: Vec::new(),
+            vals: Vec::new(),
+        }
+    }
+}
+
+/// Where a lookup is in one cell: the point relative to the cell's corner in cell sizes,
+/// the margin of the single-precision test, and the highest level it may use.
+#[derive(Clone, Copy)]
+struct At {
+    q: [f32; 3],
+    margin: f32,
+    top: u32,
+}
+
+impl<V> CellList<V> {
+    fn push(&mut self, near: [f32; 4], tag: Tag, v: V) {
+        let lane = self.vals.len() % 4;
+        if lane == 0 {
+            self.quads.push(EMPTY_QUAD);
+        }
+        if let Some(q) = self.quads.last_mut() {
+            (q.x[lane], q.y[lane], q.z[lane], q.r2[lane]) = (near[0], near[1], near[2], near[3]);
+        }
+        self.lvls.push(tag.lvl);
+        self.weights.push(tag.weight);
+        self.vals.push(v);
+    }
+
+    /// Hand on, in filing order and in blocks of up to 32, the indices of the values whose
+    /// reach sphere holds the lookup's point, of a level up to `at.top` and accepted by
+    /// `usable`. The reach is tested in single precision, four values at a time, and again
+    /// by `exact` (in double precision) for a value whose test falls within the margin of
+    /// rounding, so that the values handed on are exactly those `exact` accepts.
+    /// `prefetch` is called for each value before its block is handed on, so that their
+    /// cache misses overlap.
+    #[inline(always)]
+    fn scan(
+        &self,
+        at: At,
+        usable: &impl Fn(u32, f64) -> bool,
+        exact: impl Fn(&V) -> bool,
+        prefetch: impl Fn(&V),
+        mut hand_on: impl FnMut(&[u32]),
+    ) {
+        let (qx, qy, qz) = (
+            Vec4::splat(at.q[0]),
+            Vec4::splat(at.q[1]),
+            Vec4::splat(at.q[2]),
+        );
+        let margin = Vec4::splat(at.margin);
+        let mut hits = [0u32; 32];
+        let mut n = 0;
+        for (b, quad) in self.quads.iter().enumerate() {
+            let (dx, dy, dz) = (
+                Vec4::from_array(quad.x) - qx,
+                Vec4::from_array(quad.y) - qy,
+                Vec4::from_array(quad.z) - qz,
+            );
+            let d2 = dx * dx + dy * dy + dz * dz;
+            let r2 = Vec4::from_array(quad.r2);
+            let mut maybe = d2.cmplt(r2 + margin).bitmask();
+            if maybe == 0 {
+                continue;
+            }
+            // Lanes inside by more than the margin need no exact test.
+            let sure = d2.cmplt(r2 - margin).bitmask();
+            while maybe != 0 {
+                let lane = maybe.trailing_zeros();
+                maybe &= maybe - 1;
+                let i = b * 4 + lane as usize;
+                let lvl = self.lvls[i];
+                if lvl > at.top
+                    || (sure & (1 << lane) == 0 && !exact(&self.vals[i]))
+                    || !usable(lvl, self.weights[i])
+                {
+                    continue;
+                }
+                prefetch(&self.vals[i]);
+                hits[n] = i as u32;
+                n += 1;
+                if n == hits.len() {
+                    hand_on(&hits);
+                    n = 0;
+                }
+            }
+        }
+        hand_on(&hits[..n]);
+    }
+}
+
+type Grid = HashMap<Key, CellList<Arc<CachedValue>>, BuildHasherDefault<KeyHasher>>;
 
 /// A shard's lock on a cache line of its own: taking a read lock writes the lock word, and
 /// neighbouring shards' locks in one line made threads reading different shards contend.
@@ -206,6 +364,10 @@ pub struct AmbientCache {
     aa: f64,
     shards: Vec<Shard>,
     levels_used: AtomicU64,
+    /// Per level, a bit per hash of a cell's coordinates, set when a value is filed in a
+    /// cell of that hash: a lookup skips a level whose bit is clear without taking a lock
+    /// or reading the grid (most levels hold nothing near a given point).
+    occupied: Vec<AtomicU64>,
     origin_id: u64,
     max_level_seen: AtomicU32,
     sink: OnceLock<Box<dyn ValueSink>>,
@@ -238,6 +400,9 @@ impl AmbientCache {
                 .map(|_| Shard(RwLock::new(Grid::default())))
                 .collect(),
             levels_used: AtomicU64::new(0),
+            occupied: (0..MAX_LEVELS as usize * OCCUPIED_WORDS)
+                .map(|_| AtomicU64::new(0))
+                .collect(),
             origin_id,
             max_level_seen: AtomicU32::new(0),
             sink: OnceLock::new(),
@@ -335,10 +500,14 @@ impl AmbientCache {
         let pad = rr * (1.0 + 1e-6) + 1e-9 * s;
         let lo = ((v.pos - DVec3::splat(pad)) / s).floor();
         let hi = ((v.pos + DVec3::splat(pad)) / s).floor();
-        let entry = [v.pos.x, v.pos.y, v.pos.z, rr * rr];
         let tag = Tag {
             weight: v.weight,
             lvl: v.lvl,
+        };
+        let (c, r2) = (v.pos / s, ((rr / s) * (rr / s)) as f32);
+        let near = |key: &Key| {
+            let [x, y, z] = local(key, c);
+            [x, y, z, r2]
         };
         let kept = PRIVATE.with(|p| match p.try_borrow_mut().ok().as_deref_mut() {
             Some(Some(own)) => {
@@ -346,7 +515,7 @@ impl AmbientCache {
                 own.vals.push(v);
                 own.levels |= 1u64 << l;
                 for key in cells(l, lo, hi) {
-                    own.cells.entry(key).or_default().push((entry, tag, k));
+                    own.cells.entry(key).or_default().push(near(&key), tag, k);
                 }
                 true
             }
@@ -357,11 +526,15 @@ impl AmbientCache {
         }
         let shared = Arc::new(v);
         for key in cells(l, lo, hi) {
+            let (w, bit) = occupancy(&key);
+            if self.occupied[w].load(Ordering::Relaxed) & bit == 0 {
+                self.occupied[w].fetch_or(bit, Ordering::Relaxed);
+            }
             if let Ok(mut shard) = self.shards[shard_of(&key)].0.write() {
-                let cell = shard.entry(key).or_default();
-                cell.reach.push(entry);
-                cell.tags.push(tag);
-                cell.vals.push(Arc::clone(&shared));
+                shard
+                    .entry(key)
+                    .or_default()
+                    .push(near(&key), tag, Arc::clone(&shared));
             }
         }
         // Written only when they change: every lookup reads them.
@@ -379,6 +552,23 @@ impl AmbientCache {
         }
     }
 
+    /// Where `p` lies in cell `key` ([`CellList::scan`]).
+    #[inline(always)]
+    fn at(&self, key: &Key, p: DVec3, top: u32) -> At {
+        At {
+            q: local(key, p / self.cell_size(key.0)),
+            margin: margin(key),
+            top,
+        }
+    }
+
+    /// Whether `p` lies inside value `v`'s reach sphere, in double precision (the radius
+    /// [`AmbientCache::insert`] files it with).
+    fn within(&self, p: DVec3, v: &CachedValue) -> bool {
+        let rr = self.aa * (v.rad[1].max(v.rad[0]) * v.reach.max(1.0) * v.share.max(1.0));
+        within(p, &[v.pos.x, v.pos.y, v.pos.z, rr * rr])
+    }
+
     /// The cell of level `l` holding `p`.
     fn key_at(&self, l: u32, p: DVec3) -> Key {
         let s = self.cell_size(l);
@@ -392,40 +582,36 @@ impl AmbientCache {
 
     /// Call `f` for every value whose reach sphere (radius `aa·reach·max(rad)`) holds `p`
     /// and whose level and weight `usable` accepts, in the order of their levels and, within
-    /// a level, of their filing.
+    /// a level, of their filing. `usable` accepts no value of a level above `max_level`.
+    #[inline]
     pub fn for_each_near(
         &self,
         p: DVec3,
+        max_level: u32,
         usable: impl Fn(u32, f64) -> bool,
         mut f: impl FnMut(&CachedValue),
     ) {
         let used = self.levels_used.load(Ordering::Relaxed);
-        let top = self.max_level_seen.load(Ordering::Relaxed);
-        for l in 0..=top {
+        let highest = self.max_level_seen.load(Ordering::Relaxed);
+        for l in 0..=highest {
             if used & (1u64 << l) == 0 {
                 continue;
             }
             let key = self.key_at(l, p);
+            let (w, bit) = occupancy(&key);
+            if self.occupied[w].load(Ordering::Relaxed) & bit == 0 {
+                continue;
+            }
+            let at = self.at(&key, p, max_level);
             if let Ok(grid) = self.shards[shard_of(&key)].0.read() {
                 if let Some(cell) = grid.get(&key) {
-                    // The usable values of up to 32 candidates are brought in together,
-                    // then handed on in filing order: their cache misses overlap.
-                    let mut hand_on =
-                        |ks: &[u32]| ks.iter().for_each(|&k| f(&cell.vals[k as usize]));
-                    let mut hits = [0u32; 32];
-                    let mut n = 0;
-                    for (k, (r, t)) in cell.reach.iter().zip(&cell.tags).enumerate() {
-                        if within(p, r) && usable(t.lvl, t.weight) {
-                            crate::prefetch::prefetch::<CachedValue>(&cell.vals[k]);
-                            hits[n] = k as u32;
-                            n += 1;
-                            if n == hits.len() {
-                                hand_on(&hits);
-                                n = 0;
-                            }
-                        }
-                    }
-                    hand_on(&hits[..n]);
+                    cell.scan(
+                        at,
+                        &usable,
+                        |v| self.within(p, v),
+                        |v| crate::prefetch::prefetch::<CachedValue>(&**v),
+                        |ks| ks.iter().for_each(|&k| f(&cell.vals[k as usize])),
+                    );
                 }
             }
         }
@@ -437,12 +623,18 @@ impl AmbientCache {
                 if own.levels & (1u64 << l) == 0 {
                     continue;
                 }
-                if let Some(cell) = own.cells.get(&self.key_at(l, p)) {
-                    for (r, t, k) in cell {
-                        if within(p, r) && usable(t.lvl, t.weight) {
-                            f(&own.vals[*k as usize]);
-                        }
-                    }
+                let key = self.key_at(l, p);
+                if let Some(cell) = own.cells.get(&key) {
+                    cell.scan(
+                        self.at(&key, p, max_level),
+                        &usable,
+                        |&k| self.within(p, &own.vals[k as usize]),
+                        |&k| crate::prefetch::prefetch::<CachedValue>(&own.vals[k as usize]),
+                        |ks| {
+                            ks.iter()
+                                .for_each(|&k| f(&own.vals[cell.vals[k as usize] as usize]))
+                        },
+                    );
                 }
             }
         });
@@ -573,7 +765,7 @@ mod tests {
         }
         assert_eq!(c.len(), 1);
         let mut found = 0;
-        c.for_each_near(DVec3::ZERO, |_, _| true, |_| found += 1);
+        c.for_each_near(DVec3::ZERO, u32::MAX, |_, _| true, |_| found += 1);
         assert_eq!(found, 1);
     }
 
@@ -582,8 +774,54 @@ mod tests {
     /// returns each value once although it is filed in up to eight cells.
     #[test]
     fn lookups_find_exactly_the_values_in_reach() {
+        exact_lookups(DVec3::ZERO, 0.01, 1.0);
+    }
+
+    /// The same far from the origin, where the single-precision test is not trusted (cells
+    /// beyond `NEAR_RANGE` cell sizes) or only just is.
+    #[test]
+    fn lookups_far_from_the_origin_find_exactly_the_values_in_reach() {
+        // Cells of about 10⁻⁵: 10¹¹ cell sizes from the origin.
+        exact_lookups(DVec3::new(1e6, -3e5, 2e5), 1e-5, 1e-3);
+        // Cells of about 10⁻²: 10⁸.
+        exact_lookups(DVec3::new(1e6, 1e6, -1e6), 0.01, 1.0);
+    }
+
+    /// The single-precision test's rounding stays well inside its margin wherever it is
+    /// trusted: points and centres of cells up to `NEAR_RANGE` cell sizes from the origin,
+    /// of sizes 2⁻³⁰ to 2³⁰; beyond, it is not trusted.
+    #[test]
+    fn the_single_precision_test_errs_less_than_its_margin() {
+        let mut rnd = crate::hash::test_uniform(17);
+        let mut worst = 0f64;
+        for _ in 0..200_000 {
+            let s = 2f64.powi((rnd() * 60.0) as i32 - 30);
+            let k =
+                |r: f64| ((10f64.powf(r * 9.0) as i64) as f64) * if r < 0.5 { -1.0 } else { 1.0 };
+            let key: Key = (0, k(rnd()) as i64, k(rnd()) as i64, k(rnd()) as i64);
+            let corner = DVec3::new(key.1 as f64, key.2 as f64, key.3 as f64);
+            let p = (corner + DVec3::new(rnd(), rnd(), rnd())) * s;
+            let c = (corner + DVec3::new(rnd(), rnd(), rnd()) * 2.0 - DVec3::splat(0.5)) * s;
+            if (p / s).floor() != corner {
+                continue;
+            }
+            let (q, e) = (local(&key, p / s), local(&key, c / s));
+            let d = [e[0] - q[0], e[1] - q[1], e[2] - q[2]];
+            let single = (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]) as f64;
+            let exact = (p - c).length_squared() / (s * s);
+            worst = worst.max((single - exact).abs());
+            assert_eq!(margin(&key), NEAR_MARGIN);
+        }
+        assert!(worst < NEAR_MARGIN as f64 / 4.0, "rounding {worst}");
+        assert_eq!(margin(&(0, 2_000_000_000, 0, 0)), f32::INFINITY);
+        assert_eq!(margin(&(3, 0, -2_000_000_000, 5)), f32::INFINITY);
+    }
+
+    /// Values spread over a cube of side `4·scale` about `offset`, of radii from
+    /// `0.01·scale` to `2·scale`.
+    fn exact_lookups(offset: DVec3, minrad: f64, scale: f64) {
         let aa = 0.2;
-        let cache = AmbientCache::new(0.01, aa, 1);
+        let cache = AmbientCache::new(minrad, aa, 1);
         let mut rng = crate::render::sampler::Sampler::for_pixel(0, 1, 2, 3);
         let mut rnd = || rng.uniform();
         let mut vals = Vec::new();
@@ -593,7 +831,8 @@ mod tests {
             if seq % 2 == 0 {
                 pos = (pos / 0.004).round() * 0.004 + DVec3::splat(1e-12 * (rnd() - 0.5));
             }
-            let v = value(pos, 0.01 + rnd() * rnd() * 2.0, 1.0 + rnd(), seq);
+            let pos = pos * scale + offset;
+            let v = value(pos, (0.01 + rnd() * rnd() * 2.0) * scale, 1.0 + rnd(), seq);
             cache.insert(v);
             vals.push(v);
         }
@@ -605,7 +844,7 @@ mod tests {
             let t = if rnd() < 0.3 { 0.999_999 } else { rnd() };
             let p = v.pos + dir * (r * t);
             let mut found = Vec::new();
-            cache.for_each_near(p, |_, _| true, |c| found.push(c.id.seq));
+            cache.for_each_near(p, u32::MAX, |_, _| true, |c| found.push(c.id.seq));
             found.sort_unstable();
             let mut want: Vec<u64> = vals
                 .iter()
@@ -654,12 +893,12 @@ mod tests {
         };
         let p = DVec3::splat(0.1);
         let mut every = Vec::new();
-        cache.for_each_near(p, |_, _| true, |c| every.push(c.id.seq));
+        cache.for_each_near(p, u32::MAX, |_, _| true, |c| every.push(c.id.seq));
         assert!(every.len() > 200, "{} values in reach", every.len());
         for (level, rweight) in [(0, 1.0), (1, 0.5), (2, 0.3), (3, 0.9)] {
             let usable = |lvl: u32, w: f64| lvl < level || (lvl == level && w >= 0.9 * rweight);
             let mut seen = Vec::new();
-            cache.for_each_near(p, usable, |c| {
+            cache.for_each_near(p, level, usable, |c| {
                 assert!(usable(c.lvl, c.weight), "value {} handed on", c.id.seq);
                 seen.push(c.id.seq);
             });

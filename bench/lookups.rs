@@ -1,0 +1,122 @@
+//! lookups: what one irradiance-cache lookup costs, on the values of a real ambient file.
+//!
+//! ```text
+//! cargo bench --bench lookups -- FILE.amb [--aa A] [--lookups N] [--repeat R]
+//! ```
+//!
+//! Reads the values of a Radiance ambient file (as `-af` writes it), files them in an
+//! [`AmbientCache`] of accuracy `--aa` (default 0.15) whose base cell is made from the
+//! smallest radius, and times `--lookups` lookups (default 2,000,000): each at a value's
+//! position moved by up to its reach in a random direction, of the value's level plus one
+//! (as the lookups of its own hemisphere's rays are), taking every value the cache hands on.
+//! Prints the nanoseconds per lookup (the fastest of `--repeat` passes, default 3) and the
+//! values handed on per lookup, so that a change of the cache's layout can be measured
+//! apart from the rest of a render. Single-threaded.
+
+use glam::DVec3;
+use std::process::ExitCode;
+use std::time::Instant;
+use tessera::ambient::cache::{AmbientCache, CachedValue};
+use tessera::ambient::radfile::read_file;
+
+fn main() -> ExitCode {
+    let args: Vec<String> = std::env::args()
+        .skip(1)
+        .filter(|a| a != "--bench")
+        .collect();
+    let mut file = None;
+    let (mut aa, mut lookups, mut repeat) = (0.15f64, 2_000_000usize, 3usize);
+    let mut it = args.iter();
+    while let Some(a) = it.next() {
+        let mut num = |name: &str| -> Result<f64, String> {
+            it.next()
+                .and_then(|v| v.parse::<f64>().ok())
+                .filter(|v| v.is_finite() && *v > 0.0)
+                .ok_or(format!("{name} needs a positive number"))
+        };
+        let r = match a.as_str() {
+            "--aa" => num("--aa").map(|v| aa = v),
+            "--lookups" => num("--lookups").map(|v| lookups = v as usize),
+            "--repeat" => num("--repeat").map(|v| repeat = (v as usize).max(1)),
+            f if file.is_none() && !f.starts_with("--") => {
+                file = Some(f.to_string());
+                Ok(())
+            }
+            other => Err(format!("unknown argument {other}")),
+        };
+        if let Err(e) = r {
+            eprintln!("lookups: {e}");
+            return ExitCode::from(2);
+        }
+    }
+    let Some(file) = file else {
+        eprintln!(
+            "usage: cargo bench --bench lookups -- FILE.amb [--aa A] [--lookups N] [--repeat R]"
+        );
+        return ExitCode::from(2);
+    };
+    let records = match read_file(std::path::Path::new(&file)) {
+        Ok((_, r, _)) => r,
+        Err(e) => {
+            eprintln!("lookups: {file}: {e}");
+            return ExitCode::FAILURE;
+        }
+    };
+    let vals: Vec<CachedValue> = records
+        .iter()
+        .map(|r| CachedValue::from_record(r, DVec3::ZERO))
+        .collect();
+    if vals.is_empty() {
+        eprintln!("lookups: {file}: no values");
+        return ExitCode::FAILURE;
+    }
+    let minrad = vals.iter().map(|v| v.rad[0]).fold(f64::INFINITY, f64::min);
+    let cache = AmbientCache::new(minrad, aa, 1);
+    let t = Instant::now();
+    vals.iter().for_each(|v| cache.insert(*v));
+    let filing = t.elapsed().as_secs_f64();
+    // The lookup points: a fixed pseudo-random sequence (splitmix64).
+    let mut state = 0x9E37_79B9_7F4A_7C15u64;
+    let mut rnd = || {
+        state = state.wrapping_add(0x9E37_79B9_7F4A_7C15);
+        let mut z = state;
+        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
+        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
+        ((z ^ (z >> 31)) >> 11) as f64 / (1u64 << 53) as f64
+    };
+    let points: Vec<(DVec3, u32)> = (0..lookups)
+        .map(|_| {
+            let v = &vals[(rnd() * vals.len() as f64) as usize % vals.len()];
+            let d = DVec3::new(rnd() - 0.5, rnd() - 0.5, rnd() - 0.5).normalize_or(DVec3::X);
+            let r = aa * v.rad[1] * v.reach * rnd();
+            (v.pos + d * r, v.lvl + 1)
+        })
+        .collect();
+    let mut best = f64::INFINITY;
+    let mut handed = 0usize;
+    for _ in 0..repeat {
+        handed = 0;
+        let t = Instant::now();
+        for &(p, level) in &points {
+            cache.for_each_near(
+                p,
+                level,
+                |l, _| l <= level,
+                |v| {
+                    std::hint::black_box(v);
+                    handed += 1;
+                },
+            );
+        }
+        best = best.min(t.elapsed().as_secs_f64());
+    }
+    println!(
+        "{} values from {file}, -aa {aa}: filed in {:.1} ms; {lookups} lookups: {:.0} ns each \
+         (fastest of {repeat}), {:.1} values handed on per lookup",
+        vals.len(),
+        filing * 1e3,
+        best / lookups as f64 * 1e9,
+        handed as f64 / lookups as f64
+    );
+    ExitCode::SUCCESS
+}
