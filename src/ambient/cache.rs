@@ -65,7 +65,12 @@ fn local(key: &Key, q: DVec3) -> [f32; 3] {
 /// The margin of the single-precision test in cell `key` ([`NEAR_MARGIN`], or infinite
 /// where the cell lies beyond [`NEAR_RANGE`]).
 fn margin(key: &Key) -> f32 {
-    if key.1.abs().max(key.2.abs()).max(key.3.abs()) as f64 > NEAR_RANGE {
+    let far = key
+        .1
+        .unsigned_abs()
+        .max(key.2.unsigned_abs())
+        .max(key.3.unsigned_abs());
+    if far as f64 > NEAR_RANGE {
         f32::INFINITY
     } else {
         NEAR_MARGIN

@@ -95,6 +95,7 @@ fn the_single_precision_test_errs_less_than_its_margin() {
     assert!(worst < NEAR_MARGIN as f64 / 4.0, "rounding {worst}");
     assert_eq!(margin(&(0, 2_000_000_000, 0, 0)), f32::INFINITY);
     assert_eq!(margin(&(3, 0, -2_000_000_000, 5)), f32::INFINITY);
+    assert_eq!(margin(&(3, 0, 0, i64::MIN)), f32::INFINITY);
 }
 
 /// Values spread over a cube of side `4·scale` about `offset`, of radii from
