@@ -100,7 +100,6 @@ fn main() -> ExitCode {
         for &(p, level) in &points {
             cache.for_each_near(
                 p,
-                level,
                 |l, _| l <= level,
                 |v| {
                     std::hint::black_box(v);

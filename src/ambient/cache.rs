@@ -77,6 +77,13 @@ fn margin(key: &Key) -> f32 {
     }
 }
 
+/// The radius a value is filed with, in units of `-aa`: its largest radius times its reach
+/// and share reach (its reach sphere is `aa` times this).
+#[inline(always)]
+fn filed_radius(v: &CachedValue) -> f64 {
+    v.rad[1].max(v.rad[0]) * v.reach.max(1.0) * v.share.max(1.0)
+}
+
 /// Whether `p` is inside the reach sphere `r` (centre and squared radius).
 #[inline(always)]
 fn within(p: DVec3, r: &[f64; 4]) -> bool {
@@ -267,12 +274,11 @@ impl<V> Default for CellList<V> {
 }
 
 /// Where a lookup is in one cell: the point relative to the cell's corner in cell sizes,
-/// the margin of the single-precision test, and the highest level it may use.
+/// and the margin of the single-precision test.
 #[derive(Clone, Copy)]
 struct At {
     q: [f32; 3],
     margin: f32,
-    top: u32,
 }
 
 impl<V> CellList<V> {
@@ -290,8 +296,7 @@ impl<V> CellList<V> {
     }
 
     /// Hand on, in filing order and in blocks of up to 32, the indices of the values whose
-    /// reach sphere holds the lookup's point, of a level up to `at.top` and accepted by
-    /// `usable`. The reach is tested in single precision, four values at a time, and again
+    /// reach sphere holds the lookup's point and whose level and weight `usable` accepts. The reach is tested in single precision, four values at a time, and again
     /// by `exact` (in double precision) for a value whose test falls within the margin of
     /// rounding, so that the values handed on are exactly those `exact` accepts.
     /// `prefetch` is called for each value before its block is handed on, so that their
@@ -331,10 +336,8 @@ impl<V> CellList<V> {
                 let lane = maybe.trailing_zeros();
                 maybe &= maybe - 1;
                 let i = b * 4 + lane as usize;
-                let lvl = self.lvls[i];
-                if lvl > at.top
+                if !usable(self.lvls[i], self.weights[i])
                     || (sure & (1 << lane) == 0 && !exact(&self.vals[i]))
-                    || !usable(lvl, self.weights[i])
                 {
                     continue;
                 }
@@ -490,7 +493,7 @@ impl AmbientCache {
     /// counted ([`AmbientCache::refused`]): filing it would touch
     /// unboundedly many cells.
     pub fn insert(&self, v: CachedValue) {
-        let r = v.rad[1].max(v.rad[0]) * v.reach.max(1.0) * v.share.max(1.0);
+        let r = filed_radius(&v);
         let l = self.level_for(r);
         let rr = self.aa * r;
         let s = self.cell_size(l);
@@ -561,42 +564,42 @@ impl AmbientCache {
         }
     }
 
-    /// Where `p` lies in cell `key` ([`CellList::scan`]).
-    #[inline(always)]
-    fn at(&self, key: &Key, p: DVec3, top: u32) -> At {
-        At {
-            q: local(key, p / self.cell_size(key.0)),
-            margin: margin(key),
-            top,
-        }
-    }
-
     /// Whether `p` lies inside value `v`'s reach sphere, in double precision (the radius
     /// [`AmbientCache::insert`] files it with).
     fn within(&self, p: DVec3, v: &CachedValue) -> bool {
-        let rr = self.aa * (v.rad[1].max(v.rad[0]) * v.reach.max(1.0) * v.share.max(1.0));
+        let rr = self.aa * filed_radius(v);
         within(p, &[v.pos.x, v.pos.y, v.pos.z, rr * rr])
     }
 
     /// The cell of level `l` holding `p`.
     fn key_at(&self, l: u32, p: DVec3) -> Key {
-        let s = self.cell_size(l);
-        (
+        self.cell_of(l, p).0
+    }
+
+    /// The cell of level `l` holding `p`, and where `p` lies in it ([`CellList::scan`]).
+    #[inline(always)]
+    fn cell_of(&self, l: u32, p: DVec3) -> (Key, At) {
+        let q = p / self.cell_size(l);
+        let key = (
             l,
-            (p.x / s).floor() as i64,
-            (p.y / s).floor() as i64,
-            (p.z / s).floor() as i64,
-        )
+            q.x.floor() as i64,
+            q.y.floor() as i64,
+            q.z.floor() as i64,
+        );
+        let at = At {
+            q: local(&key, q),
+            margin: margin(&key),
+        };
+        (key, at)
     }
 
     /// Call `f` for every value whose reach sphere (radius `aa·reach·max(rad)`) holds `p`
     /// and whose level and weight `usable` accepts, in the order of their levels and, within
-    /// a level, of their filing. `usable` accepts no value of a level above `max_level`.
+    /// a level, of their filing.
     #[inline]
     pub fn for_each_near(
         &self,
         p: DVec3,
-        max_level: u32,
         usable: impl Fn(u32, f64) -> bool,
         mut f: impl FnMut(&CachedValue),
     ) {
@@ -606,12 +609,11 @@ impl AmbientCache {
             if used & (1u64 << l) == 0 {
                 continue;
             }
-            let key = self.key_at(l, p);
+            let (key, at) = self.cell_of(l, p);
             let (w, bit) = occupancy(&key);
             if self.occupied[w].load(Ordering::Relaxed) & bit == 0 {
                 continue;
             }
-            let at = self.at(&key, p, max_level);
             if let Ok(grid) = self.shards[shard_of(&key)].0.read() {
                 if let Some(cell) = grid.get(&key) {
                     cell.scan(
@@ -632,10 +634,10 @@ impl AmbientCache {
                 if own.levels & (1u64 << l) == 0 {
                     continue;
                 }
-                let key = self.key_at(l, p);
+                let (key, at) = self.cell_of(l, p);
                 if let Some(cell) = own.cells.get(&key) {
                     cell.scan(
-                        self.at(&key, p, max_level),
+                        at,
                         &usable,
                         |&k| self.within(p, &own.vals[k as usize]),
                         |&k| crate::prefetch::prefetch::<CachedValue>(&own.vals[k as usize]),

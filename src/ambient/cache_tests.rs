@@ -46,7 +46,7 @@ fn absurd_values_are_refused() {
     }
     assert_eq!(c.len(), 1);
     let mut found = 0;
-    c.for_each_near(DVec3::ZERO, u32::MAX, |_, _| true, |_| found += 1);
+    c.for_each_near(DVec3::ZERO, |_, _| true, |_| found += 1);
     assert_eq!(found, 1);
 }
 
@@ -125,7 +125,7 @@ fn exact_lookups(offset: DVec3, minrad: f64, scale: f64) {
         let t = if rnd() < 0.3 { 0.999_999 } else { rnd() };
         let p = v.pos + dir * (r * t);
         let mut found = Vec::new();
-        cache.for_each_near(p, u32::MAX, |_, _| true, |c| found.push(c.id.seq));
+        cache.for_each_near(p, |_, _| true, |c| found.push(c.id.seq));
         found.sort_unstable();
         let mut want: Vec<u64> = vals
             .iter()
@@ -174,12 +174,12 @@ fn lookups_hand_on_only_usable_values_in_filing_order() {
     };
     let p = DVec3::splat(0.1);
     let mut every = Vec::new();
-    cache.for_each_near(p, u32::MAX, |_, _| true, |c| every.push(c.id.seq));
+    cache.for_each_near(p, |_, _| true, |c| every.push(c.id.seq));
     assert!(every.len() > 200, "{} values in reach", every.len());
     for (level, rweight) in [(0, 1.0), (1, 0.5), (2, 0.3), (3, 0.9)] {
         let usable = |lvl: u32, w: f64| lvl < level || (lvl == level && w >= 0.9 * rweight);
         let mut seen = Vec::new();
-        cache.for_each_near(p, level, usable, |c| {
+        cache.for_each_near(p, usable, |c| {
             assert!(usable(c.lvl, c.weight), "value {} handed on", c.id.seq);
             seen.push(c.id.seq);
         });

@@ -111,12 +111,12 @@ impl Ambient {
             |lvl: u32, weight: f64| lvl < level || (lvl == level && weight >= 0.9 * rweight);
         // The share reach applies when the surface sends other light besides.
         if self.settings().share_max > 1.0 && share.other > 0.0 {
-            return self.interpolate_shared(&mut q, level, usable, share);
+            return self.interpolate_shared(&mut q, usable, share);
         }
         let mut acc = Sum::default();
         // The cache hands on only values whose reach sphere (|P − P_v| <
         // aa·reach·share·max(rad), implied by the elliptical test) holds P.
-        self.cache.for_each_near(p, level, usable, |v| {
+        self.cache.for_each_near(p, usable, |v| {
             // This value's acceptance limit: -aa times its reach.
             let lim = aa * v.reach;
             if let Some((dt2, dr2, val)) = self.accept(v, lim, &mut q) {
@@ -132,14 +132,13 @@ impl Ambient {
     fn interpolate_shared(
         &self,
         q: &mut Lookup,
-        level: u32,
         usable: impl Fn(u32, f64) -> bool,
         share: Share,
     ) -> Option<Color> {
         let aa = self.aa();
         let mut cands = CANDIDATES.with(|c| std::mem::take(&mut *c.borrow_mut()));
         cands.clear();
-        self.cache.for_each_near(q.p, level, usable, |v| {
+        self.cache.for_each_near(q.p, usable, |v| {
             let sh = v.share.max(1.0);
             if let Some((dt2, dr2, val)) = self.accept(v, aa * v.reach * sh, q) {
                 cands.push(Candidate {
