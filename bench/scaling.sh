@@ -29,7 +29,8 @@
 #   TILES_LIST="1 4 16 32 64 128 256 512 1024" ("" for none; 1 and 4: where splitting
 #   among the loops decides), PMAX_REPEAT=3 (runs at the largest P, and of each --tiles
 #   plan; the summary takes the fastest of each),
-#   SIM_WORKERS="2,4,8,16,32,64,128,256", SYNC (per-tile seconds for the simulation,
+#   SIM_WORKERS="2,4,8,16,32,64,128,256", SPLIT (tilesim --split of the node sweep, default
+#   tpiece's 0.05,0.05,0.05), SYNC (per-tile seconds for the simulation,
 #   default tplan's 0.8 ms), STARTUP (seconds added to every simulated worker, default the
 #   measured start-up of a worker: a job of one tile minus its tile's CPU),
 #   NO_BUILD=1 (use the binaries in BIN, default target/release, as they are: a machine
@@ -46,6 +47,7 @@ OPTS=${OPTS:-"-ab 2 -aa .15 -ad 512 -as 128 -ar 64 -av .02 .02 .02 -ps 1"}
 TILES_LIST=${TILES_LIST-"1 4 16 32 64 128 256 512 1024"}
 PMAX_REPEAT=${PMAX_REPEAT:-3}
 SIM_WORKERS=${SIM_WORKERS:-"2,4,8,16,32,64,128,256"}
+SPLIT=${SPLIT:-0.05,0.05,0.05}
 if [ -z "${NO_BUILD:-}" ]; then
     (cd "$ROOT" && cargo build --release --quiet --bins)
 fi
@@ -140,7 +142,10 @@ for P in $WORKERS; do
         for mode in processes built threads; do
             job="$TMP/job-$P-$mode"
             rm -rf "$job"
-            "$B/tplan" --workers "$P" -o "$job" -- "${RARGS[@]}" "${SFILES[@]}" 2> "$TMP/plan.err"
+            # One worker of P loops gets the plan made for it (tplan --threads P).
+            threads=1
+            [ "$mode" = threads ] && threads=$P
+            "$B/tplan" --workers "$P" --threads "$threads" -o "$job" -- "${RARGS[@]}" "${SFILES[@]}" 2> "$TMP/plan.err"
             tiles=$(grep -o '[0-9]* tiles,' "$TMP/plan.err" | grep -o '[0-9]*')
             pids=()
             if [ "$mode" != threads ]; then
@@ -240,3 +245,11 @@ echo
 echo "tilesim --sweep on $OUT/costs.json (start-up $STARTUP s)"
 (cd "$ROOT" && cargo bench --quiet --bench tilesim -- "$OUT/costs.json" --sweep \
     --workers "$SIM_WORKERS" --startup "$STARTUP" "${SYNCARG[@]}")
+# The default configuration: workers of 16 loops (tplan --threads 16), splitting as tpiece
+# does, with cells of the frame's -ps.
+PS=$(awk '{ for (i = 1; i < NF; i++) if ($i == "-ps") p = $(i + 1) } END { print p ? p : 4 }' <<< "$OPTS")
+echo
+echo "tilesim --sweep, workers of 16 loops (tplan --threads 16, tpiece's splitting, -ps $PS)"
+(cd "$ROOT" && cargo bench --quiet --bench tilesim -- "$OUT/costs.json" --sweep \
+    --workers "$SIM_WORKERS" --startup "$STARTUP" "${SYNCARG[@]}" \
+    --split "$SPLIT" --loops 16 --ps "$PS")

@@ -767,13 +767,21 @@ struct Args {
     loops: usize,
     /// `--counts FILE`: the sweep's wall time of every tile count tried.
     counts: Option<String>,
+    /// `--ps N`: the sweep's plans on `cell_size(N)` pixels and `--split`'s cells of as many,
+    /// as `tplan` and `tpiece` make them at `-ps N` (else the plan grid [`GRID`] and cells of
+    /// `cell_size(GRID)`).
+    ps: Option<usize>,
+    /// `--local CHECK,MIN,WAKE`: the sibling loops' splitting settings (else
+    /// `SIBLING_CHECK_SECONDS`, `SIBLING_MIN_PIECE_SECONDS` and [`SIBLING_WAKE`]).
+    local: Option<(f64, f64, f64)>,
 }
 
 const USAGE: &str = "usage: cargo bench --bench tilesim -- COSTS.json [--workers 1,2,4,...] \
 [--tiles-per-worker N] [--sync-cost SECONDS] [--json OUT] [--lpt] [--bands SHARE:SIZE,...]
        cargo bench --bench tilesim -- COSTS.json --sweep [--workers ...] [--sync-cost S]
          [--startup S] [--estimate-factor F] [--frame-costs C,...] [--tail T]
-         [--split CHECK,MIN,WAKE [--loops N]] [--counts FILE]
+         [--split CHECK,MIN,WAKE [--loops N]] [--counts FILE] [--ps N]
+         [--local CHECK,MIN,WAKE]
        cargo bench --bench tilesim -- --self-test
        cargo bench --bench tilesim -- --write-synthetic OUT.json [--size WxH]
          [--hot-corner tl|tr|bl|br | --hot-at U,V] [--hot-radius FRACTION_OF_HEIGHT]";
@@ -797,6 +805,8 @@ fn parse_args() -> Result<Args, String> {
         tail: tessera::job::plan::TAIL,
         loops: 1,
         counts: None,
+        ps: None,
+        local: None,
         hot: Synthetic {
             width: 640,
             height: 480,
@@ -861,6 +871,24 @@ fn parse_args() -> Result<Args, String> {
                 a.loops = match value("--loops")?.parse() {
                     Ok(n) if n > 0 => n,
                     _ => return Err("--loops: expected a positive integer".into()),
+                }
+            }
+            "--local" => {
+                let v = value("--local")?;
+                let f: Vec<f64> = v
+                    .split(',')
+                    .map(|s| s.trim().parse::<f64>())
+                    .collect::<Result<_, _>>()
+                    .map_err(|_| format!("--local {v}: expected CHECK,MIN,WAKE seconds"))?;
+                match f[..] {
+                    [c, m, w] if c > 0.0 && m >= 0.0 && w >= 0.0 => a.local = Some((c, m, w)),
+                    _ => return Err(format!("--local {v}: CHECK > 0, MIN and WAKE >= 0")),
+                }
+            }
+            "--ps" => {
+                a.ps = match value("--ps")?.parse() {
+                    Ok(n) if (1..=64).contains(&n) => Some(n),
+                    _ => return Err("--ps: expected an integer from 1 to 64".into()),
                 }
             }
             "--frame-costs" => {
@@ -938,6 +966,12 @@ fn parse_args() -> Result<Args, String> {
     }
     if let Some(sp) = &mut a.split {
         sp.loops = a.loops;
+        if let Some(ps) = a.ps {
+            sp.cell = tessera::render::cell_size(ps);
+        }
+        if let Some(l) = a.local {
+            sp.local = l;
+        }
     } else if a.loops > 1 {
         return Err("--loops needs --split".into());
     }
@@ -998,6 +1032,7 @@ fn run() -> Result<(), String> {
             args.estimate,
             args.split,
             args.tail,
+            args.ps.map_or(GRID, tessera::render::cell_size),
             file.as_mut().map(|f| f as &mut dyn std::io::Write),
         );
         if let Some(mut f) = file {

@@ -2,16 +2,17 @@
 //! 1000 CPU-seconds and every worker count.
 //!
 //! The measured cost map is scaled to each frame cost. For each P, the default plan
-//! (`tiles_for_cost` of the frame's cost times `--estimate-factor`, the cost probe's bias)
-//! and plans of every tile count from 1 to 80 P (a geometric series, 12 a doubling) are
+//! (`tiles_for_cost` of the frame's cost times `--estimate-factor`, the cost probe's bias;
+//! with `--split` and `--loops` of 2 or more, `tiles_for_loops`, as `tplan --threads`) and
+//! plans of every tile count from 1 to 80 P (a geometric series, 12 a doubling) are
 //! replayed with `--sync-cost` per tile on the render thread; each makespan gets
 //! `--startup` seconds (a worker reading its scene). Printed: the best count, its wall time,
 //! the default's, and their ratio.
 
 use super::split::{simulate_split, SplitParams};
-use super::{simulate, CostMap, GRID};
+use super::{simulate, CostMap};
 use std::io::Write;
-use tessera::job::plan::{plan_tiles, tiles_for_tail, TILES_PER_WORKER};
+use tessera::job::plan::{plan_tiles, tiles_for_loops, tiles_for_tail, TILES_PER_WORKER};
 
 /// The frame costs swept by default, CPU seconds (`--frame-costs` for others).
 pub const FRAME_COSTS: [f64; 5] = [0.1, 1.0, 10.0, 100.0, 1000.0];
@@ -26,6 +27,7 @@ pub struct Row {
     pub best_wall: f64,
 }
 
+#[allow(clippy::too_many_arguments)]
 fn wall(
     map: &CostMap,
     scale: f64,
@@ -34,8 +36,9 @@ fn wall(
     sync: f64,
     startup: f64,
     split: Option<SplitParams>,
+    grid: usize,
 ) -> (usize, f64) {
-    let plan = plan_tiles(map.width, map.height, tiles, GRID);
+    let plan = plan_tiles(map.width, map.height, tiles, grid);
     if let Some(sp) = split {
         return (
             plan.len(),
@@ -57,6 +60,7 @@ pub fn sweep(
     estimate: f64,
     split: Option<SplitParams>,
     tail: f64,
+    grid: usize,
     mut counts: Option<&mut dyn std::io::Write>,
 ) -> Vec<Row> {
     let mut rows = Vec::new();
@@ -65,12 +69,25 @@ pub fn sweep(
     for &cost in costs {
         let scale = cost / total;
         for &p in workers {
-            let n = tiles_for_tail(area, p, cost * estimate, sync, tail);
-            let (default_tiles, default_wall) = wall(map, scale, n, p, sync, startup, split);
+            // `tplan --threads T`'s default: workers of several loops that split, a few
+            // tiles a loop; single-thread workers, the cost rule.
+            let loops = split.map_or(1, |sp| sp.loops.min(p));
+            let n = tiles_for_loops(area, p, loops)
+                .unwrap_or_else(|| tiles_for_tail(area, p, cost * estimate, sync, tail));
+            let (default_tiles, default_wall) = wall(map, scale, n, p, sync, startup, split, grid);
             let (mut best_tiles, mut best_wall) = (default_tiles, default_wall);
             let mut k = 1.0f64;
             while k <= (TILES_PER_WORKER * p) as f64 {
-                let (t, w) = wall(map, scale, k.round() as usize, p, sync, startup, split);
+                let (t, w) = wall(
+                    map,
+                    scale,
+                    k.round() as usize,
+                    p,
+                    sync,
+                    startup,
+                    split,
+                    grid,
+                );
                 if let Some(out) = counts.as_mut() {
                     let _ = writeln!(out, "{cost}\t{p}\t{}\t{t}\t{w}", k.round());
                 }

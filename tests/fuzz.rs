@@ -438,6 +438,7 @@ fn manifest_seed(dir: &Path) -> Vec<u8> {
         tiles: Some(4),
         tile_size: None,
         workers: Some(2),
+        threads: None,
         frames: None,
         views: None,
         path: None,

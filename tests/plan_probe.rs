@@ -83,3 +83,59 @@ fn the_probe_estimates_indirect_frames_within_a_small_factor() {
         );
     }
 }
+
+/// Planned for workers of several tile loops (`--threads`), the default plan has a few tiles
+/// a loop whatever the frame costs, and says so; with `--no-split`, or single-thread
+/// workers, the cost probe sizes it; a `--threads` beyond `--workers` is refused.
+#[test]
+fn workers_of_several_loops_get_a_few_tiles_a_loop() {
+    let dir = tempfile::tempdir().unwrap();
+    let plan = |name: &str, extra: &[&str]| {
+        let job = dir.path().join(name);
+        let out = Command::new(env!("CARGO_BIN_EXE_tplan"))
+            .env("RAYPATH", demo())
+            .args(["--workers", "8", "-o"])
+            .arg(&job)
+            .args(extra)
+            .arg("--")
+            .args(args("1"))
+            .output()
+            .unwrap();
+        let err = String::from_utf8_lossy(&out.stderr).to_string();
+        let m: Option<serde_json::Value> = std::fs::read(job.join("manifest.json"))
+            .ok()
+            .map(|b| serde_json::from_slice(&b).unwrap());
+        (out.status.success(), err, m)
+    };
+    let tiles = |m: &serde_json::Value| m["frames"][0]["tiles"].as_array().unwrap().len();
+    let (ok, err, m) = plan("loops", &["--threads", "4"]);
+    assert!(ok, "{err}");
+    let m = m.unwrap();
+    // 24 asked for; the plan's bands round to whole tiles.
+    assert!((20..=40).contains(&tiles(&m)), "{} tiles\n{err}", tiles(&m));
+    assert_eq!(m["threads_expected"], 4);
+    assert!(err.contains("tiles per loop"), "{err}");
+    assert!(!err.contains("cost probe"), "{err}");
+    // A single-thread worker on it says the plan was made for loops (and renders it).
+    let out = Command::new(env!("CARGO_BIN_EXE_tpiece"))
+        .arg(dir.path().join("loops"))
+        .args(["--threads", "1", "-q"])
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&out.stderr).to_string();
+    assert!(out.status.success(), "{err}");
+    assert!(err.contains("planned for workers of 4 tile loops"), "{err}");
+    let (ok, err, m) = plan("single", &[]);
+    assert!(ok, "{err}");
+    let m = m.unwrap();
+    assert_eq!(m["threads_expected"], 1);
+    assert!(err.contains("cost probe"), "{err}");
+    let (ok, err, _) = plan("nosplit", &["--threads", "4", "--no-split"]);
+    assert!(ok && err.contains("cost probe"), "{err}");
+    let (ok, err, m) = plan("toomany", &["--threads", "9"]);
+    assert!(!ok && m.is_none(), "{err}");
+    assert!(
+        err.contains("--threads 9 must be from 1 to --workers (8)"),
+        "{err}"
+    );
+}

@@ -3,7 +3,7 @@
 use super::manifest::Manifest;
 use super::{task_name, tile, JobDir};
 use crate::image::{Header, Image};
-use anyhow::{anyhow, Result};
+use anyhow::{anyhow, Context, Result};
 
 /// A tile that could not be used, and why.
 #[derive(Clone, Debug, PartialEq)]
@@ -130,4 +130,58 @@ pub fn assemble_frame(
         ));
     }
     Ok((img, missing))
+}
+
+/// The missing or invalid tiles of a frame, each with why, for a message.
+pub fn missing_list(missing: &[MissingTile]) -> String {
+    missing
+        .iter()
+        .map(|t| format!("{} ({})", t.task, t.reason))
+        .collect::<Vec<_>>()
+        .join(", ")
+}
+
+/// The results of point job `job` (`p`: its plan) in input order, to `output` or standard
+/// output; with `partial`, missing chunks as zeros, else an error message and status 1.
+pub fn write_points(
+    job: &JobDir,
+    m: &Manifest,
+    p: &super::points::PointsPlan,
+    output: Option<&std::path::Path>,
+    partial: bool,
+    cmd: &str,
+) -> Result<i32> {
+    let pieces = job_pieces(job)?;
+    let (img, missing) = assemble_frame(job, m, &pieces, 0, cmd)?;
+    if !missing.is_empty() {
+        let list = missing_list(&missing);
+        if !partial {
+            eprintln!(
+                "tassemble: error: {} of {} chunks missing or invalid: {} (run tpiece on the \
+                 job to trace them, or pass --partial to write zeros)",
+                missing.len(),
+                m.frames[0].tiles.len(),
+                list
+            );
+            return Ok(1);
+        }
+        eprintln!(
+            "tassemble: warning - {} chunks written as zeros: {}",
+            missing.len(),
+            list
+        );
+    }
+    let rays = super::points::load_rays(job, p)?;
+    let bytes = super::points::records(p, &rays, &img.pixels, &m.command);
+    match output {
+        Some(o) => crate::image::output::write_atomic(o, |f| std::io::Write::write_all(f, &bytes))
+            .with_context(|| format!("cannot write {}", o.display()))?,
+        None => {
+            let mut out = std::io::stdout().lock();
+            std::io::Write::write_all(&mut out, &bytes)
+                .and_then(|()| std::io::Write::flush(&mut out))
+                .context("cannot write the results")?;
+        }
+    }
+    Ok(0)
 }

@@ -61,6 +61,12 @@ struct TplanArgs {
     /// workers (default plan).
     #[arg(long, default_value_t = 4, verbatim_doc_comment)]
     workers: usize,
+    /// Tile loops each worker runs (its tpiece --threads; default plan):
+    /// with 2 or more, 3 tiles per loop, which the loops split among
+    /// themselves as they finish; with 1, as many as the frame's
+    /// estimated cost asks for.
+    #[arg(long, default_value_t = 1, verbatim_doc_comment)]
+    threads: usize,
     /// View file with one view per line: one frame per view (each on
     /// top of the previous).
     #[arg(long, value_name = "VIEWFILE", verbatim_doc_comment)]
@@ -204,6 +210,14 @@ fn tplan(a: TplanArgs) -> Result<i32> {
     if a.tiles == Some(0) {
         bail!("--tiles must be at least 1");
     }
+    if a.threads == 0 || a.threads > a.workers {
+        bail!(
+            "--threads {} must be from 1 to --workers ({}): the tile loops of each worker, \
+             out of all the job's loops",
+            a.threads,
+            a.workers
+        );
+    }
     let output = match (&a.rif, a.output.clone()) {
         (Some(_), _) if a.print => return rif_print(&a),
         (_, Some(o)) => o,
@@ -222,6 +236,7 @@ fn tplan(a: TplanArgs) -> Result<i32> {
         tiles: a.tiles,
         tile_size: a.tile_size.as_deref().map(parse_size).transpose()?,
         workers: Some(a.workers),
+        threads: Some(a.threads),
         frames: a.frames.map(|p| p.display().to_string()),
         views,
         path: a
@@ -259,6 +274,15 @@ fn tplan(a: TplanArgs) -> Result<i32> {
         m.primitives,
         m.lease_seconds
     );
+    let per_loop = m.threads_expected >= 2 && m.split && a.tiles.is_none();
+    if per_loop && a.tile_size.is_none() && m.points.is_none() {
+        eprintln!(
+            "tplan: the default plan for workers of {} tile loops: {:.1} tiles per loop, which \
+             a worker's loops split among themselves (docs/batch.md, \"The tile plan\")",
+            m.threads_expected,
+            f0.tiles.len() as f64 / a.workers.max(1) as f64
+        );
+    }
     if let Some(c) = m.frame_cost_estimate {
         eprintln!(
             "tplan: the default plan: {:.1} tiles per worker for a frame estimated at {c:.2} \
@@ -560,15 +584,6 @@ struct TassembleArgs {
     raw: bool,
 }
 
-/// The missing or invalid tiles of a frame, each with why, for a message.
-fn missing_list(missing: &[super::assemble::MissingTile]) -> String {
-    missing
-        .iter()
-        .map(|t| format!("{} ({})", t.task, t.reason))
-        .collect::<Vec<_>>()
-        .join(", ")
-}
-
 /// `tassemble` of a point job: every ray's results in input order, to `-o` or standard
 /// output.
 fn assemble_points(
@@ -589,39 +604,7 @@ fn assemble_points(
             );
         }
     }
-    let pieces = super::assemble::job_pieces(job)?;
-    let (img, missing) = super::assemble::assemble_frame(job, m, &pieces, 0, cmd)?;
-    if !missing.is_empty() {
-        let list = missing_list(&missing);
-        if !a.partial {
-            eprintln!(
-                "tassemble: error: {} of {} chunks missing or invalid: {} (run tpiece on the \
-                 job to trace them, or pass --partial to write zeros)",
-                missing.len(),
-                m.frames[0].tiles.len(),
-                list
-            );
-            return Ok(1);
-        }
-        eprintln!(
-            "tassemble: warning - {} chunks written as zeros: {}",
-            missing.len(),
-            list
-        );
-    }
-    let rays = super::points::load_rays(job, p)?;
-    let bytes = super::points::records(p, &rays, &img.pixels, &m.command);
-    match &a.output {
-        Some(o) => crate::image::output::write_atomic(o, |f| std::io::Write::write_all(f, &bytes))
-            .with_context(|| format!("cannot write {}", o.display()))?,
-        None => {
-            let mut out = std::io::stdout().lock();
-            std::io::Write::write_all(&mut out, &bytes)
-                .and_then(|()| std::io::Write::flush(&mut out))
-                .context("cannot write the results")?;
-        }
-    }
-    Ok(0)
+    super::assemble::write_points(job, m, p, a.output.as_deref(), a.partial, cmd)
 }
 
 /// Entry point of `tassemble`.
@@ -687,7 +670,7 @@ fn tassemble(a: TassembleArgs) -> Result<i32> {
             img = fin.apply(&img);
         }
         if !missing.is_empty() {
-            let list = missing_list(&missing);
+            let list = super::assemble::missing_list(&missing);
             if !a.partial {
                 eprintln!(
                     "tassemble: error: frame {f}: {} of {} tiles missing or invalid: {} \

@@ -1,6 +1,8 @@
 //! The job manifest (`manifest.json`) and job creation (`tplan`).
 
-use super::plan::{check_cover, default_tiles, pixel_cost_floor, plan_fixed, plan_tiles, TileRect};
+use super::plan::{
+    check_cover, default_tiles, pixel_cost_floor, plan_fixed, plan_tiles, tiles_for_loops, TileRect,
+};
 use super::{check_plain_name, hex32, parse_hex32, task_name, JobDir};
 use crate::options::{parse_rpict_args, Command, PictureParams, RenderParams, RpictOptions};
 use crate::render::world::Scene;
@@ -71,6 +73,10 @@ pub struct Manifest {
     pub lease_seconds: f64,
     /// Workers the plan was made for.
     pub workers_expected: usize,
+    /// Tile loops per worker the plan was made for (`tplan --threads`; manifests without
+    /// it: 1).
+    #[serde(default = "one")]
+    pub threads_expected: usize,
     /// The default plan's estimate of the first frame's CPU seconds ([`super::probe`]), when
     /// it was planned that way (informational).
     #[serde(default, skip_serializing_if = "Option::is_none")]
@@ -94,6 +100,10 @@ fn yes() -> bool {
     true
 }
 
+fn one() -> usize {
+    1
+}
+
 /// A manifest as stored: today's (`params`, `picture`) or one written before the options
 /// split (`options`, tpict's command line, of which only render and picture parameters are
 /// used).
@@ -112,6 +122,8 @@ struct ManifestFile {
     fingerprint: String,
     lease_seconds: f64,
     workers_expected: usize,
+    #[serde(default = "one")]
+    threads_expected: usize,
     #[serde(default)]
     frame_cost_estimate: Option<f64>,
     #[serde(default)]
@@ -152,6 +164,7 @@ impl TryFrom<ManifestFile> for Manifest {
             fingerprint: f.fingerprint,
             lease_seconds: f.lease_seconds,
             workers_expected: f.workers_expected,
+            threads_expected: f.threads_expected,
             frame_cost_estimate: f.frame_cost_estimate,
             finish: f.finish,
             points: f.points,
@@ -282,6 +295,8 @@ pub struct PlanRequest {
     pub tile_size: Option<(usize, usize)>,
     /// `--workers N` (default 4): sets the default tile count.
     pub workers: Option<usize>,
+    /// `--threads T` (default 1): the tile loops of each worker, for the default tile count.
+    pub threads: Option<usize>,
     /// `--frames VIEWFILE`: one view per line, each on top of the previous.
     pub frames: Option<String>,
     /// Views given directly, one frame each (a rif file's views); each stands alone.
@@ -421,6 +436,7 @@ pub fn create_job(dir: &Path, req: &PlanRequest) -> Result<Manifest> {
         }
     }
     let workers = req.workers.unwrap_or(4).max(1);
+    let threads = req.threads.unwrap_or(1).clamp(1, workers);
     let mut frames = Vec::new();
     // The default plan: every frame's tiles from the first frame's measured cost per pixel.
     let mut per_pixel: Option<f64> = None;
@@ -444,6 +460,12 @@ pub fn create_job(dir: &Path, req: &PlanRequest) -> Result<Manifest> {
             }
             (Some((tw, th)), _) => plan_fixed(x, y, tw, th),
             (None, Some(n)) => plan_tiles(x, y, n, grid),
+            // Workers of several loops that split tiles: a few tiles a loop, whatever the
+            // frame costs (no probe).
+            (None, None) if !req.no_split && tiles_for_loops(x * y, workers, threads).is_some() => {
+                let n = tiles_for_loops(x * y, workers, threads).unwrap_or(1);
+                plan_tiles(x, y, n, grid)
+            }
             (None, None) => {
                 let floor = pixel_cost_floor(opts.params.ab);
                 let cost = match per_pixel {
@@ -505,6 +527,7 @@ pub fn create_job(dir: &Path, req: &PlanRequest) -> Result<Manifest> {
         fingerprint: hex32(&fingerprint),
         lease_seconds: lease,
         workers_expected: workers,
+        threads_expected: threads,
         frame_cost_estimate,
         finish: req.finish.clone(),
         split: !req.no_split && points.is_none(),
@@ -719,6 +742,7 @@ mod tests {
             fingerprint: "00".repeat(32),
             lease_seconds: 180.0,
             workers_expected: 2,
+            threads_expected: 1,
             frame_cost_estimate: None,
             finish: None,
             points: None,

@@ -84,6 +84,30 @@ pub fn default_tiles(width: usize, height: usize, workers: usize, pixel_cost: f6
     tiles_for_cost(width * height, workers, frame, TILE_OVERHEAD)
 }
 
+/// Tiles per tile loop of the default plan for workers of two or more loops that may split
+/// tiles ([`tiles_for_loops`]).
+pub const TILES_PER_LOOP: usize = 3;
+
+/// The default `tiles` for `workers` tile loops in all, run by workers of `threads` loops
+/// each that split tiles while they render ([`super::split`], [`super::siblings`]):
+/// [`TILES_PER_LOOP`] per loop, whatever the frame costs, kept within a sixteenth of the
+/// area as in [`tiles_for_tail`]. A worker's loops share the end of a tile at once (a loop
+/// that waits gets half of a sibling's rest within milliseconds), so the tail that more
+/// tiles would shorten is short already and each further tile costs its overhead: replayed
+/// by `bench/tilesim --sweep --loops 16 --ps 1` on four cost maps over frames of 0.1–1000
+/// CPU-s on 2–64 loops, three a loop came within 5% of the best tile count in 176 of the 192
+/// cases (worst 1.17×) where the cost rule of [`tiles_for_cost`] did in 103 (worst 1.26×;
+/// docs/benchmarks.md, "Scaling and the default plan"). `None` for single-thread workers
+/// (`threads` < 2), which balance only through other processes' polls and want the cost
+/// rule.
+pub fn tiles_for_loops(area: usize, workers: usize, threads: usize) -> Option<usize> {
+    (threads >= 2).then(|| {
+        TILES_PER_LOOP
+            .saturating_mul(workers.max(1))
+            .min((area / 16).max(1))
+    })
+}
+
 /// The tail of a frame, the time the last worker still renders after the others are done,
 /// modelled as `TAIL · P · cost / tiles`: P times a mean tile's cost, scaled. With more
 /// workers the end waits for the slowest of more last tiles, and a tile's cost varies with
@@ -417,6 +441,24 @@ mod tests {
                 "{cost} s, {p} workers: {n}"
             );
         }
+    }
+
+    #[test]
+    fn workers_of_several_loops_get_a_few_tiles_a_loop() {
+        assert_eq!(tiles_for_loops(1024 * 1024, 16, 1), None);
+        assert_eq!(tiles_for_loops(1024 * 1024, 16, 0), None);
+        assert_eq!(
+            tiles_for_loops(1024 * 1024, 16, 2),
+            Some(16 * TILES_PER_LOOP)
+        );
+        assert_eq!(
+            tiles_for_loops(1024 * 1024, 64, 16),
+            Some(64 * TILES_PER_LOOP)
+        );
+        // Never more than a sixteenth of the area, never none.
+        assert_eq!(tiles_for_loops(32 * 32, 64, 16), Some(64));
+        assert_eq!(tiles_for_loops(1, 4, 4), Some(1));
+        assert_eq!(tiles_for_loops(1 << 20, 0, 4), Some(TILES_PER_LOOP));
     }
 
     #[test]

@@ -89,6 +89,14 @@ pub fn run_worker(job: &JobDir, wo: &WorkerOptions) -> Result<WorkerSummary> {
     if let Some(w) = cut {
         eprintln!("tpiece: warning: {w}");
     }
+    if loops == 1 && m.threads_expected >= 2 && m.split {
+        eprintln!(
+            "tpiece: warning: the job was planned for workers of {} tile loops (tplan --threads), \
+             whose loops split its few tiles among themselves; a single-thread worker ends \
+             frames later",
+            m.threads_expected
+        );
+    }
     let start = super::jobscene::SceneStart {
         amb_flush: wo.amb_flush,
         scene_image: wo.scene_image,
