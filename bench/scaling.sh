@@ -229,7 +229,7 @@ if [ -z "$STARTUP" ] && [ -d "$one" ]; then
     # The worker's wall time less its tile's (one pixel, which at -ab 2 still makes the
     # ambient values that pixel needs).
     tile_s=$("$B/tstat" "$one" --costs 0 | python3 -c 'import json, sys; print(sum(t["seconds"] for t in json.load(sys.stdin)["tiles"]))')
-    STARTUP=$(awk -v t="$tile_s" '{ s = $1 - t; printf "%.3f\n", s > 0 ? s : 0 }' "$TMP/startup.t")
+    STARTUP=$(awk -v t="$tile_s" '{ s = $1 - t; printf "%.3f\n", (s > 0 ? s : 0) }' "$TMP/startup.t")
 fi
 STARTUP=${STARTUP:-0}
 echo "$STARTUP" > "$OUT/startup.txt"
