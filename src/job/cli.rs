@@ -274,8 +274,8 @@ fn tplan(a: TplanArgs) -> Result<i32> {
         m.primitives,
         m.lease_seconds
     );
-    let per_loop = m.threads_expected >= 2 && m.split && a.tiles.is_none();
-    if per_loop && a.tile_size.is_none() && m.points.is_none() {
+    let default_plan = a.tiles.is_none() && a.tile_size.is_none() && m.points.is_none();
+    if default_plan && m.frame_cost_estimate.is_none() && m.threads_expected >= 2 && m.split {
         eprintln!(
             "tplan: the default plan for workers of {} tile loops: {:.1} tiles per loop, which \
              a worker's loops split among themselves (docs/batch.md, \"The tile plan\")",

@@ -454,18 +454,15 @@ pub fn create_job(dir: &Path, req: &PlanRequest) -> Result<Manifest> {
         // Tile edges on the sampling grid (cells of `cell_size(-ps)` pixels): no cell is
         // traced by two tiles.
         let grid = crate::render::cell_size(opts.picture.ps.max(1));
-        let tiles = match (req.tile_size, req.tiles) {
+        // Workers of several loops that split tiles: a few tiles a loop, whatever the frame
+        // costs (no probe).
+        let by_loops = tiles_for_loops(x * y, workers, threads).filter(|_| !req.no_split);
+        let tiles = match (req.tile_size, req.tiles.or(by_loops)) {
             _ if points.is_some() => {
                 plan_fixed(x, y, x, points.as_ref().map_or(1, |p| p.rows_per_task))
             }
             (Some((tw, th)), _) => plan_fixed(x, y, tw, th),
             (None, Some(n)) => plan_tiles(x, y, n, grid),
-            // Workers of several loops that split tiles: a few tiles a loop, whatever the
-            // frame costs (no probe).
-            (None, None) if !req.no_split && tiles_for_loops(x * y, workers, threads).is_some() => {
-                let n = tiles_for_loops(x * y, workers, threads).unwrap_or(1);
-                plan_tiles(x, y, n, grid)
-            }
             (None, None) => {
                 let floor = pixel_cost_floor(opts.params.ab);
                 let cost = match per_pixel {
