@@ -842,18 +842,7 @@ fn parse_args() -> Result<Args, String> {
                 }
             }
             "--split" => {
-                let v = value("--split")?;
-                let f: Vec<f64> = v
-                    .split(',')
-                    .map(|s| s.trim().parse::<f64>())
-                    .collect::<Result<_, _>>()
-                    .map_err(|_| format!("--split {v}: expected CHECK,MIN,WAKE seconds"))?;
-                let [check, min_piece, wake] = f[..] else {
-                    return Err(format!("--split {v}: expected CHECK,MIN,WAKE seconds"));
-                };
-                if !(check > 0.0 && min_piece >= 0.0 && wake >= 0.0) {
-                    return Err(format!("--split {v}: CHECK > 0, MIN and WAKE >= 0"));
-                }
+                let (check, min_piece, wake) = check_min_wake("--split", &value("--split")?)?;
                 a.split = Some(split::SplitParams {
                     check,
                     min_piece,
@@ -873,18 +862,7 @@ fn parse_args() -> Result<Args, String> {
                     _ => return Err("--loops: expected a positive integer".into()),
                 }
             }
-            "--local" => {
-                let v = value("--local")?;
-                let f: Vec<f64> = v
-                    .split(',')
-                    .map(|s| s.trim().parse::<f64>())
-                    .collect::<Result<_, _>>()
-                    .map_err(|_| format!("--local {v}: expected CHECK,MIN,WAKE seconds"))?;
-                match f[..] {
-                    [c, m, w] if c > 0.0 && m >= 0.0 && w >= 0.0 => a.local = Some((c, m, w)),
-                    _ => return Err(format!("--local {v}: CHECK > 0, MIN and WAKE >= 0")),
-                }
-            }
+            "--local" => a.local = Some(check_min_wake("--local", &value("--local")?)?),
             "--ps" => {
                 a.ps = match value("--ps")?.parse() {
                     Ok(n) if (1..=64).contains(&n) => Some(n),
@@ -972,10 +950,24 @@ fn parse_args() -> Result<Args, String> {
         if let Some(l) = a.local {
             sp.local = l;
         }
-    } else if a.loops > 1 {
-        return Err("--loops needs --split".into());
+    } else if a.loops > 1 || a.local.is_some() {
+        return Err("--loops and --local need --split".into());
     }
     Ok(a)
+}
+
+/// The value `v` of option `name`: CHECK,MIN,WAKE seconds, CHECK > 0, MIN and WAKE >= 0.
+fn check_min_wake(name: &str, v: &str) -> Result<(f64, f64, f64), String> {
+    let f: Vec<f64> = v
+        .split(',')
+        .map(|s| s.trim().parse::<f64>())
+        .collect::<Result<_, _>>()
+        .map_err(|_| format!("{name} {v}: expected CHECK,MIN,WAKE seconds"))?;
+    match f[..] {
+        [c, m, w] if c > 0.0 && m >= 0.0 && w >= 0.0 => Ok((c, m, w)),
+        [_, _, _] => Err(format!("{name} {v}: CHECK > 0, MIN and WAKE >= 0")),
+        _ => Err(format!("{name} {v}: expected CHECK,MIN,WAKE seconds")),
+    }
 }
 
 /// Seconds before a woken sibling loop takes a new piece (a condition variable's wake-up
