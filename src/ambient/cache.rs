@@ -296,9 +296,10 @@ impl<V> CellList<V> {
     }
 
     /// Hand on, in filing order and in blocks of up to 32, the indices of the values whose
-    /// reach sphere holds the lookup's point and whose level and weight `usable` accepts. The reach is tested in single precision, four values at a time, and again
-    /// by `exact` (in double precision) for a value whose test falls within the margin of
-    /// rounding, so that the values handed on are exactly those `exact` accepts.
+    /// reach sphere holds the lookup's point and whose level and weight `usable` accepts.
+    /// The reach is tested in single precision, four values at a time, and again by `exact`
+    /// (in double precision) for a value whose test falls within the margin of rounding, so
+    /// that the values handed on are exactly those `exact` accepts.
     /// `prefetch` is called for each value before its block is handed on, so that their
     /// cache misses overlap.
     #[inline(always)]

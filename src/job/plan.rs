@@ -101,11 +101,15 @@ pub const TILES_PER_LOOP: usize = 3;
 /// (`threads` < 2), which balance only through other processes' polls and want the cost
 /// rule.
 pub fn tiles_for_loops(area: usize, workers: usize, threads: usize) -> Option<usize> {
-    (threads >= 2).then(|| {
-        TILES_PER_LOOP
-            .saturating_mul(workers.max(1))
-            .min((area / 16).max(1))
-    })
+    (threads >= 2).then(|| most_tiles(area, workers, TILES_PER_LOOP))
+}
+
+/// `per_worker` tiles for each of `workers`, kept within a sixteenth of the `area` (the
+/// plan's bands keep tiles of at least [`MIN_TILE_AREA`] pixels) and at least one.
+fn most_tiles(area: usize, workers: usize, per_worker: usize) -> usize {
+    per_worker
+        .saturating_mul(workers.max(1))
+        .min((area / 16).max(1))
 }
 
 /// The tail of a frame, the time the last worker still renders after the others are done,
@@ -139,9 +143,7 @@ pub fn tiles_for_tail(
     tail: f64,
 ) -> usize {
     let workers = workers.max(1);
-    let most = TILES_PER_WORKER
-        .saturating_mul(workers)
-        .min((area / 16).max(1));
+    let most = most_tiles(area, workers, TILES_PER_WORKER);
     let best = workers as f64 * (tail * frame_cost / (PLANNED_PER_TILE * overhead)).sqrt();
     if !best.is_finite() || area == 0 {
         return most;
