@@ -5,14 +5,15 @@
 //! twice its reach (`aa·reach·r`), filed (as a shared pointer) in every cell of that level its
 //! reach sphere touches — at most 2×2×2. A lookup at point P reads, per level in use, the one
 //! cell holding P: every value whose reach covers P is there; per-level occupancy bits let
-//! it skip, without a lock or a probe, levels with nothing filed near P. A cell keeps each
-//! value's position (relative to the cell's corner) and squared reach in single precision,
-//! four values to a cache line, and its level and weight in arrays beside them; a lookup
-//! tests four values at a time, tests again in double precision those within rounding of
-//! their reach (so it sees exactly the values a double-precision test would), reads the
-//! level and weight of the values in reach, and reads a value itself only when these let
-//! the lookup use it (prefetching the usable values of a block together, so that their
-//! cache misses overlap).
+//! it skip, without a lock or a probe, levels with nothing filed near P. A cell keeps its
+//! values in spans of one ambient level each, and per value its position (relative to the
+//! cell's corner) and squared reach in single precision, four values to a cache line, and
+//! its weight beside them; a lookup reads only the spans of the levels it may use, tests
+//! four values at a time, tests again in double precision those within rounding of their
+//! reach (so it sees exactly the values a double-precision test would), reads the weight
+//! of the values in reach, and reads a value itself only when these let the lookup use it
+//! (prefetching the usable values of the cell together, so that their cache misses
+//! overlap), handing them on in filing order.
 //! The grid is split into shards, each behind its own `RwLock`: lookups only take short read
 //! locks on the shards they touch (no global lock), inserts write locks on the shards of
 //! their cells, one at a time. A shard holds blocks of 8×8×8 cells of a level.
@@ -26,12 +27,16 @@
 use super::ValueId;
 use crate::color::Color;
 use crate::hash::fx_mix;
-use glam::{DVec3, Vec4};
+use glam::DVec3;
 use std::cell::RefCell;
 use std::collections::HashMap;
 use std::hash::{BuildHasherDefault, Hasher};
 use std::sync::atomic::{AtomicU32, AtomicU64, Ordering};
 use std::sync::{Arc, OnceLock, RwLock};
+
+#[path = "cache_cell.rs"]
+mod cell;
+use cell::{At, CellList, Tag};
 
 /// The cells of level `l` from cell `lo` to cell `hi` (corners, in cell units).
 fn cells(l: u32, lo: DVec3, hi: DVec3) -> impl Iterator<Item = Key> {
@@ -41,7 +46,7 @@ fn cells(l: u32, lo: DVec3, hi: DVec3) -> impl Iterator<Item = Key> {
     })
 }
 
-/// The rounding the single-precision reach test of [`CellList::scan`] allows for, in squared
+/// The rounding the single-precision reach test of [`cell::CellList::scan`] allows for, in squared
 /// cell sizes: a value nearer to the edge of its reach sphere than this is tested again in
 /// double precision. The coordinates it compares lie within two cell sizes of the cell's
 /// corner, where single precision is good to about 2·10⁻⁶ of a squared cell size.
@@ -218,140 +223,6 @@ impl Hasher for KeyHasher {
     #[inline]
     fn write_i64(&mut self, i: i64) {
         self.mix(i as u64);
-    }
-}
-
-/// A value's level and weight, which decide whether a lookup may use it at all: kept beside
-/// the reach so that a lookup reads the value itself (another cache line, often a miss) only
-/// when it may.
-#[derive(Clone, Copy)]
-struct Tag {
-    weight: f64,
-    lvl: u32,
-}
-
-/// The values of one grid cell (`V`: a shared pointer to each, or an index), with a
-/// compact copy of what the lookup's first tests need, in arrays scanned in order.
-struct CellList<V> {
-    /// Each value's position relative to the cell's corner and its squared reach
-    /// (`(aa·reach·max(rad))²`), in cell sizes and single precision, four values to a
-    /// cache line (16 bytes a value), tested four at a time.
-    quads: Vec<Quad>,
-    /// Each value's level.
-    lvls: Vec<u32>,
-    /// Each value's weight.
-    weights: Vec<f64>,
-    vals: Vec<V>,
-}
-
-/// Four values' positions and squared reaches ([`CellList::quads`]); an unused lane's
-/// squared reach is −∞, which no test passes.
-#[derive(Clone, Copy)]
-#[repr(C, align(64))]
-struct Quad {
-    x: [f32; 4],
-    y: [f32; 4],
-    z: [f32; 4],
-    r2: [f32; 4],
-}
-
-const EMPTY_QUAD: Quad = Quad {
-    x: [0.0; 4],
-    y: [0.0; 4],
-    z: [0.0; 4],
-    r2: [f32::NEG_INFINITY; 4],
-};
-
-impl<V> Default for CellList<V> {
-    fn default() -> Self {
-        CellList {
-            quads: Vec::new(),
-            lvls: Vec::new(),
-            weights: Vec::new(),
-            vals: Vec::new(),
-        }
-    }
-}
-
-/// Where a lookup is in one cell: the point relative to the cell's corner in cell sizes,
-/// and the margin of the single-precision test.
-#[derive(Clone, Copy)]
-struct At {
-    q: [f32; 3],
-    margin: f32,
-}
-
-impl<V> CellList<V> {
-    fn push(&mut self, near: [f32; 4], tag: Tag, v: V) {
-        let lane = self.vals.len() % 4;
-        if lane == 0 {
-            self.quads.push(EMPTY_QUAD);
-        }
-        if let Some(q) = self.quads.last_mut() {
-            (q.x[lane], q.y[lane], q.z[lane], q.r2[lane]) = (near[0], near[1], near[2], near[3]);
-        }
-        self.lvls.push(tag.lvl);
-        self.weights.push(tag.weight);
-        self.vals.push(v);
-    }
-
-    /// Hand on, in filing order and in blocks of up to 32, the indices of the values whose
-    /// reach sphere holds the lookup's point and whose level and weight `usable` accepts.
-    /// The reach is tested in single precision, four values at a time, and again by `exact`
-    /// (in double precision) for a value whose test falls within the margin of rounding, so
-    /// that the values handed on are exactly those `exact` accepts.
-    /// `prefetch` is called for each value before its block is handed on, so that their
-    /// cache misses overlap.
-    #[inline(always)]
-    fn scan(
-        &self,
-        at: At,
-        usable: &impl Fn(u32, f64) -> bool,
-        exact: impl Fn(&V) -> bool,
-        prefetch: impl Fn(&V),
-        mut hand_on: impl FnMut(&[u32]),
-    ) {
-        let (qx, qy, qz) = (
-            Vec4::splat(at.q[0]),
-            Vec4::splat(at.q[1]),
-            Vec4::splat(at.q[2]),
-        );
-        let margin = Vec4::splat(at.margin);
-        let mut hits = [0u32; 32];
-        let mut n = 0;
-        for (b, quad) in self.quads.iter().enumerate() {
-            let (dx, dy, dz) = (
-                Vec4::from_array(quad.x) - qx,
-                Vec4::from_array(quad.y) - qy,
-                Vec4::from_array(quad.z) - qz,
-            );
-            let d2 = dx * dx + dy * dy + dz * dz;
-            let r2 = Vec4::from_array(quad.r2);
-            let mut maybe = d2.cmplt(r2 + margin).bitmask();
-            if maybe == 0 {
-                continue;
-            }
-            // Lanes inside by more than the margin need no exact test.
-            let sure = d2.cmplt(r2 - margin).bitmask();
-            while maybe != 0 {
-                let lane = maybe.trailing_zeros();
-                maybe &= maybe - 1;
-                let i = b * 4 + lane as usize;
-                if !usable(self.lvls[i], self.weights[i])
-                    || (sure & (1 << lane) == 0 && !exact(&self.vals[i]))
-                {
-                    continue;
-                }
-                prefetch(&self.vals[i]);
-                hits[n] = i as u32;
-                n += 1;
-                if n == hits.len() {
-                    hand_on(&hits);
-                    n = 0;
-                }
-            }
-        }
-        hand_on(&hits[..n]);
     }
 }
 
@@ -577,7 +448,7 @@ impl AmbientCache {
         self.cell_of(l, p).0
     }
 
-    /// The cell of level `l` holding `p`, and where `p` lies in it ([`CellList::scan`]).
+    /// The cell of level `l` holding `p`, and where `p` lies in it ([`cell::CellList::scan`]).
     #[inline(always)]
     fn cell_of(&self, l: u32, p: DVec3) -> (Key, At) {
         let q = p / self.cell_size(l);
@@ -622,7 +493,7 @@ impl AmbientCache {
                         &usable,
                         |v| self.within(p, v),
                         |v| crate::prefetch::prefetch::<CachedValue>(&**v),
-                        |ks| ks.iter().for_each(|&k| f(&cell.vals[k as usize])),
+                        |v| f(v),
                     );
                 }
             }
@@ -631,10 +502,10 @@ impl AmbientCache {
         PRIVATE.with(|pv| {
             let Ok(own) = pv.try_borrow() else { return };
             let Some(own) = own.as_ref() else { return };
-            for l in 0..64 {
-                if own.levels & (1u64 << l) == 0 {
-                    continue;
-                }
+            let mut levels = own.levels;
+            while levels != 0 {
+                let l = levels.trailing_zeros();
+                levels &= levels - 1;
                 let (key, at) = self.cell_of(l, p);
                 if let Some(cell) = own.cells.get(&key) {
                     cell.scan(
@@ -642,10 +513,7 @@ impl AmbientCache {
                         &usable,
                         |&k| self.within(p, &own.vals[k as usize]),
                         |&k| crate::prefetch::prefetch::<CachedValue>(&own.vals[k as usize]),
-                        |ks| {
-                            ks.iter()
-                                .for_each(|&k| f(&own.vals[cell.vals[k as usize] as usize]))
-                        },
+                        |&k| f(&own.vals[k as usize]),
                     );
                 }
             }
@@ -666,7 +534,7 @@ impl AmbientCache {
             if let Ok(shard) = s.0.read() {
                 // Each value once: from the cell holding its position.
                 for (key, cell) in shard.iter() {
-                    for v in &cell.vals {
+                    for v in cell.values() {
                         if self.key_at(key.0, v.pos) == *key {
                             out.push(**v);
                         }
