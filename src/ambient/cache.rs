@@ -67,6 +67,29 @@ fn local(key: &Key, q: DVec3) -> [f32; 3] {
     ]
 }
 
+/// `q · 2^-l`, exactly (for `q` far from the subnormals).
+#[inline(always)]
+fn scale_down(q: DVec3, l: u32) -> DVec3 {
+    q * (1.0 / (1u64 << l) as f64)
+}
+
+/// The cell of level `l` holding the point `q` (in cells of that level,
+/// [`AmbientCache::in_cells`]), and where the point lies in it ([`cell::CellList::scan`]).
+#[inline(always)]
+fn cell_of(l: u32, q: DVec3) -> (Key, At) {
+    let key = (
+        l,
+        q.x.floor() as i64,
+        q.y.floor() as i64,
+        q.z.floor() as i64,
+    );
+    let at = At {
+        q: local(&key, q),
+        margin: margin(&key),
+    };
+    (key, at)
+}
+
 /// The margin of the single-precision test in cell `key` ([`NEAR_MARGIN`], or infinite
 /// where the cell lies beyond [`NEAR_RANGE`]).
 fn margin(key: &Key) -> f32 {
@@ -245,6 +268,9 @@ struct Written {
 /// The shared cache.
 pub struct AmbientCache {
     base: f64,
+    /// `1 / base`: a point's coordinates in cells of level `l` are `p · inv_base · 2^-l`
+    /// (multiplications, the last exact), the same for filing and for lookups.
+    inv_base: f64,
     aa: f64,
     shards: Vec<Shard>,
     levels_used: AtomicU64,
@@ -279,6 +305,7 @@ impl AmbientCache {
         let base = (2.0 * aa * minrad).max(1e-9);
         AmbientCache {
             base,
+            inv_base: 1.0 / base,
             aa,
             shards: (0..SHARDS)
                 .map(|_| Shard(RwLock::new(Grid::default())))
@@ -355,6 +382,14 @@ impl AmbientCache {
         self.base * (1u64 << level) as f64
     }
 
+    /// `p` in units of the cells of level `l`. Monotone in each coordinate (a product by a
+    /// constant, correctly rounded, then by an exact power of two), so the cell of a point
+    /// inside a padded sphere lies among the cells the sphere's bounds give.
+    #[inline(always)]
+    fn in_cells(&self, l: u32, p: DVec3) -> DVec3 {
+        scale_down(p * self.inv_base, l)
+    }
+
     /// Insert a value: it is filed in every cell of its level that its reach sphere
     /// touches (at most 2×2×2, as the cells are at least twice the reach), so a lookup reads
     /// one cell per level.
@@ -382,13 +417,13 @@ impl AmbientCache {
         }
         // Padded so that rounding never leaves out a cell the sphere touches.
         let pad = rr * (1.0 + 1e-6) + 1e-9 * s;
-        let lo = ((v.pos - DVec3::splat(pad)) / s).floor();
-        let hi = ((v.pos + DVec3::splat(pad)) / s).floor();
+        let lo = self.in_cells(l, v.pos - DVec3::splat(pad)).floor();
+        let hi = self.in_cells(l, v.pos + DVec3::splat(pad)).floor();
         let tag = Tag {
             weight: v.weight,
             lvl: v.lvl,
         };
-        let (c, r2) = (v.pos / s, ((rr / s) * (rr / s)) as f32);
+        let (c, r2) = (self.in_cells(l, v.pos), ((rr / s) * (rr / s)) as f32);
         let near = |key: &Key| {
             let [x, y, z] = local(key, c);
             [x, y, z, r2]
@@ -445,24 +480,7 @@ impl AmbientCache {
 
     /// The cell of level `l` holding `p`.
     fn key_at(&self, l: u32, p: DVec3) -> Key {
-        self.cell_of(l, p).0
-    }
-
-    /// The cell of level `l` holding `p`, and where `p` lies in it ([`cell::CellList::scan`]).
-    #[inline(always)]
-    fn cell_of(&self, l: u32, p: DVec3) -> (Key, At) {
-        let q = p / self.cell_size(l);
-        let key = (
-            l,
-            q.x.floor() as i64,
-            q.y.floor() as i64,
-            q.z.floor() as i64,
-        );
-        let at = At {
-            q: local(&key, q),
-            margin: margin(&key),
-        };
-        (key, at)
+        cell_of(l, self.in_cells(l, p)).0
     }
 
     /// Call `f` for every value whose reach sphere (radius `aa·reach·max(rad)`) holds `p`
@@ -477,11 +495,12 @@ impl AmbientCache {
     ) {
         let used = self.levels_used.load(Ordering::Relaxed);
         let highest = self.max_level_seen.load(Ordering::Relaxed);
+        let q0 = p * self.inv_base;
         for l in 0..=highest {
             if used & (1u64 << l) == 0 {
                 continue;
             }
-            let (key, at) = self.cell_of(l, p);
+            let (key, at) = cell_of(l, scale_down(q0, l));
             let (w, bit) = occupancy(&key);
             if self.occupied[w].load(Ordering::Relaxed) & bit == 0 {
                 continue;
@@ -506,7 +525,7 @@ impl AmbientCache {
             while levels != 0 {
                 let l = levels.trailing_zeros();
                 levels &= levels - 1;
-                let (key, at) = self.cell_of(l, p);
+                let (key, at) = cell_of(l, scale_down(q0, l));
                 if let Some(cell) = own.cells.get(&key) {
                     cell.scan(
                         at,
