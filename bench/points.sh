@@ -11,7 +11,8 @@
 #
 # Usage: bash bench/points.sh
 # Environment: N (points, default 10000), OPTS (default "-ab 5 -ad 512 -as 128 -aa .15"),
-#   SWEEP (the -aa values of the sweep, default ".3 .2 .15 .1"),
+#   SWEEP (the -aa values of the sweep, default ".3 .2 .15 .1"), REPEAT (runs of each sweep
+#   point, the smallest CPU kept; default 3),
 #   REF_OPTS (default "-ab 5 -ad 2048 -as 1024 -aa .05").
 set -euo pipefail
 ROOT=$(cd "$(dirname "$0")/.." && pwd)
@@ -24,6 +25,7 @@ B=$ROOT/target/release
 N=${N:-10000}
 OPTS=${OPTS:-"-ab 5 -ad 512 -as 128 -aa .15"}
 SWEEP=${SWEEP:-".3 .2 .15 .1"}
+REPEAT=${REPEAT:-3}
 REF_OPTS=${REF_OPTS:-"-ab 5 -ad 2048 -as 1024 -aa .05"}
 work_dir
 cp "$ROOT"/tests/scenes/daylight/*.rad "$TMP/"
@@ -83,15 +85,46 @@ echo "error against each renderer's own reference, at equal settings:"
 echo "  rtrace -n 1 $(err rt1.out rt.ref)   ttrace -n 1 $(err tt1.out tt.ref)   job $(err job.out tt.ref)"
 echo "  ttrace against rtrace's reference: $(err tt.ref rt.ref) (the references' difference)"
 
-echo "sweep of -aa (one thread): CPU-s and error of each"
-printf '%-8s %10s %10s %10s %10s\n' -aa rtrace-CPU rtrace-err ttrace-CPU ttrace-err
+# least_cpu OUT CMD...: the smallest CPU seconds (user + system) of $REPEAT runs of CMD <
+# grid.pts, whose output (the same every run) goes to OUT.
+least_cpu() {
+    local out=$1 best="" u s c
+    shift
+    for _ in $(seq "$REPEAT"); do
+        /usr/bin/time -f "%U %S" -o t.txt "$@" <grid.pts >"$out"
+        read -r u s <t.txt
+        c=$(echo "$u + $s" | bc)
+        if [ -z "$best" ] || [ "$(echo "$c < $best" | bc)" = 1 ]; then best=$c; fi
+    done
+    echo "$best"
+}
+
+echo "sweep of -aa (one thread, the smallest CPU of $REPEAT runs): CPU-s and error of each"
+printf '%-8s %10s %10s %10s %10s\n' -aa rtrace-CPU rtrace-err ttrace-CPU ttrace-err | tee sweep.txt
 for aa in $SWEEP; do
     # shellcheck disable=SC2206
     S=($OPTS -aa "$aa")
-    /usr/bin/time -f "%U %S" -o t1.txt rtrace -h -I "${S[@]}" s.oct <grid.pts >rs.out
-    /usr/bin/time -f "%U %S" -o t2.txt "$B/ttrace" -n 1 -h -I "${S[@]}" room.rad sky.rad <grid.pts >ts.out
-    read -r u1 s1 <t1.txt
-    read -r u2 s2 <t2.txt
-    printf '%-8s %10.2f %10s %10.2f %10s\n' "$aa" "$(echo "$u1 + $s1" | bc)" "$(err rs.out rt.ref)" \
-        "$(echo "$u2 + $s2" | bc)" "$(err ts.out tt.ref)"
+    c1=$(least_cpu rs.out rtrace -h -I "${S[@]}" s.oct)
+    c2=$(least_cpu ts.out "$B/ttrace" -n 1 -h -I "${S[@]}" room.rad sky.rad)
+    printf '%-8s %10.2f %10s %10.2f %10s\n' "$aa" "$c1" "$(err rs.out rt.ref)" \
+        "$c2" "$(err ts.out tt.ref)" | tee -a sweep.txt
 done
+# Equal error: for each rtrace point, ttrace's CPU at rtrace's error, interpolated linearly
+# between the two ttrace points whose errors enclose it (from the least accurate down).
+echo "at equal error (ttrace's CPU interpolated at rtrace's error):"
+awk 'NR > 1 { a[NR-1] = $1; rc[NR-1] = $2; re[NR-1] = $3; tc[NR-1] = $4; te[NR-1] = $5; n = NR - 1 }
+    END {
+        for (i = 1; i <= n; i++) {
+            c = ""
+            for (j = 1; j < n; j++)
+                if (te[j] >= re[i] && te[j+1] <= re[i] && te[j] > te[j+1]) {
+                    c = tc[j] + (te[j] - re[i]) / (te[j] - te[j+1]) * (tc[j+1] - tc[j])
+                    break
+                }
+            if (c == "" && te[1] <= re[i]) c = tc[1]   # the cheapest ttrace run is already as accurate
+            if (c == "")
+                printf "  rtrace -aa %s (%.2f%%, %.2f s): ttrace does not reach it in the sweep\n", a[i], 100 * re[i], rc[i]
+            else
+                printf "  rtrace -aa %s (%.2f%%, %.2f s): ttrace %s%.2f s, %.2fx\n", a[i], 100 * re[i], rc[i], (te[1] <= re[i] ? "at most " : ""), c, rc[i] / c
+        }
+    }' sweep.txt
