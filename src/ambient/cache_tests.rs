@@ -195,3 +195,32 @@ fn lookups_hand_on_only_usable_values_in_filing_order() {
     }
     assert_eq!(end_private().len(), 100);
 }
+
+/// Values of several ambient levels filed in one cell, interleaved, are handed on in the
+/// order they were filed whatever levels the lookup may use (the cell keeps them in a span
+/// per level), also when more are in reach than a cell hands on without allocating; a
+/// level the lookup may not use, or a weight below its threshold, is left out.
+#[test]
+fn values_of_several_levels_come_in_filing_order() {
+    for count in [7u64, 150] {
+        let c = AmbientCache::new(0.01, 0.2, 1);
+        for seq in 0..count {
+            // Same radius (so the same grid level and cell), levels 0..3 interleaved.
+            let p = DVec3::new(0.001 * seq as f64 / count as f64, 0.0, 0.0);
+            c.insert(CachedValue {
+                lvl: ((seq * 7) % 4) as u32,
+                weight: if seq % 5 == 0 { 0.1 } else { 1.0 },
+                ..value(p, 0.5, 1.0, seq)
+            });
+        }
+        for (level, least) in [(3u32, 0.0), (2, 0.0), (1, 0.5), (0, 0.0)] {
+            let usable = |l: u32, w: f64| l < level || (l == level && w >= least);
+            let mut got = Vec::new();
+            c.for_each_near(DVec3::ZERO, usable, |v| got.push(v.id.seq));
+            let want: Vec<u64> = (0..count)
+                .filter(|s| usable(((s * 7) % 4) as u32, if s % 5 == 0 { 0.1 } else { 1.0 }))
+                .collect();
+            assert_eq!(got, want, "{count} values, lookup at level {level}");
+        }
+    }
+}
