@@ -46,9 +46,9 @@ fn cells(l: u32, lo: DVec3, hi: DVec3) -> impl Iterator<Item = Key> {
     })
 }
 
-/// The rounding the single-precision reach test of [`cell::CellList::scan`] allows for, in squared
-/// cell sizes: a value nearer to the edge of its reach sphere than this is tested again in
-/// double precision. The coordinates it compares lie within two cell sizes of the cell's
+/// The rounding the single-precision reach test of [`cell::CellList::scan`] allows for, in
+/// squared cell sizes: a value nearer to the edge of its reach sphere than this is tested
+/// again in double precision. The coordinates it compares lie within two cell sizes of the cell's
 /// corner, where single precision is good to about 2·10⁻⁶ of a squared cell size.
 const NEAR_MARGIN: f32 = 1e-5;
 
