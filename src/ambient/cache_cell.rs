@@ -137,7 +137,7 @@ impl<V> CellList<V> {
     }
 
     /// Hand on, in filing order, the values whose reach sphere holds the lookup's point and
-    /// whose level and weight `usable` accepts. A group whose level `usable` refuses at any
+    /// whose level and weight `usable` accepts. A span whose level `usable` refuses at any
     /// weight is not read. The reach is tested in single precision, four values at a time,
     /// and again by `exact` (in double precision) for a value whose test falls within the
     /// margin of rounding, so that the values handed on are exactly those `exact` accepts.
