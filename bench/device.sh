@@ -13,7 +13,10 @@
 # target/release. Then, on the node (no cargo, no Radiance needed):
 #   BIN=target/release bash bench/device.sh DIR [OUTDIR]
 # which writes OUTDIR/scaling.txt (default DIR/out), the assembled pictures, costs.json and
-# startup.txt for `cargo bench --bench tilesim -- OUTDIR/costs.json --sweep --startup S`.
+# startup.txt for `cargo bench --bench tilesim -- OUTDIR/costs.json --sweep --startup S`,
+# and OUTDIR/lookups.txt: the irradiance cache's lookups timed on 1, 2, 4, 8 and 16 threads
+# at once (bench/lookups.rs on the office's own ambient file, which --prepare renders), what
+# threads of one worker cost each other in the cache that processes do not.
 # Environment: RES (default "-x 1536 -y 1536": 1536x1064, 14.5 CPU-s a frame on one core
 # here; about 4 minutes for everything on 16 cores), WORKERS (default "1 2 4 8 16", cut to
 # the cores), TILES_LIST and PMAX_REPEAT (bench/scaling.sh).
@@ -37,7 +40,15 @@ if [ "${1:-}" = --prepare ]; then
         [ -n "$found" ] || { echo "bench/device.sh: $f not found along RAYPATH" >&2; exit 1; }
         cp "$found" "$dir/"
     done
-    echo "bench/device.sh: prepared $dir (office.rad, office.view and what they read)"
+    # The cache-contention probe: bench/lookups.rs's binary and an ambient file of the office.
+    (cd "$ROOT" && cargo build --release --quiet --bench lookups)
+    lk=$(ls -t "$ROOT"/target/release/deps/lookups-* 2>/dev/null | grep -v '\.d$' | head -1)
+    [ -n "$lk" ] || { echo "bench/device.sh: the lookups bench binary was not found" >&2; exit 1; }
+    strip -o "$dir/lookups" "$lk" 2>/dev/null || cp "$lk" "$dir/lookups"
+    (cd "$dir" && RAYPATH="$dir:${RAYPATH:-.}" "$ROOT/target/release/tpict" $(cat office.view) \
+        -x 256 -y 256 -ab 2 -aa .15 -ad 512 -as 128 -ar 64 -dt .07 -ps 1 -af office.amb \
+        office.rad >/dev/null)
+    echo "bench/device.sh: prepared $dir (office.rad, office.view and what they read, lookups, office.amb)"
     exit 0
 fi
 
@@ -57,3 +68,12 @@ BIN=$(cd "${BIN:-$ROOT/target/release}" && pwd)
         OPTS="-ab 2 -aa .15 -ad 512 -as 128 -ar 64 -dt .07 -ps 1" \
         bash "$ROOT/bench/scaling.sh" "$OUT"
 } 2>&1 | tee "$OUT/scaling.txt"
+if [ -x "$dir/lookups" ] && [ -f "$dir/office.amb" ]; then
+    {
+        echo "lookups on the office's ambient file, T threads at once (ns a lookup, wall / lookups each):"
+        for t in 1 2 4 8 16; do
+            [ "$t" -le "$(nproc)" ] || continue
+            "$dir/lookups" "$dir/office.amb" --threads "$t" --lookups 1000000
+        done
+    } 2>&1 | tee "$OUT/lookups.txt"
+fi

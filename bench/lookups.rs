@@ -1,7 +1,8 @@
 //! lookups: what one irradiance-cache lookup costs, on the values of a real ambient file.
 //!
 //! ```text
-//! cargo bench --bench lookups -- FILE.amb [--aa A] [--lookups N] [--repeat R]
+//! cargo bench --bench lookups -- FILE.amb [--aa A] [--lookups N] [--repeat R] [--threads T]
+//!     [--separate]
 //! ```
 //!
 //! Reads the values of a Radiance ambient file (as `-af` writes it), files them in an
@@ -11,7 +12,12 @@
 //! (as the lookups of its own hemisphere's rays are), taking every value the cache hands on.
 //! Prints the nanoseconds per lookup (the fastest of `--repeat` passes, default 3) and the
 //! values handed on per lookup, so that a change of the cache's layout can be measured
-//! apart from the rest of a render. Single-threaded.
+//! apart from the rest of a render. With `--threads T` (default 1), T threads look up at
+//! once, each its own rotation of the same points, and the time is the wall time of T
+//! lookups each: above the one-thread figure by what the threads cost each other (lines of
+//! the cache that every lookup writes move between cores). `--separate` gives each thread
+//! a cache of its own holding the same values, as processes have: the difference to the
+//! shared figure is what sharing one cache costs.
 
 use glam::DVec3;
 use std::process::ExitCode;
@@ -25,7 +31,8 @@ fn main() -> ExitCode {
         .filter(|a| a != "--bench")
         .collect();
     let mut file = None;
-    let (mut aa, mut lookups, mut repeat) = (0.15f64, 2_000_000usize, 3usize);
+    let (mut aa, mut lookups, mut repeat, mut threads) = (0.15f64, 2_000_000usize, 3usize, 1usize);
+    let mut separate = false;
     let mut it = args.iter();
     while let Some(a) = it.next() {
         let mut num = |name: &str| -> Result<f64, String> {
@@ -38,6 +45,11 @@ fn main() -> ExitCode {
             "--aa" => num("--aa").map(|v| aa = v),
             "--lookups" => num("--lookups").map(|v| lookups = v as usize),
             "--repeat" => num("--repeat").map(|v| repeat = (v as usize).max(1)),
+            "--threads" => num("--threads").map(|v| threads = (v as usize).clamp(1, 256)),
+            "--separate" => {
+                separate = true;
+                Ok(())
+            }
             f if file.is_none() && !f.starts_with("--") => {
                 file = Some(f.to_string());
                 Ok(())
@@ -51,7 +63,8 @@ fn main() -> ExitCode {
     }
     let Some(file) = file else {
         eprintln!(
-            "usage: cargo bench --bench lookups -- FILE.amb [--aa A] [--lookups N] [--repeat R]"
+            "usage: cargo bench --bench lookups -- FILE.amb [--aa A] [--lookups N] [--repeat R] \
+             [--threads T] [--separate]"
         );
         return ExitCode::from(2);
     };
@@ -71,10 +84,19 @@ fn main() -> ExitCode {
         return ExitCode::FAILURE;
     }
     let minrad = vals.iter().map(|v| v.rad[0]).fold(f64::INFINITY, f64::min);
-    let cache = AmbientCache::new(minrad, aa, 1);
+    let filed = || {
+        let cache = AmbientCache::new(minrad, aa, 1);
+        vals.iter().for_each(|v| cache.insert(*v));
+        cache
+    };
     let t = Instant::now();
-    vals.iter().for_each(|v| cache.insert(*v));
+    let cache = filed();
     let filing = t.elapsed().as_secs_f64();
+    let own: Vec<AmbientCache> = if separate {
+        (0..threads).map(|_| filed()).collect()
+    } else {
+        Vec::new()
+    };
     // The lookup points: a fixed pseudo-random sequence (splitmix64).
     let mut state = 0x9E37_79B9_7F4A_7C15u64;
     let mut rnd = || {
@@ -95,25 +117,41 @@ fn main() -> ExitCode {
     let mut best = f64::INFINITY;
     let mut handed = 0usize;
     for _ in 0..repeat {
-        handed = 0;
         let t = Instant::now();
-        for &(p, level) in &points {
-            cache.for_each_near(
-                p,
-                |l, _| l <= level,
-                |v| {
-                    std::hint::black_box(v);
-                    handed += 1;
-                },
-            );
-        }
+        let counts: Vec<usize> = std::thread::scope(|scope| {
+            let runs: Vec<_> = (0..threads)
+                .map(|i| {
+                    let (cache, points) = (own.get(i).unwrap_or(&cache), &points);
+                    scope.spawn(move || {
+                        let mut handed = 0usize;
+                        let start = i * points.len() / threads;
+                        let (a, b) = points.split_at(start);
+                        for &(p, level) in b.iter().chain(a) {
+                            cache.for_each_near(
+                                p,
+                                |l, _| l <= level,
+                                |v| {
+                                    std::hint::black_box(v);
+                                    handed += 1;
+                                },
+                            );
+                        }
+                        handed
+                    })
+                })
+                .collect();
+            runs.into_iter().map(|r| r.join().unwrap_or(0)).collect()
+        });
         best = best.min(t.elapsed().as_secs_f64());
+        handed = counts.iter().sum::<usize>() / threads;
     }
     println!(
-        "{} values from {file}, -aa {aa}: filed in {:.1} ms; {lookups} lookups: {:.0} ns each \
-         (fastest of {repeat}), {:.1} values handed on per lookup",
+        "{} values from {file}, -aa {aa}: filed in {:.1} ms; {lookups} lookups on each of \
+         {threads} thread(s){}: {:.0} ns each (fastest of {repeat}), {:.1} values handed on per \
+         lookup",
         vals.len(),
         filing * 1e3,
+        if separate { ", each its own cache" } else { "" },
         best / lookups as f64 * 1e9,
         handed as f64 / lookups as f64
     );

@@ -14,9 +14,11 @@
 //! of the values in reach, and reads a value itself only when these let the lookup use it
 //! (prefetching the usable values of the cell together, so that their cache misses
 //! overlap), handing them on in filing order.
-//! The grid is split into shards, each behind its own `RwLock`: lookups only take short read
-//! locks on the shards they touch (no global lock), inserts write locks on the shards of
-//! their cells, one at a time. A shard holds blocks of 8×8×8 cells of a level.
+//! The grid is split into shards, each behind its own lock ([`super::sharded`]): lookups
+//! take short read holds on the shards they touch (no global lock; a reader writes only a
+//! cache line of its thread's own, so threads looking up in the same shards do not move
+//! lines between their cores), inserts take the write lock of each shard their cells lie
+//! in, once. A shard holds blocks of 8×8×8 cells of a level.
 //!
 //! A thread may make its values **privately** ([`begin_private`] … [`end_private`]): they
 //! are then kept in a thread-local list that only its own lookups see (after the shared
@@ -24,6 +26,7 @@
 //! its choosing. `ttrace` traces each ray so and commits a wave's values in input order,
 //! which makes its values independent of the thread count.
 
+use super::sharded::Sharded;
 use super::ValueId;
 use crate::color::Color;
 use crate::hash::fx_mix;
@@ -32,7 +35,7 @@ use std::cell::RefCell;
 use std::collections::HashMap;
 use std::hash::{BuildHasherDefault, Hasher};
 use std::sync::atomic::{AtomicU32, AtomicU64, Ordering};
-use std::sync::{Arc, OnceLock, RwLock};
+use std::sync::{Arc, OnceLock};
 
 #[path = "cache_cell.rs"]
 mod cell;
@@ -251,11 +254,6 @@ impl Hasher for KeyHasher {
 
 type Grid = HashMap<Key, CellList<Arc<CachedValue>>, BuildHasherDefault<KeyHasher>>;
 
-/// A shard's lock on a cache line of its own: taking a read lock writes the lock word, and
-/// neighbouring shards' locks in one line made threads reading different shards contend.
-#[repr(align(128))]
-struct Shard(RwLock<Grid>);
-
 /// Counters written at every insert, kept off the line the lookups read.
 #[derive(Default)]
 #[repr(align(128))]
@@ -272,7 +270,7 @@ pub struct AmbientCache {
     /// (multiplications, the last exact), the same for filing and for lookups.
     inv_base: f64,
     aa: f64,
-    shards: Vec<Shard>,
+    shards: Sharded<Grid>,
     levels_used: AtomicU64,
     /// Per level, a bit per hash of a cell's coordinates, set when a value is filed in a
     /// cell of that hash: a lookup skips a level whose bit is clear without taking a lock
@@ -307,9 +305,7 @@ impl AmbientCache {
             base,
             inv_base: 1.0 / base,
             aa,
-            shards: (0..SHARDS)
-                .map(|_| Shard(RwLock::new(Grid::default())))
-                .collect(),
+            shards: Sharded::new(SHARDS, Grid::default),
             levels_used: AtomicU64::new(0),
             occupied: (0..MAX_LEVELS as usize * OCCUPIED_WORDS)
                 .map(|_| AtomicU64::new(0))
@@ -444,16 +440,24 @@ impl AmbientCache {
             return;
         }
         let shared = Arc::new(v);
-        for key in cells(l, lo, hi) {
-            let (w, bit) = occupancy(&key);
-            if self.occupied[w].load(Ordering::Relaxed) & bit == 0 {
-                self.occupied[w].fetch_or(bit, Ordering::Relaxed);
-            }
-            if let Ok(mut shard) = self.shards[shard_of(&key)].0.write() {
+        // Usually 2×2×2 cells or fewer, in one shard: each shard's lock is taken once.
+        let mut keys: Vec<(usize, Key)> = cells(l, lo, hi)
+            .map(|key| {
+                let (w, bit) = occupancy(&key);
+                if self.occupied[w].load(Ordering::Relaxed) & bit == 0 {
+                    self.occupied[w].fetch_or(bit, Ordering::Relaxed);
+                }
+                (shard_of(&key), key)
+            })
+            .collect();
+        keys.sort_by_key(|&(sh, _)| sh);
+        for group in keys.chunk_by(|a, b| a.0 == b.0) {
+            let mut shard = self.shards.write(group[0].0);
+            for (_, key) in group {
                 shard
-                    .entry(key)
+                    .entry(*key)
                     .or_default()
-                    .push(near(&key), tag, Arc::clone(&shared));
+                    .push(near(key), tag, Arc::clone(&shared));
             }
         }
         // Written only when they change: every lookup reads them.
@@ -505,16 +509,15 @@ impl AmbientCache {
             if self.occupied[w].load(Ordering::Relaxed) & bit == 0 {
                 continue;
             }
-            if let Ok(grid) = self.shards[shard_of(&key)].0.read() {
-                if let Some(cell) = grid.get(&key) {
-                    cell.scan(
-                        at,
-                        &usable,
-                        |v| self.within(p, v),
-                        |v| crate::prefetch::prefetch::<CachedValue>(&**v),
-                        |v| f(v),
-                    );
-                }
+            let grid = self.shards.read(shard_of(&key));
+            if let Some(cell) = grid.get(&key) {
+                cell.scan(
+                    at,
+                    &usable,
+                    |v| self.within(p, v),
+                    |v| crate::prefetch::prefetch::<CachedValue>(&**v),
+                    |v| f(v),
+                );
             }
         }
         // This thread's private values, filed and tested the same way.
@@ -549,14 +552,13 @@ impl AmbientCache {
     /// Every value (for saving), in no particular order.
     pub fn all(&self) -> Vec<CachedValue> {
         let mut out = Vec::with_capacity(self.len() as usize);
-        for s in &self.shards {
-            if let Ok(shard) = s.0.read() {
-                // Each value once: from the cell holding its position.
-                for (key, cell) in shard.iter() {
-                    for v in cell.values() {
-                        if self.key_at(key.0, v.pos) == *key {
-                            out.push(**v);
-                        }
+        for i in 0..self.shards.len() {
+            let shard = self.shards.read(i);
+            // Each value once: from the cell holding its position.
+            for (key, cell) in shard.iter() {
+                for v in cell.values() {
+                    if self.key_at(key.0, v.pos) == *key {
+                        out.push(**v);
                     }
                 }
             }

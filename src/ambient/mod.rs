@@ -26,6 +26,7 @@ pub mod radfile;
 pub mod radii;
 pub mod sample;
 pub mod settings;
+pub mod sharded;
 pub mod striped;
 
 pub use compute::Ambient;
