@@ -5,6 +5,7 @@ pub mod lightcells;
 pub mod picture;
 pub mod ray;
 pub mod sampler;
+pub mod schedule;
 pub mod shading;
 pub mod splitting;
 pub mod srcdraw;

@@ -245,23 +245,31 @@ pub fn render_region(
         draw_sources(tr, fs, &frame_src, (x0, y0, x1, y1), out, progress);
     };
     if ps == 1 {
-        // One row per job (with_max_len): rows differ in cost, and rayon's adaptive split
-        // otherwise leaves a quarter of the rows to one thread at the end.
-        out.par_chunks_mut(w)
-            .enumerate()
-            .with_max_len(1)
-            .for_each(|(row, line)| {
-                if tr.scene.fatal_error().is_some() {
-                    return;
-                }
-                let mut rays = 0;
-                for (i, px) in line.iter_mut().enumerate() {
-                    let s = sample_pixel(tr, fs, x0 + i, y0 + row, &mut rays);
-                    *px = to_f32(s.color);
-                }
-                progress.rays.fetch_add(rays, Ordering::Relaxed);
-                progress.rows_done.fetch_add(1, Ordering::Relaxed);
-            });
+        // Jobs of whole rows, shrinking to a few pixels at the end of the region, taken in
+        // reading order (super::schedule).
+        let jobs = super::schedule::pixel_jobs(w * h, w, rayon::current_num_threads());
+        let mut rest = &mut out[..];
+        let mut work = Vec::with_capacity(jobs.len());
+        for (at, len) in jobs {
+            let (line, r) = std::mem::take(&mut rest).split_at_mut(len);
+            rest = r;
+            work.push((at, line));
+        }
+        super::schedule::run_in_order(work, |(at, line)| {
+            if tr.scene.fatal_error().is_some() {
+                return;
+            }
+            let mut rays = 0;
+            for (i, px) in line.iter_mut().enumerate() {
+                let p = at + i;
+                let s = sample_pixel(tr, fs, x0 + p % w, y0 + p / w, &mut rays);
+                *px = to_f32(s.color);
+            }
+            progress.rays.fetch_add(rays, Ordering::Relaxed);
+            // The rows whose last pixel this job rendered.
+            let rows = (at + line.len()) / w - at / w;
+            progress.rows_done.fetch_add(rows, Ordering::Relaxed);
+        });
         draw(&mut out);
         return out;
     }
@@ -271,8 +279,8 @@ pub fn render_region(
     let full = &frame_src.cells;
     // Samples on the cell borders are shared: a cell takes its left column from the cell
     // before it in its band, and its top and bottom rows from the band lines it shares with
-    // the bands above and below. Even bands run first (in parallel, their lines disjoint),
-    // then odd bands reuse the lines the even ones filled. A sample depends only on its
+    // the bands above and below. Even bands (their lines disjoint) run before the odd band
+    // between them, which reuses the lines they filled. A sample depends only on its
     // pixel, so sharing changes no pixel, only how often a border sample is traced.
     let lx0 = cx0 * ps;
     let line_len = (cx1 * ps).min(fs.xres - 1) + 1 - lx0;
@@ -317,22 +325,16 @@ pub fn render_region(
         progress.rows_done.fetch_add(1, Ordering::Relaxed);
     };
     // The rows of each band: [max(cy*ps, y0), min((cy+1)*ps, y1)).
-    let mut even = Vec::new();
-    let mut odd = Vec::new();
+    let mut bands = Vec::with_capacity(cy1 - cy0);
     let mut rest = &mut out[..];
     for cy in cy0..cy1 {
         let n = (((cy + 1) * ps).min(y1) - (cy * ps).max(y0)) * w;
         let (rows, r) = std::mem::take(&mut rest).split_at_mut(n);
         rest = r;
-        if (cy - cy0).is_multiple_of(2) {
-            even.push((cy, rows));
-        } else {
-            odd.push((cy, rows));
-        }
+        bands.push((cy, rows));
     }
-    // One band per job, as the rows above.
-    even.into_par_iter().with_max_len(1).for_each(band);
-    odd.into_par_iter().with_max_len(1).for_each(band);
+    // Even bands before the odd bands between them (super::schedule).
+    super::schedule::run_bands(bands, band);
     draw(&mut out);
     out
 }
