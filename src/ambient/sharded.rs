@@ -23,7 +23,7 @@ use std::ops::{Deref, DerefMut};
 use std::sync::atomic::{AtomicBool, AtomicU32, AtomicUsize, Ordering::SeqCst};
 
 /// Stripes of reader counts; threads beyond it share stripes, still correctly.
-pub const STRIPES: usize = 32;
+pub const STRIPES: usize = 64;
 
 /// Shards a [`Sharded`] may have (one reader count per shard in a stripe).
 pub const MAX_SHARDS: usize = 64;
