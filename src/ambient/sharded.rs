@@ -18,7 +18,7 @@
 //! As with `std::sync::RwLock`, a thread must not take a shard's lock while it already
 //! holds it.
 
-use std::cell::UnsafeCell;
+use std::cell::{Cell, UnsafeCell};
 use std::ops::{Deref, DerefMut};
 use std::sync::atomic::{AtomicBool, AtomicU32, AtomicUsize, Ordering::SeqCst};
 
@@ -38,13 +38,34 @@ struct Mark(AtomicBool);
 
 /// A shard's data, on lines of its own.
 #[repr(align(128))]
-struct Cell<T>(UnsafeCell<T>);
+struct Slot<T>(UnsafeCell<T>);
 
 static NEXT_STRIPE: AtomicUsize = AtomicUsize::new(0);
 
 thread_local! {
-    /// This thread's stripe, handed out in the order threads first take a lock.
-    static MY_STRIPE: usize = NEXT_STRIPE.fetch_add(1, SeqCst);
+    /// This thread's stripe (handed out in the order threads first take a lock; `usize::MAX`
+    /// until then): a constant initialiser, so that reading it costs no lazy-init check.
+    static MY_STRIPE: Cell<usize> = const { Cell::new(usize::MAX) };
+}
+
+/// This thread's stripe.
+#[inline(always)]
+fn my_stripe() -> usize {
+    let s = MY_STRIPE.with(Cell::get);
+    if s < STRIPES {
+        s
+    } else {
+        first_stripe()
+    }
+}
+
+/// A stripe for a thread's first lock.
+#[cold]
+#[inline(never)]
+fn first_stripe() -> usize {
+    let s = NEXT_STRIPE.fetch_add(1, SeqCst) % STRIPES;
+    MY_STRIPE.with(|c| c.set(s));
+    s
 }
 
 /// Stripes any thread may be counting in now: a writer need not look beyond them.
@@ -68,7 +89,7 @@ fn back_off(spins: &mut u32) {
 pub struct Sharded<T> {
     readers: Box<[Stripe]>,
     marks: Box<[Mark]>,
-    data: Box<[Cell<T>]>,
+    data: Box<[Slot<T>]>,
 }
 
 // SAFETY: a shard's data is reached only through the guards below, which give shared access
@@ -88,7 +109,7 @@ impl<T> Sharded<T> {
                 .map(|_| Stripe(std::array::from_fn(|_| AtomicU32::new(0))))
                 .collect(),
             marks: (0..n).map(|_| Mark(AtomicBool::new(false))).collect(),
-            data: (0..n).map(|_| Cell(UnsafeCell::new(make()))).collect(),
+            data: (0..n).map(|_| Slot(UnsafeCell::new(make()))).collect(),
         }
     }
 
@@ -103,22 +124,34 @@ impl<T> Sharded<T> {
     }
 
     /// Shared access to shard `i`, waiting while a writer holds it.
-    #[inline]
+    #[inline(always)]
     pub fn read(&self, i: usize) -> Read<'_, T> {
-        let count = &self.readers[MY_STRIPE.with(|s| *s) % STRIPES].0[i];
+        let count = &self.readers[my_stripe()].0[i];
+        count.fetch_add(1, SeqCst);
+        if self.marks[i].0.load(SeqCst) {
+            self.wait_for_writer(count, i);
+        }
+        Read {
+            count,
+            data: &self.data[i].0,
+        }
+    }
+
+    /// A reader counted in `count` that found shard `i` held by a writer: steps back until
+    /// the writer is done, and returns counted again with no writer holding the shard.
+    #[cold]
+    #[inline(never)]
+    fn wait_for_writer(&self, count: &AtomicU32, i: usize) {
         let mark = &self.marks[i].0;
         loop {
-            count.fetch_add(1, SeqCst);
-            if !mark.load(SeqCst) {
-                return Read {
-                    count,
-                    data: &self.data[i].0,
-                };
-            }
             count.fetch_sub(1, SeqCst);
             let mut spins = 0;
             while mark.load(SeqCst) {
                 back_off(&mut spins);
+            }
+            count.fetch_add(1, SeqCst);
+            if !mark.load(SeqCst) {
+                return;
             }
         }
     }

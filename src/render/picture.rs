@@ -245,31 +245,27 @@ pub fn render_region(
         draw_sources(tr, fs, &frame_src, (x0, y0, x1, y1), out, progress);
     };
     if ps == 1 {
-        // Jobs of whole rows, shrinking to a few pixels at the end of the region, taken in
-        // reading order (super::schedule).
-        let jobs = super::schedule::pixel_jobs(w * h, w, rayon::current_num_threads());
-        let mut rest = &mut out[..];
-        let mut work = Vec::with_capacity(jobs.len());
-        for (at, len) in jobs {
-            let (line, r) = std::mem::take(&mut rest).split_at_mut(len);
-            rest = r;
-            work.push((at, line));
-        }
-        super::schedule::run_in_order(work, |(at, line)| {
-            if tr.scene.fatal_error().is_some() {
-                return;
-            }
-            let mut rays = 0;
-            for (i, px) in line.iter_mut().enumerate() {
-                let p = at + i;
-                let s = sample_pixel(tr, fs, x0 + p % w, y0 + p / w, &mut rays);
-                *px = to_f32(s.color);
-            }
-            progress.rays.fetch_add(rays, Ordering::Relaxed);
-            // The rows whose last pixel this job rendered.
-            let rows = (at + line.len()) / w - at / w;
-            progress.rows_done.fetch_add(rows, Ordering::Relaxed);
-        });
+        // Runs of a few pixels in reading order, which rayon spreads over the threads as it
+        // did the rows (super::schedule): the pass ends on runs, not on whole rows.
+        out.par_chunks_mut(super::schedule::RUN)
+            .enumerate()
+            .with_max_len(1)
+            .for_each(|(k, run)| {
+                if tr.scene.fatal_error().is_some() {
+                    return;
+                }
+                let at = k * super::schedule::RUN;
+                let mut rays = 0;
+                for (i, px) in run.iter_mut().enumerate() {
+                    let p = at + i;
+                    let s = sample_pixel(tr, fs, x0 + p % w, y0 + p / w, &mut rays);
+                    *px = to_f32(s.color);
+                }
+                progress.rays.fetch_add(rays, Ordering::Relaxed);
+                // The rows whose last pixel this run rendered.
+                let rows = (at + run.len()) / w - at / w;
+                progress.rows_done.fetch_add(rows, Ordering::Relaxed);
+            });
         draw(&mut out);
         return out;
     }
@@ -465,14 +461,31 @@ pub(super) fn overture(
         fill_only: true,
         ..*tr
     };
-    rows.par_iter().with_max_len(1).for_each(|&y| {
-        let mut rays = 0;
-        for x in (x0.div_ceil(step) * step..x1).step_by(step) {
-            sample_pixel(tr, fs, x, y, &mut rays);
-        }
-        progress.rays.fetch_add(rays, Ordering::Relaxed);
-        progress.rows_done.fetch_add(1, Ordering::Relaxed);
-    });
+    // Runs of the grid's points in reading order, spread over the threads by rayon as the
+    // pixels of a `-ps 1` region are (super::schedule).
+    let xs: Vec<usize> = (x0.div_ceil(step) * step..x1).step_by(step).collect();
+    if xs.is_empty() {
+        progress.rows_done.fetch_add(rows.len(), Ordering::Relaxed);
+        return;
+    }
+    let nx = xs.len();
+    let n = rows.len() * nx;
+    let run = super::schedule::RUN;
+    (0..n.div_ceil(run))
+        .into_par_iter()
+        .with_max_len(1)
+        .for_each(|k| {
+            let (at, end) = (k * run, ((k + 1) * run).min(n));
+            let mut rays = 0;
+            for p in at..end {
+                sample_pixel(tr, fs, xs[p % nx], rows[p / nx], &mut rays);
+            }
+            progress.rays.fetch_add(rays, Ordering::Relaxed);
+            // The rows whose last point this run sampled.
+            progress
+                .rows_done
+                .fetch_add(end / nx - at / nx, Ordering::Relaxed);
+        });
 }
 
 pub(super) fn to_f32(c: Color) -> [f32; 3] {
