@@ -16,7 +16,9 @@
 # startup.txt for `cargo bench --bench tilesim -- OUTDIR/costs.json --sweep --startup S`,
 # and OUTDIR/lookups.txt: the irradiance cache's lookups timed on 1, 2, 4, 8 and 16 threads
 # at once (bench/lookups.rs on the office's own ambient file, which --prepare renders), what
-# threads of one worker cost each other in the cache that processes do not.
+# threads of one worker cost each other in the cache that processes do not; and
+# OUTDIR/bands.txt: tpict at the default -ps 4 on 1 and on P threads (P = the cores, at
+# most 16), where the band queue of src/render/schedule.rs decides how busy threads stay.
 # Environment: RES (default "-x 1536 -y 1536": 1536x1064, 14.5 CPU-s a frame on one core
 # here; about 4 minutes for everything on 16 cores), WORKERS (default "1 2 4 8 16", cut to
 # the cores), TILES_LIST and PMAX_REPEAT (bench/scaling.sh).
@@ -77,3 +79,15 @@ if [ -x "$dir/lookups" ] && [ -f "$dir/office.amb" ]; then
         done
     } 2>&1 | tee "$OUT/lookups.txt"
 fi
+{
+    P=$(nproc)
+    [ "$P" -le 16 ] || P=16
+    echo "tpict -ps 4 (the default), office -ab 2 -aa .15 -ad 512 -as 128, 768x532: wall s"
+    for n in 1 "$P"; do
+        t0=$(date +%s.%N)
+        (cd "$dir" && RAYPATH="$dir:${RAYPATH:-.}" "$BIN/tpict" $(cat office.view) -x 768 -y 768 \
+            -ab 2 -aa .15 -ad 512 -as 128 -ar 64 -dt .07 -n "$n" office.rad >"$OUT/bands-n$n.hdr")
+        t1=$(date +%s.%N)
+        echo "-n $n: $(awk -v a="$t0" -v b="$t1" 'BEGIN { printf "%.2f", b - a }') s"
+    done
+} 2>&1 | tee "$OUT/bands.txt"
