@@ -1,26 +1,28 @@
 //! Shards of data read by many threads and written rarely, each behind a lock whose readers
 //! write only a cache line of their own (a "big reader" lock, striped by thread).
 //!
-//! The irradiance cache's lookups took a `std::sync::RwLock` read lock per shard: taking and
-//! releasing it are two atomic writes to the lock's word, so threads looking up values in the
-//! same shards moved that line between their cores at every lookup (on 2 cores a lookup
-//! took 12% longer with another thread looking up in the same cache than in a copy of its
-//! own: `cargo bench --bench lookups -- FILE --threads 2 [--separate]`). Here a reader adds
-//! one to its own stripe's count of that shard's readers (a line no other reader writes, as
-//! long as there are no more threads than [`STRIPES`]), then checks that no writer holds
-//! the shard; a writer marks the shard and waits until every stripe's count of it is zero.
-//! Both sides use sequentially consistent operations, so a reader and a writer cannot both
-//! miss each other. Writers exclude each other through their mark. Readers are many and
-//! short, writers few (an ambient value filed), so a writer's scan of the stripes, one cache
-//! miss each, costs little; a reader that finds a writer steps back and waits for it, so a
-//! steady stream of readers cannot starve a writer.
+//! A reader adds one to its own stripe's count of that shard's readers (a line no other
+//! reader writes, as long as there are no more threads than [`STRIPES`]), then checks that
+//! no writer holds the shard; a writer marks the shard and waits until every stripe's count
+//! of it is zero. Both sides use sequentially consistent operations, so a reader and a
+//! writer cannot both miss each other. Writers exclude each other through their mark.
+//! Readers are many and short, writers few (an ambient value filed), so a writer's scan of
+//! the stripes, one cache miss each, costs little; a reader that finds a writer steps back
+//! and waits for it, so a steady stream of readers cannot starve a writer.
+//!
+//! A `std::sync::RwLock` instead writes its lock word at every read lock and unlock, so
+//! threads reading the same shards move that line between their cores at every read: two
+//! threads looking up in one irradiance cache took 1.35× as long a lookup as two with a
+//! cache each (`cargo bench --bench lookups -- FILE --threads 2 [--separate]`, 2 cores),
+//! where with this lock they take as long.
 //!
 //! As with `std::sync::RwLock`, a thread must not take a shard's lock while it already
 //! holds it.
 
-use std::cell::{Cell, UnsafeCell};
+use super::striped::{thread_index, threads_indexed};
+use std::cell::UnsafeCell;
 use std::ops::{Deref, DerefMut};
-use std::sync::atomic::{AtomicBool, AtomicU32, AtomicUsize, Ordering::SeqCst};
+use std::sync::atomic::{AtomicBool, AtomicU32, Ordering::SeqCst};
 
 /// Stripes of reader counts; threads beyond it share stripes, still correctly.
 pub const STRIPES: usize = 64;
@@ -40,37 +42,15 @@ struct Mark(AtomicBool);
 #[repr(align(128))]
 struct Slot<T>(UnsafeCell<T>);
 
-static NEXT_STRIPE: AtomicUsize = AtomicUsize::new(0);
-
-thread_local! {
-    /// This thread's stripe (handed out in the order threads first take a lock; `usize::MAX`
-    /// until then): a constant initialiser, so that reading it costs no lazy-init check.
-    static MY_STRIPE: Cell<usize> = const { Cell::new(usize::MAX) };
-}
-
 /// This thread's stripe.
 #[inline(always)]
 fn my_stripe() -> usize {
-    let s = MY_STRIPE.with(Cell::get);
-    if s < STRIPES {
-        s
-    } else {
-        first_stripe()
-    }
-}
-
-/// A stripe for a thread's first lock.
-#[cold]
-#[inline(never)]
-fn first_stripe() -> usize {
-    let s = NEXT_STRIPE.fetch_add(1, SeqCst) % STRIPES;
-    MY_STRIPE.with(|c| c.set(s));
-    s
+    thread_index() % STRIPES
 }
 
 /// Stripes any thread may be counting in now: a writer need not look beyond them.
 fn stripes_in_use() -> usize {
-    NEXT_STRIPE.load(SeqCst).min(STRIPES)
+    threads_indexed().min(STRIPES)
 }
 
 /// Spin briefly, then give the core away: the other side holds its lock for a short while,
@@ -101,9 +81,8 @@ unsafe impl<T: Send> Send for Sharded<T> {}
 
 impl<T> Sharded<T> {
     /// Shards made by `make`, at most [`MAX_SHARDS`] of them.
-    pub fn new(n: usize, make: impl FnMut() -> T) -> Sharded<T> {
+    pub fn new(n: usize, mut make: impl FnMut() -> T) -> Sharded<T> {
         assert!(n <= MAX_SHARDS, "at most {MAX_SHARDS} shards");
-        let mut make = make;
         Sharded {
             readers: (0..STRIPES)
                 .map(|_| Stripe(std::array::from_fn(|_| AtomicU32::new(0))))

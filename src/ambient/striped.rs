@@ -6,6 +6,7 @@
 //! [`SLOTS`] slots in the order they first count); a read sums the slots. Adding and
 //! reading keep the `AtomicU64` method names, so the counters read as before.
 
+use std::cell::Cell;
 use std::sync::atomic::{AtomicU64, AtomicUsize, Ordering};
 
 /// Slots per counter (threads beyond it share slots, still correctly).
@@ -34,18 +35,48 @@ impl std::fmt::Debug for Striped {
     }
 }
 
-static NEXT_SLOT: AtomicUsize = AtomicUsize::new(0);
+static NEXT_THREAD: AtomicUsize = AtomicUsize::new(0);
 
 thread_local! {
-    static MY_SLOT: usize = NEXT_SLOT.fetch_add(1, Ordering::Relaxed) % SLOTS;
+    /// This thread's index ([`thread_index`]); `usize::MAX` until it is first asked for. A
+    /// constant initialiser, so that reading it costs no lazy-init check.
+    static THREAD_INDEX: Cell<usize> = const { Cell::new(usize::MAX) };
+}
+
+/// This thread's index among the threads that asked for one, in the order they first asked
+/// (0, 1, 2, ...): the stripe it adds to, here and in [`super::sharded`].
+#[inline(always)]
+pub fn thread_index() -> usize {
+    let i = THREAD_INDEX.with(Cell::get);
+    if i != usize::MAX {
+        i
+    } else {
+        first_index()
+    }
+}
+
+/// A thread's index when it first asks (sequentially consistent: a thread's index is
+/// handed out before anything it then does, which [`threads_indexed`] relies on).
+#[cold]
+#[inline(never)]
+fn first_index() -> usize {
+    let i = NEXT_THREAD.fetch_add(1, Ordering::SeqCst);
+    THREAD_INDEX.with(|c| c.set(i));
+    i
+}
+
+/// How many threads have an index so far (every index handed out is below it).
+pub fn threads_indexed() -> usize {
+    NEXT_THREAD.load(Ordering::SeqCst)
 }
 
 impl Striped {
     /// Add `n` (the order is ignored: counts are summed when read).
     #[inline]
     pub fn fetch_add(&self, n: u64, _order: Ordering) {
-        let i = MY_SLOT.with(|s| *s);
-        self.slots[i].0.fetch_add(n, Ordering::Relaxed);
+        self.slots[thread_index() % SLOTS]
+            .0
+            .fetch_add(n, Ordering::Relaxed);
     }
 
     /// The sum of every thread's additions so far.

@@ -1,28 +1,24 @@
-//! How the threads of one render share a region's work ([`super::render_region`]).
+//! How the threads of one render share a region's work ([`super::render_region`]), so
+//! that no thread sits idle at the end of a pass while others finish large jobs:
+//! - `-ps 1` passes (the picture's, and the overture's, which at `-ps 1` samples every
+//!   pixel) are cut into runs of [`RUN`] pixels in reading order, which rayon hands out as
+//!   it would whole rows (a thread works through its part of the picture in order, an idle
+//!   one takes half of what another has left). The threads work far apart, so they seldom
+//!   compute ambient values for the same spot at once, and a pass ends on runs of a few
+//!   pixels instead of rows (whole rows leave about half a row's time idle per thread: some
+//!   4% of a 173-row pass on 16 threads). Runs handed out in reading order from one queue
+//!   would put the threads side by side: on 2 threads the overture then makes 7% more
+//!   values.
+//! - At `-ps` above 1 an odd band reuses the border samples of the even bands on both
+//!   sides of it. [`run_bands`] starts an odd band as soon as those two are done (before
+//!   any further even band), and the even bands otherwise in an order that spreads them
+//!   over the region (halves, then quarters, ...). There is no wave boundary between the
+//!   even and the odd bands (with one, 22 even bands on 16 threads run in two rounds of
+//!   which the second is under half full, and the odd bands again): threads wait only when
+//!   every band left is an odd band whose neighbours are still running.
 //!
-//! Two losses at the end of a frame made `tpict -n T` scale worse than T processes on
-//! tiles: with `-ps 1` every job was a whole pixel row (of the picture and of the overture,
-//! which at `-ps 1` samples every pixel), so a pass ended with threads idle while the last
-//! rows finished (on a 173-row picture and 16 threads, about half a row's time each,
-//! some 4% of the pass); with `-ps` above 1 the sampling bands ran in two waves, the even
-//! bands and then the odd ones (which reuse the even bands' border samples), with every
-//! thread waiting between them for the slowest even band (22 even bands on 16 threads:
-//! two rounds of which the second is under half full, then the same again for the odd
-//! bands). Now:
-//! - `-ps 1` passes are cut into runs of [`RUN`] pixels in reading order, which rayon
-//!   hands out as it did the rows (a thread works through its part of the picture in
-//!   order, an idle one takes half of what another has left): the threads work far apart,
-//!   so they seldom compute ambient values for the same spot at once, and a pass ends on
-//!   runs of a few pixels. (Runs handed out in reading order from one queue put every
-//!   thread next to the others: on 2 threads the overture then made 7% more values.)
-//! - [`run_bands`] starts an odd band as soon as the even bands on both sides of it are
-//!   done (before any further even band), and the even bands otherwise in an order that
-//!   spreads them over the region (halves, then quarters, ...), so there is no wave
-//!   boundary: threads wait only when every band left is an odd band whose neighbours are
-//!   still running.
-//!
-//! On one thread both keep the order of the single-thread render (reading order; the even
-//! bands, then the odd ones), so a one-thread picture is bit-identical to before, with
+//! On one thread both keep the order of a single-thread render (reading order; the even
+//! bands, then the odd ones), so one-thread pictures do not depend on this module, with
 //! indirect light too. A pixel's value never depends on the job it falls in.
 
 use std::sync::{Condvar, Mutex};
@@ -61,7 +57,8 @@ struct Bands<J> {
 
 impl<J> Bands<J> {
     /// The band to run next, if one can start now: the first odd band whose neighbours are
-    /// done, else the next even band (each even band is handed out once, in `evens`). `Err(())` when bands are left but none can start.
+    /// done, else the next even band (each even band is handed out once, in `evens`).
+    /// `Err(())` when bands are left but none can start.
     fn pick(&mut self) -> Result<Option<(usize, J)>, ()> {
         if self.left == 0 {
             return Ok(None);
@@ -85,6 +82,22 @@ impl<J> Bands<J> {
     }
 }
 
+/// Marks band `b` done when dropped, even if its job panicked, so that no thread waits for
+/// it forever ([`run_bands`]).
+struct Done<'a, J> {
+    state: &'a Mutex<Bands<J>>,
+    changed: &'a Condvar,
+    b: usize,
+}
+
+impl<J> Drop for Done<'_, J> {
+    fn drop(&mut self) {
+        let mut st = self.state.lock().unwrap_or_else(|e| e.into_inner());
+        st.done[self.b] = true;
+        self.changed.notify_all();
+    }
+}
+
 /// Run the bands `jobs` (band `b` shares its top border with band `b − 1` and its bottom
 /// with band `b + 1`; an odd band reuses what its even neighbours sampled) on the current
 /// rayon pool's threads: on one thread the even bands in order, then the odd ones; on more,
@@ -93,13 +106,9 @@ impl<J> Bands<J> {
 pub fn run_bands<J: Send>(jobs: Vec<J>, f: impl Fn(J) + Sync) {
     let threads = rayon::current_num_threads();
     if threads <= 1 || jobs.len() <= 2 {
-        let mut jobs: Vec<Option<J>> = jobs.into_iter().map(Some).collect();
-        let order = (0..jobs.len()).step_by(2).chain((1..jobs.len()).step_by(2));
-        for b in order.collect::<Vec<_>>() {
-            if let Some(j) = jobs[b].take() {
-                f(j);
-            }
-        }
+        let (even, odd): (Vec<_>, Vec<_>) =
+            jobs.into_iter().enumerate().partition(|(b, _)| b % 2 == 0);
+        even.into_iter().chain(odd).for_each(|(_, j)| f(j));
         return;
     }
     let n = jobs.len();
@@ -125,19 +134,6 @@ pub fn run_bands<J: Send>(jobs: Vec<J>, f: impl Fn(J) + Sync) {
                 }
             }
         };
-        // Marks the band done even if `f` panics, so that no thread waits for it forever.
-        struct Done<'a, J> {
-            state: &'a Mutex<Bands<J>>,
-            changed: &'a Condvar,
-            b: usize,
-        }
-        impl<J> Drop for Done<'_, J> {
-            fn drop(&mut self) {
-                let mut st = self.state.lock().unwrap_or_else(|e| e.into_inner());
-                st.done[self.b] = true;
-                self.changed.notify_all();
-            }
-        }
         let _done = Done {
             state: &state,
             changed: &changed,
