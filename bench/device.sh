@@ -16,7 +16,9 @@
 # startup.txt for `cargo bench --bench tilesim -- OUTDIR/costs.json --sweep --startup S`,
 # and OUTDIR/lookups.txt: the irradiance cache's lookups timed on 1, 2, 4, 8 and 16 threads
 # at once (bench/lookups.rs on the office's own ambient file, which --prepare renders), what
-# threads of one worker cost each other in the cache that processes do not; and
+# threads of one worker cost each other in the cache that processes do not (with
+# --separate: a cache each, as processes have); OUTDIR/vistable.txt: the same for the
+# shadow-reuse table (bench/vistable.rs); and
 # OUTDIR/bands.txt: tpict at the default -ps 4 on 1 and on P threads (P = the cores, at
 # most 16), where the band queue of src/render/schedule.rs decides how busy threads stay.
 # Environment: RES (default "-x 1536 -y 1536": 1536x1064, 14.5 CPU-s a frame on one core
@@ -43,14 +45,17 @@ if [ "${1:-}" = --prepare ]; then
         cp "$found" "$dir/"
     done
     # The cache-contention probe: bench/lookups.rs's binary and an ambient file of the office.
-    (cd "$ROOT" && cargo build --release --quiet --bench lookups)
-    lk=$(ls -t "$ROOT"/target/release/deps/lookups-* 2>/dev/null | grep -v '\.d$' | head -1)
-    [ -n "$lk" ] || { echo "bench/device.sh: the lookups bench binary was not found" >&2; exit 1; }
-    strip -o "$dir/lookups" "$lk" 2>/dev/null || cp "$lk" "$dir/lookups"
+    # The shadow-reuse table's probe: bench/vistable.rs's binary.
+    (cd "$ROOT" && cargo build --release --quiet --bench lookups --bench vistable)
+    for b in lookups vistable; do
+        f=$(ls -t "$ROOT"/target/release/deps/$b-* 2>/dev/null | grep -v '\.d$' | head -1)
+        [ -n "$f" ] || { echo "bench/device.sh: the $b bench binary was not found" >&2; exit 1; }
+        strip -o "$dir/$b" "$f" 2>/dev/null || cp "$f" "$dir/$b"
+    done
     (cd "$dir" && RAYPATH="$dir:${RAYPATH:-.}" "$ROOT/target/release/tpict" $(cat office.view) \
         -x 256 -y 256 -ab 2 -aa .15 -ad 512 -as 128 -ar 64 -dt .07 -ps 1 -af office.amb \
         office.rad >/dev/null)
-    echo "bench/device.sh: prepared $dir (office.rad, office.view and what they read, lookups, office.amb)"
+    echo "bench/device.sh: prepared $dir (office.rad, office.view and what they read, lookups, vistable, office.amb)"
     exit 0
 fi
 
@@ -76,8 +81,19 @@ if [ -x "$dir/lookups" ] && [ -f "$dir/office.amb" ]; then
         for t in 1 2 4 8 16; do
             [ "$t" -le "$(nproc)" ] || continue
             "$dir/lookups" "$dir/office.amb" --threads "$t" --lookups 1000000
+            "$dir/lookups" "$dir/office.amb" --threads "$t" --lookups 1000000 --separate
         done
     } 2>&1 | tee "$OUT/lookups.txt"
+fi
+if [ -x "$dir/vistable" ]; then
+    {
+        echo "shadow-reuse queries, T threads at once, one table or a table each (ns a query):"
+        for t in 1 2 4 8 16; do
+            [ "$t" -le "$(nproc)" ] || continue
+            "$dir/vistable" --threads "$t" --queries 1000000
+            "$dir/vistable" --threads "$t" --queries 1000000 --separate
+        done
+    } 2>&1 | tee "$OUT/vistable.txt"
 fi
 {
     P=$(nproc)

@@ -5,15 +5,19 @@
 #   ttrace -n 1, ttrace -n 2,
 #   a point job (tplan --points) run by one tpiece with 2 tile loops, merged and assembled;
 # wall and CPU seconds; then the error of each against its own converged values at equal
-# settings, and a sweep of -aa (equal error: the CPU each needs to reach the other's error).
+# settings, and a sweep of -ad x -aa (equal error: each renderer's front, the CPU ttrace
+# needs to reach rtrace's error along it).
 # Errors are per-point relative differences to the renderer's own reference (-aa .05
 # -ad 2048 -as 1024, one thread), averaged over the points.
 #
 # Usage: bash bench/points.sh
 # Environment: N (points, default 10000), OPTS (default "-ab 5 -ad 512 -as 128 -aa .15"),
-#   SWEEP (the -aa values of the sweep, default ".3 .2 .15 .1"), REPEAT (runs of each sweep
+#   SWEEP (the -aa values of the sweep, default ".3 .2 .15 .1"), AD_SWEEP (its -ad values,
+#   default "256 512 1024"), REPEAT (runs of each sweep
 #   point, the smallest CPU kept; default 3),
-#   REF_OPTS (default "-ab 5 -ad 2048 -as 1024 -aa .05").
+#   REF_OPTS (default "-ab 5 -ad 2048 -as 1024 -aa .05"), KEEP (a directory that keeps
+#   the grid, the references and the sweep table), REF_DIR (a KEEP directory of an earlier
+#   run whose references are used again when its grid is the same).
 set -euo pipefail
 ROOT=$(cd "$(dirname "$0")/.." && pwd)
 NAME=points
@@ -25,6 +29,7 @@ B=$ROOT/target/release
 N=${N:-10000}
 OPTS=${OPTS:-"-ab 5 -ad 512 -as 128 -aa .15"}
 SWEEP=${SWEEP:-".3 .2 .15 .1"}
+AD_SWEEP=${AD_SWEEP:-"256 512 1024"}
 REPEAT=${REPEAT:-3}
 REF_OPTS=${REF_OPTS:-"-ab 5 -ad 2048 -as 1024 -aa .05"}
 work_dir
@@ -67,9 +72,16 @@ t1=$(date +%s.%N)
 read -r u s <time.txt
 printf '%-34s %8.2f %8.2f\n' "job: tpiece --threads 2" "$(echo "$t1 - $t0" | bc)" "$(echo "$u + $s" | bc)"
 
-echo "references ($REF_OPTS, one thread):"
-run "rtrace reference" rt.ref rtrace -h -I "${R[@]}" s.oct
-run "ttrace reference" tt.ref "$B/ttrace" -n 1 -h -I "${R[@]}" room.rad sky.rad
+if [[ -n "${REF_DIR:-}" && -f "$REF_DIR/grid.pts" ]] && cmp -s grid.pts "$REF_DIR/grid.pts"; then
+    # References kept by an earlier run (KEEP) of the same grid; their options are the
+    # caller's to match.
+    echo "references: from $REF_DIR"
+    cp "$REF_DIR/rt.ref" "$REF_DIR/tt.ref" .
+else
+    echo "references ($REF_OPTS, one thread):"
+    run "rtrace reference" rt.ref rtrace -h -I "${R[@]}" s.oct
+    run "ttrace reference" tt.ref "$B/ttrace" -n 1 -h -I "${R[@]}" room.rad sky.rad
+fi
 
 # err TEST REF: mean per-point relative difference of the first component (points whose
 # reference is below 1e-3 of the largest are left out).
@@ -99,32 +111,64 @@ least_cpu() {
     echo "$best"
 }
 
-echo "sweep of -aa (one thread, the smallest CPU of $REPEAT runs): CPU-s and error of each"
-printf '%-8s %10s %10s %10s %10s\n' -aa rtrace-CPU rtrace-err ttrace-CPU ttrace-err | tee sweep.txt
-for aa in $SWEEP; do
-    # shellcheck disable=SC2206
-    S=($OPTS -aa "$aa")
-    c1=$(least_cpu rs.out rtrace -h -I "${S[@]}" s.oct)
-    c2=$(least_cpu ts.out "$B/ttrace" -n 1 -h -I "${S[@]}" room.rad sky.rad)
-    printf '%-8s %10.2f %10s %10.2f %10s\n' "$aa" "$c1" "$(err rs.out rt.ref)" \
-        "$c2" "$(err ts.out tt.ref)" | tee -a sweep.txt
+echo "sweep of -ad x -aa (one thread, the smallest CPU of $REPEAT runs): CPU-s and error of each"
+printf '%-6s %-6s %10s %10s %10s %10s\n' -ad -aa rtrace-CPU rtrace-err ttrace-CPU ttrace-err | tee sweep.txt
+for ad in $AD_SWEEP; do
+    for aa in $SWEEP; do
+        # shellcheck disable=SC2206
+        S=($OPTS -ad "$ad" -aa "$aa")
+        c1=$(least_cpu rs.out rtrace -h -I "${S[@]}" s.oct)
+        c2=$(least_cpu ts.out "$B/ttrace" -n 1 -h -I "${S[@]}" room.rad sky.rad)
+        printf '%-6s %-6s %10.2f %10s %10.2f %10s\n' "$ad" "$aa" "$c1" "$(err rs.out rt.ref)" \
+            "$c2" "$(err ts.out tt.ref)" | tee -a sweep.txt
+    done
 done
-# Equal error: for each rtrace point, ttrace's CPU at rtrace's error, interpolated linearly
-# between the two ttrace points whose errors enclose it (from the least accurate down).
-echo "at equal error (ttrace's CPU interpolated at rtrace's error):"
-awk 'NR > 1 { a[NR-1] = $1; rc[NR-1] = $2; re[NR-1] = $3; tc[NR-1] = $4; te[NR-1] = $5; n = NR - 1 }
-    END {
-        for (i = 1; i <= n; i++) {
-            c = ""
-            for (j = 1; j < n; j++)
-                if (te[j] >= re[i] && te[j+1] <= re[i] && te[j] > te[j+1]) {
-                    c = tc[j] + (te[j] - re[i]) / (te[j] - te[j+1]) * (tc[j+1] - tc[j])
-                    break
-                }
-            if (c == "" && te[1] <= re[i]) c = tc[1]   # the cheapest ttrace run is already as accurate
-            if (c == "")
-                printf "  rtrace -aa %s (%.2f%%, %.2f s): ttrace does not reach it in the sweep\n", a[i], 100 * re[i], rc[i]
-            else
-                printf "  rtrace -aa %s (%.2f%%, %.2f s): ttrace %s%.2f s, %.2fx\n", a[i], 100 * re[i], rc[i], (te[1] <= re[i] ? "at most " : ""), c, rc[i] / c
-        }
-    }' sweep.txt
+# Equal error, as bench/ambient.sh does for pictures: each renderer's front (its runs that
+# no cheaper run of it beats in error); for each point of rtrace's front, the CPU of
+# ttrace's front at that error, interpolated linearly in log CPU and log error between the
+# two front points that enclose it; the ratios where the fronts overlap and their median.
+echo "at equal error (each renderer's front over the sweep; ttrace's CPU at rtrace's error):"
+python3 - sweep.txt <<'PY'
+import math, sys
+rows = [l.split() for l in open(sys.argv[1]).read().splitlines()[1:] if l.strip()]
+def front(cpu, err):
+    pts = sorted((float(r[cpu]), float(r[err]), r[0], r[1]) for r in rows)
+    out, best = [], math.inf
+    for c, e, ad, aa in pts:
+        if e < best:
+            out.append((c, e, ad, aa)); best = e
+    return out
+rf, tf = front(2, 3), front(4, 5)
+print("  rtrace's front: " + ", ".join(f"-ad {a} -aa {b} {100*e:.2f}% {c:.2f} s" for c, e, a, b in rf))
+print("  ttrace's front: " + ", ".join(f"-ad {a} -aa {b} {100*e:.2f}% {c:.2f} s" for c, e, a, b in tf))
+ratios = []
+for c, e, ad, aa in rf:
+    t = None
+    if e >= tf[0][1]:
+        t, bound = tf[0][0], "at most "
+    else:
+        bound = ""
+        for (c0, e0, *_), (c1, e1, *_) in zip(tf, tf[1:]):
+            if e0 >= e >= e1:
+                f = math.log(e0 / e) / math.log(e0 / e1)
+                t = math.exp(math.log(c0) + f * (math.log(c1) - math.log(c0)))
+                break
+    if t is None:
+        print(f"  rtrace -ad {ad} -aa {aa} ({100*e:.2f}%, {c:.2f} s): below ttrace's front")
+        continue
+    print(f"  rtrace -ad {ad} -aa {aa} ({100*e:.2f}%, {c:.2f} s): ttrace {bound}{t:.2f} s, {c/t:.2f}x")
+    if not bound:
+        ratios.append(c / t)
+if ratios:
+    ratios.sort()
+    m = len(ratios)
+    med = ratios[m // 2] if m % 2 else (ratios[m // 2 - 1] + ratios[m // 2]) / 2
+    print(f"  overlap: {m} point(s), median {med:.2f}x, min {ratios[0]:.2f}x, max {ratios[-1]:.2f}x")
+else:
+    print("  the fronts do not overlap")
+PY
+# KEEP=DIR keeps the grid, the references and the sweep's table.
+if [[ -n "${KEEP:-}" ]]; then
+    mkdir -p "$KEEP"
+    cp grid.pts rt.ref tt.ref sweep.txt "$KEEP/"
+fi

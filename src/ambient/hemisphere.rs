@@ -132,6 +132,51 @@ pub fn super_sample_shares(b: &[f64], m: usize, nphi: usize) -> Vec<f64> {
     out
 }
 
+/// [`super_sample_shares`] without a cell's own first sample: each cell's share is the
+/// spread (standard deviation) of the first samples of its up to 8 neighbours (wrapping in
+/// φ, not across the pole or the horizon), never of its own. A cell's extra rays then do
+/// not depend on its own first sample, so the mean of its samples stays an unbiased
+/// estimate of its light: where the share grows with the cell's own sample (a bright first
+/// sample draws rays that dilute it, a dark one keeps its full weight), a value is biased
+/// low by about 1/`-ad` (docs/ambient.md, "Super-sampling"). A bright patch that one cell's
+/// sample found still draws rays into the cells around it, whose neighbourhood holds it.
+pub fn super_sample_shares_unbiased(b: &[f64], m: usize, nphi: usize) -> Vec<f64> {
+    let mut out = vec![0.0; m * nphi];
+    let mut vals = [0.0f64; 8];
+    for j in 0..m {
+        for k in 0..nphi {
+            let cols = phi_neighbours(k, nphi);
+            let mut n = 0usize;
+            for dj in -1i64..=1 {
+                let jj = j as i64 + dj;
+                if jj < 0 || jj >= m as i64 {
+                    continue;
+                }
+                let row = jj as usize * nphi;
+                for (ci, &kk) in cols.iter().enumerate() {
+                    // The cell itself, and a column met twice in a ring of fewer than 3.
+                    if (dj == 0 && ci == 1) || (ci != 1 && kk == k) || (ci == 2 && kk == cols[0]) {
+                        continue;
+                    }
+                    vals[n] = b[row + kk];
+                    n += 1;
+                }
+            }
+            if n < 2 {
+                continue;
+            }
+            let mean = vals[..n].iter().sum::<f64>() / n as f64;
+            let var = vals[..n]
+                .iter()
+                .map(|v| (v - mean) * (v - mean))
+                .sum::<f64>()
+                / n as f64;
+            out[j * nphi + k] = var.sqrt();
+        }
+    }
+    out
+}
+
 /// Translational and rotational gradients of the hemisphere integral (in the same units as
 /// the mean of `l`) for cells stratified as in [`super::sample`]: `l[j*nphi + k]` and distances.
 /// Formulas of Ward & Heckbert (1992), "Irradiance Gradients", divided by π because the
@@ -191,6 +236,35 @@ mod tests {
     use super::*;
     use crate::ambient::settings::OUTLIER_LIMIT;
     use crate::color::bright;
+
+    #[test]
+    fn unbiased_shares_never_read_the_cells_own_sample() {
+        // Rings of 1 to 3 columns meet the wrapping's duplicates; 9 x 28 is a value's mesh.
+        for (m, nphi) in [(4, 1), (4, 2), (3, 3), (9, 28)] {
+            let mut b: Vec<f64> = (0..m * nphi)
+                .map(|i| ((i * 7919) % 101) as f64 / 10.0)
+                .collect();
+            let base = super_sample_shares_unbiased(&b, m, nphi);
+            for c in 0..m * nphi {
+                let keep = b[c];
+                b[c] = keep * 50.0 + 3.0;
+                let s = super_sample_shares_unbiased(&b, m, nphi);
+                b[c] = keep;
+                assert_eq!(s[c], base[c], "cell {c} of {m}x{nphi}");
+            }
+        }
+        // A lone bright cell: the cells around it share, it does not.
+        let (m, nphi) = (5, 12);
+        let mut b = vec![1.0; m * nphi];
+        b[2 * nphi + 5] = 100.0;
+        let s = super_sample_shares_unbiased(&b, m, nphi);
+        assert_eq!(s[2 * nphi + 5], 0.0);
+        for (dj, dk) in [(-1i64, -1i64), (-1, 0), (0, 1), (1, 1)] {
+            let i = ((2 + dj) as usize) * nphi + (5 + dk) as usize;
+            assert!(s[i] > 10.0, "neighbour {i}: {}", s[i]);
+        }
+        assert_eq!(s[0], 0.0);
+    }
 
     #[test]
     fn one_dominant_cell_is_clamped_to_the_others_sum() {

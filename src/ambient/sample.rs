@@ -6,7 +6,9 @@
 use super::cache::CachedValue;
 use super::compute::{Ambient, Share, AVGREFL};
 use super::corral::{corral_flags, CORRAL_MIN_DIVISIONS};
-use super::hemisphere::{clamp_outliers, outlier_limit, super_sample_shares, Cell};
+use super::hemisphere::{
+    clamp_outliers, outlier_limit, super_sample_shares, super_sample_shares_unbiased, Cell,
+};
 use crate::color::{bright, sanitize, Color};
 use crate::geometry::any_perpendicular;
 use crate::material::MatId;
@@ -94,10 +96,14 @@ impl Hemisphere<'_, '_> {
 
     /// Super-sampling (`-as`): `extra` rays where neighbouring cells differ most, in
     /// proportion to the cells' estimated standard deviations (Neyman allocation).
-    fn super_sample(&mut self, extra: f64, rng: &mut Sampler) {
+    fn super_sample(&mut self, extra: f64, unbiased: bool, rng: &mut Sampler) {
         let (m, nphi) = (self.m, self.nphi);
         let b: Vec<f64> = self.cells.iter().map(|c| bright(c.mean())).collect();
-        let share = super_sample_shares(&b, m, nphi);
+        let share = if unbiased {
+            super_sample_shares_unbiased(&b, m, nphi)
+        } else {
+            super_sample_shares(&b, m, nphi)
+        };
         let ssum: f64 = share.iter().sum();
         if ssum <= 0.0 {
             return;
@@ -247,7 +253,7 @@ impl Ambient {
         let complete = h.complete();
         let extra = (self.as_ * wt).floor();
         if complete && m * nphi > 49 && extra >= 4.0 * m as f64 {
-            h.super_sample(extra, rng);
+            h.super_sample(extra, !self.settings().ss_own, rng);
         }
         self.stats
             .sample_rays

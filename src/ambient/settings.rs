@@ -72,6 +72,10 @@ pub struct AmbientSettings {
     /// `--amb-outlier-limit F`: a cell of a new value may bring at most F times the others'
     /// sum, loosened with the sample count (0: no limit).
     pub outlier_limit: f64,
+    /// `--amb-ss-own on|off`: whether a cell's own first sample counts in how many of the
+    /// super-sampling rays it gets (on: Radiance's rule, which biases values low by about
+    /// 1/`-ad`; off: the spread of its neighbours only, unbiased).
+    pub ss_own: bool,
 }
 
 impl Default for AmbientSettings {
@@ -88,6 +92,7 @@ impl Default for AmbientSettings {
             shadow_reuse: true,
             hessian_cells: HESSIAN_CELLS,
             outlier_limit: OUTLIER_LIMIT,
+            ss_own: true,
         }
     }
 }
@@ -105,6 +110,7 @@ pub const OPTION_NAMES: &[&str] = &[
     "--amb-shadow-reuse",
     "--amb-hessian-cells",
     "--amb-outlier-limit",
+    "--amb-ss-own",
 ];
 
 fn on_off(option: &str, w: &str) -> Result<bool, String> {
@@ -158,6 +164,7 @@ impl AmbientSettings {
                 }
             }
             "--amb-outlier-limit" => self.outlier_limit = number(o, w, 0.0, 1e6)?,
+            "--amb-ss-own" => self.ss_own = on_off(o, w)?,
             _ => unreachable!("every name in OPTION_NAMES has a branch"),
         }
         Ok(Some(2))
@@ -179,6 +186,7 @@ impl AmbientSettings {
             b(self.shadow_reuse),
             format!("{}", self.hessian_cells),
             format!("{}", self.outlier_limit),
+            b(self.ss_own),
         ];
         OPTION_NAMES
             .iter()
@@ -224,7 +232,7 @@ mod tests {
             "--amb-share-max 1.5 --amb-as0-split 0 --amb-hessian off --amb-reach off \
              --amb-gradients off --amb-gradient-radii on --amb-glow-sampling off \
              --amb-corral off --amb-shadow-reuse off --amb-hessian-cells 64 \
-             --amb-outlier-limit 0",
+             --amb-outlier-limit 0 --amb-ss-own off",
         );
         let mut i = 0;
         while i < w.len() {

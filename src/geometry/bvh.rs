@@ -430,21 +430,27 @@ impl Bvh {
             org,
             dir,
             tmax,
-            |i| intersect(i).map(|t| (t, 0)),
+            |i, _| intersect(i).map(|t| (t, 0)),
             |a, b| prefer(a.0, b.0),
         )
         .map(|(i, _, t)| (i, t))
     }
 
     /// [`Bvh::closest`] for candidates that hold several surfaces (a two-level BVH's
-    /// instances): `intersect(i)` returns the distance and which surface `j` of candidate `i`
-    /// was hit; ties compare `(t, i, j)`. Returns `(i, j, t)`.
+    /// instances): `intersect(i, reach)` returns the distance and which surface `j` of
+    /// candidate `i` was hit; ties compare `(t, i, j)`. Returns `(i, j, t)`.
+    ///
+    /// `reach` (at most `tmax`) is the closest distance found so far plus the tie window:
+    /// a hit beyond it can neither win nor tie, so a candidate may search no farther (an
+    /// instance's own tree prunes with it). The candidate must still choose among its own
+    /// surfaces as it would with `tmax`: where its choice looks past its closest hit (a
+    /// window of its own), it searches that much farther.
     pub fn closest_sub(
         &self,
         org: DVec3,
         dir: DVec3,
         tmax: f64,
-        mut intersect: impl FnMut(usize) -> Option<(f64, u32)>,
+        mut intersect: impl FnMut(usize, f64) -> Option<(f64, u32)>,
         prefer: impl Fn((usize, u32), (usize, u32)) -> bool,
     ) -> Option<(usize, u32, f64)> {
         let (ray, shift) = self.setup(org, dir, tmax)?;
@@ -454,12 +460,14 @@ impl Bvh {
         // candidates order exactly as by index.
         let key = |i: usize, j: u32| i | ((j as usize) << 32);
         let split = |k: usize| (k & 0xffff_ffff, (k >> 32) as u32);
-        self.traverse(ray, |i| match intersect(i) {
-            Some((t, j)) if t > self.eps && t < tmax && win.push(key(i, j), t) => {
-                // A new closest distance: prune (conservatively) beyond it plus eps.
-                f32_up((t + self.eps - shift) * (1.0 + 1e-6) + pad2)
+        self.traverse(ray, |i| {
+            match intersect(i, (win.tmin + self.eps).min(tmax)) {
+                Some((t, j)) if t > self.eps && t < tmax && win.push(key(i, j), t) => {
+                    // A new closest distance: prune (conservatively) beyond it plus eps.
+                    f32_up((t + self.eps - shift) * (1.0 + 1e-6) + pad2)
+                }
+                _ => f32::INFINITY,
             }
-            _ => f32::INFINITY,
         });
         win.select(&|a, b| prefer(split(a), split(b)))
             .map(|(k, t)| (split(k).0, split(k).1, t))

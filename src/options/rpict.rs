@@ -111,6 +111,10 @@ pub fn help_text() -> String {
             "--amb-outlier-limit F",
             "a cell brings at most F x the others' sum (2; 0: none)",
         ),
+        (
+            "--amb-ss-own on|off",
+            "a cell's own sample counts in its super-sampling share",
+        ),
     ] {
         s.push_str(&format!("  {name:<28} {what}\n"));
     }

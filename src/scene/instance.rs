@@ -66,11 +66,11 @@ impl SceneGeometry {
                 org,
                 dir,
                 tmax,
-                |i| {
+                |i, reach| {
                     if i < n {
                         self.objects.intersect(i, org, dir, tmax).map(|t| (t, 0))
                     } else {
-                        self.placement_hit(i - n, org, dir, tmax, &prefer)
+                        self.placement_hit(i - n, (org, dir), (tmax, reach), &prefer)
                     }
                 },
                 |a, b| prefer(href(a.0, a.1), href(b.0, b.1)),
@@ -88,12 +88,17 @@ impl SceneGeometry {
         (o, d / k, k)
     }
 
+    /// The closest hit of placement `pi` before `tmax`, searched only as far as `reach`
+    /// (world lengths; [`crate::geometry::bvh::Bvh::closest_sub`]): a hit of the set beyond it cannot win, but its
+    /// own choice among surfaces within its tie window of its closest hit must see that
+    /// window whole, so the set's search goes that much farther (never past `tmax`), and
+    /// the placement gives the hit it would give searching up to `tmax` whenever that hit
+    /// lies within `reach`.
     fn placement_hit(
         &self,
         pi: usize,
-        org: DVec3,
-        dir: DVec3,
-        tmax: f64,
+        (org, dir): (DVec3, DVec3),
+        (tmax, reach): (f64, f64),
         prefer: &impl Fn(HitRef, HitRef) -> bool,
     ) -> Option<(f64, u32)> {
         let p = &self.placements[pi];
@@ -102,7 +107,7 @@ impl SceneGeometry {
         if !(k > 0.0 && k.is_finite()) {
             return None;
         }
-        let tl = tmax * k;
+        let tl = (tmax * k).min(reach * k + 2.0 * set.bvh.eps);
         let inst = pi as u32;
         // Hits within the scene's tolerance in world units are no hits (the top level would
         // drop them; refusing them here keeps the set's search from pruning on them).
