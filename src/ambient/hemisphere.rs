@@ -82,28 +82,45 @@ pub fn cell_variances(b: &[f64], m: usize, nphi: usize) -> Vec<f64> {
     for j in 0..m {
         for k in 0..nphi {
             let c = b[j * nphi + k];
-            let mut s = 0.0;
-            let mut cnt = 0usize;
-            let cols = phi_neighbours(k, nphi);
-            for dj in -1i64..=1 {
-                let jj = j as i64 + dj;
-                if jj < 0 || jj >= m as i64 {
-                    continue;
-                }
-                let row = jj as usize * nphi;
-                for (ci, &kk) in cols.iter().enumerate() {
-                    if dj == 0 && ci == 1 {
-                        continue;
-                    }
-                    let d = b[row + kk] - c;
-                    s += d * d;
-                    cnt += 1;
-                }
-            }
+            let (mut s, mut cnt) = (0.0, 0usize);
+            for_neighbours((j, k), (m, nphi), false, |i| {
+                let d = b[i] - c;
+                s += d * d;
+                cnt += 1;
+            });
             out[j * nphi + k] = if cnt > 0 { s / cnt as f64 } else { 0.0 };
         }
     }
     out
+}
+
+/// Calls `f` with the index of each of the up to 8 neighbours of cell (j, k): the rings
+/// j − 1 to j + 1 that exist (not across the pole or the horizon), the columns k − 1 to
+/// k + 1 wrapping in φ, the cell itself left out. With `distinct`, a column met twice in a
+/// ring of fewer than 3 columns (or the cell's own column met again) is visited once.
+fn for_neighbours(
+    (j, k): (usize, usize),
+    (m, nphi): (usize, usize),
+    distinct: bool,
+    mut f: impl FnMut(usize),
+) {
+    let cols = phi_neighbours(k, nphi);
+    for dj in -1i64..=1 {
+        let jj = j as i64 + dj;
+        if jj < 0 || jj >= m as i64 {
+            continue;
+        }
+        let row = jj as usize * nphi;
+        for (ci, &kk) in cols.iter().enumerate() {
+            if dj == 0 && ci == 1 {
+                continue;
+            }
+            if distinct && ((ci != 1 && kk == k) || (ci == 2 && kk == cols[0])) {
+                continue;
+            }
+            f(row + kk);
+        }
+    }
 }
 
 /// How super-sampling shares its extra rays among the cells (not normalised): the estimated
@@ -138,30 +155,17 @@ pub fn super_sample_shares(b: &[f64], m: usize, nphi: usize) -> Vec<f64> {
 /// not depend on its own first sample, so the mean of its samples stays an unbiased
 /// estimate of its light: where the share grows with the cell's own sample (a bright first
 /// sample draws rays that dilute it, a dark one keeps its full weight), a value is biased
-/// low by about 1/`-ad` (docs/ambient.md, "Super-sampling"). A bright patch that one cell's
+/// low by about 1/`-ad` (docs/ambient.md, "Super-sampling's own bias"). A bright patch that one cell's
 /// sample found still draws rays into the cells around it, whose neighbourhood holds it.
 pub fn super_sample_shares_unbiased(b: &[f64], m: usize, nphi: usize) -> Vec<f64> {
     let mut out = vec![0.0; m * nphi];
-    let mut vals = [0.0f64; 8];
     for j in 0..m {
         for k in 0..nphi {
-            let cols = phi_neighbours(k, nphi);
-            let mut n = 0usize;
-            for dj in -1i64..=1 {
-                let jj = j as i64 + dj;
-                if jj < 0 || jj >= m as i64 {
-                    continue;
-                }
-                let row = jj as usize * nphi;
-                for (ci, &kk) in cols.iter().enumerate() {
-                    // The cell itself, and a column met twice in a ring of fewer than 3.
-                    if (dj == 0 && ci == 1) || (ci != 1 && kk == k) || (ci == 2 && kk == cols[0]) {
-                        continue;
-                    }
-                    vals[n] = b[row + kk];
-                    n += 1;
-                }
-            }
+            let (mut vals, mut n) = ([0.0f64; 8], 0usize);
+            for_neighbours((j, k), (m, nphi), true, |i| {
+                vals[n] = b[i];
+                n += 1;
+            });
             if n < 2 {
                 continue;
             }
