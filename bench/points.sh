@@ -17,7 +17,9 @@
 #   point, the smallest CPU kept; default 3),
 #   REF_OPTS (default "-ab 5 -ad 2048 -as 1024 -aa .05"), KEEP (a directory that keeps
 #   the grid, the references and the sweep table), REF_DIR (a KEEP directory of an earlier
-#   run whose references are used again when its grid is the same).
+#   run whose references are used again when its grid is the same; the caller keeps
+#   their options the same), TT_EXTRA (options for ttrace alone, its reference and the
+#   job included: TT_EXTRA="--amb-ss-own off").
 set -euo pipefail
 ROOT=$(cd "$(dirname "$0")/.." && pwd)
 NAME=points
@@ -32,6 +34,7 @@ SWEEP=${SWEEP:-".3 .2 .15 .1"}
 AD_SWEEP=${AD_SWEEP:-"256 512 1024"}
 REPEAT=${REPEAT:-3}
 REF_OPTS=${REF_OPTS:-"-ab 5 -ad 2048 -as 1024 -aa .05"}
+TT_EXTRA=${TT_EXTRA:-}
 work_dir
 cp "$ROOT"/tests/scenes/daylight/*.rad "$TMP/"
 cd "$TMP"
@@ -58,14 +61,16 @@ run() {
 O=($OPTS)
 # shellcheck disable=SC2206
 R=($REF_OPTS)
+# shellcheck disable=SC2206
+X=($TT_EXTRA)
 printf '%-34s %8s %8s\n' run wall-s CPU-s
 run "rtrace -n 1" rt1.out rtrace -h -I "${O[@]}" s.oct
 run "rtrace -n 2" rt2.out rtrace -n 2 -h -I "${O[@]}" s.oct
-run "ttrace -n 1" tt1.out "$B/ttrace" -n 1 -h -I "${O[@]}" room.rad sky.rad
-run "ttrace -n 2" tt2.out "$B/ttrace" -n 2 -h -I "${O[@]}" room.rad sky.rad
+run "ttrace -n 1" tt1.out "$B/ttrace" -n 1 -h -I "${O[@]}" "${X[@]}" room.rad sky.rad
+run "ttrace -n 2" tt2.out "$B/ttrace" -n 2 -h -I "${O[@]}" "${X[@]}" room.rad sky.rad
 t0=$(date +%s.%N)
 /usr/bin/time -f "%U %S" -o time.txt bash -c "
-    '$B/tplan' --points grid.pts --workers 2 -o job -- -h -I ${OPTS} room.rad sky.rad >/dev/null 2>&1 &&
+    '$B/tplan' --points grid.pts --workers 2 -o job -- -h -I ${OPTS} ${TT_EXTRA} room.rad sky.rad >/dev/null 2>&1 &&
     '$B/tpiece' job --threads 2 -q && '$B/tmerge' job >/dev/null 2>&1 &&
     '$B/tassemble' job -o job.out"
 t1=$(date +%s.%N)
@@ -80,7 +85,7 @@ if [[ -n "${REF_DIR:-}" && -f "$REF_DIR/grid.pts" ]] && cmp -s grid.pts "$REF_DI
 else
     echo "references ($REF_OPTS, one thread):"
     run "rtrace reference" rt.ref rtrace -h -I "${R[@]}" s.oct
-    run "ttrace reference" tt.ref "$B/ttrace" -n 1 -h -I "${R[@]}" room.rad sky.rad
+    run "ttrace reference" tt.ref "$B/ttrace" -n 1 -h -I "${R[@]}" "${X[@]}" room.rad sky.rad
 fi
 
 # err TEST REF: mean per-point relative difference of the first component (points whose
@@ -118,7 +123,7 @@ for ad in $AD_SWEEP; do
         # shellcheck disable=SC2206
         S=($OPTS -ad "$ad" -aa "$aa")
         c1=$(least_cpu rs.out rtrace -h -I "${S[@]}" s.oct)
-        c2=$(least_cpu ts.out "$B/ttrace" -n 1 -h -I "${S[@]}" room.rad sky.rad)
+        c2=$(least_cpu ts.out "$B/ttrace" -n 1 -h -I "${S[@]}" "${X[@]}" room.rad sky.rad)
         printf '%-6s %-6s %10.2f %10s %10.2f %10s\n' "$ad" "$aa" "$c1" "$(err rs.out rt.ref)" \
             "$c2" "$(err ts.out tt.ref)" | tee -a sweep.txt
     done
