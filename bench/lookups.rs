@@ -19,6 +19,9 @@
 //! a cache of its own holding the same values, as processes have: the difference to the
 //! shared figure is what sharing one cache costs.
 
+#[path = "args.rs"]
+mod args;
+
 use glam::DVec3;
 use std::process::ExitCode;
 use std::time::Instant;
@@ -26,21 +29,13 @@ use tessera::ambient::cache::{AmbientCache, CachedValue};
 use tessera::ambient::radfile::read_file;
 
 fn main() -> ExitCode {
-    let args: Vec<String> = std::env::args()
-        .skip(1)
-        .filter(|a| a != "--bench")
-        .collect();
+    let args = args::bench_args();
     let mut file = None;
     let (mut aa, mut lookups, mut repeat, mut threads) = (0.15f64, 2_000_000usize, 3usize, 1usize);
     let mut separate = false;
     let mut it = args.iter();
     while let Some(a) = it.next() {
-        let mut num = |name: &str| -> Result<f64, String> {
-            it.next()
-                .and_then(|v| v.parse::<f64>().ok())
-                .filter(|v| v.is_finite() && *v > 0.0)
-                .ok_or(format!("{name} needs a positive number"))
-        };
+        let mut num = |name: &str| args::number(&mut it, name, false);
         let r = match a.as_str() {
             "--aa" => num("--aa").map(|v| aa = v),
             "--lookups" => num("--lookups").map(|v| lookups = v as usize),

@@ -18,6 +18,7 @@ import os
 import sys
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+from fronts import pareto, time_at  # noqa: E402
 from plotenv import ensure_deps  # noqa: E402
 
 ensure_deps("plot_ambient", ["matplotlib", "numpy"])
@@ -35,35 +36,6 @@ import numpy as np  # noqa: E402
 # Error levels of the ratio table (AMB_LEVELS="0.02 0.05" to choose others).
 LEVELS = [float(x) for x in os.environ.get("AMB_LEVELS", "0.015 0.02 0.03 0.05 0.1 0.2").split()]
 COLORS = {"rpict": "tab:blue", "tpict": "tab:orange"}
-
-
-def pareto(points):
-    """points: list of (cpu, err, label). Returns the front sorted by cpu ascending."""
-    front = []
-    best = float("inf")
-    for p in sorted(points, key=lambda p: (p[0], p[1])):
-        if p[1] < best:
-            front.append(p)
-            best = p[1]
-    return front
-
-
-def time_at(front, err):
-    """CPU time at which the front reaches `err` (log-log interpolation), or None."""
-    if not front:
-        return None
-    errs = [p[1] for p in front]
-    if err > errs[0] or err < errs[-1]:
-        if err > errs[0]:
-            return None  # coarser than the cheapest run: not measured
-        return None
-    for a, b in zip(front, front[1:]):
-        if b[1] <= err <= a[1]:
-            if a[1] == b[1]:
-                return a[0]
-            t = (np.log(err) - np.log(a[1])) / (np.log(b[1]) - np.log(a[1]))
-            return float(np.exp(np.log(a[0]) + t * (np.log(b[0]) - np.log(a[0]))))
-    return front[0][0] if err == errs[0] else None
 
 
 def main():

@@ -133,35 +133,24 @@ done
 # ttrace's front at that error, interpolated linearly in log CPU and log error between the
 # two front points that enclose it; the ratios where the fronts overlap and their median.
 echo "at equal error (each renderer's front over the sweep; ttrace's CPU at rtrace's error):"
-python3 - sweep.txt <<'PY'
-import math, sys
+python3 - sweep.txt "$ROOT/bench" <<'PY'
+import sys
+sys.path.insert(0, sys.argv[2])
+from fronts import pareto, time_at
 rows = [l.split() for l in open(sys.argv[1]).read().splitlines()[1:] if l.strip()]
-def front(cpu, err):
-    pts = sorted((float(r[cpu]), float(r[err]), r[0], r[1]) for r in rows)
-    out, best = [], math.inf
-    for c, e, ad, aa in pts:
-        if e < best:
-            out.append((c, e, ad, aa)); best = e
-    return out
-rf, tf = front(2, 3), front(4, 5)
+rf = pareto([(float(r[2]), float(r[3]), r[0], r[1]) for r in rows])
+tf = pareto([(float(r[4]), float(r[5]), r[0], r[1]) for r in rows])
 print("  rtrace's front: " + ", ".join(f"-ad {a} -aa {b} {100*e:.2f}% {c:.2f} s" for c, e, a, b in rf))
 print("  ttrace's front: " + ", ".join(f"-ad {a} -aa {b} {100*e:.2f}% {c:.2f} s" for c, e, a, b in tf))
 ratios = []
 for c, e, ad, aa in rf:
-    t = None
-    if e >= tf[0][1]:
-        t, bound = tf[0][0], "at most "
-    else:
-        bound = ""
-        for (c0, e0, *_), (c1, e1, *_) in zip(tf, tf[1:]):
-            if e0 >= e >= e1:
-                f = math.log(e0 / e) / math.log(e0 / e1)
-                t = math.exp(math.log(c0) + f * (math.log(c1) - math.log(c0)))
-                break
+    # ttrace's cheapest run already as accurate: its CPU is a bound.
+    bound = e >= tf[0][1]
+    t = tf[0][0] if bound else time_at(tf, e)
     if t is None:
         print(f"  rtrace -ad {ad} -aa {aa} ({100*e:.2f}%, {c:.2f} s): below ttrace's front")
         continue
-    print(f"  rtrace -ad {ad} -aa {aa} ({100*e:.2f}%, {c:.2f} s): ttrace {bound}{t:.2f} s, {c/t:.2f}x")
+    print(f"  rtrace -ad {ad} -aa {aa} ({100*e:.2f}%, {c:.2f} s): ttrace {'at most ' if bound else ''}{t:.2f} s, {c/t:.2f}x")
     if not bound:
         ratios.append(c / t)
 if ratios:

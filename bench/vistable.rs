@@ -18,27 +18,15 @@
 //! its own sequence; `--separate` gives each thread a table of its own, as processes
 //! have: the difference to the shared figure is what sharing one table costs.
 
+#[path = "args.rs"]
+mod args;
+
 use glam::DVec3;
 use std::process::ExitCode;
 use std::time::Instant;
 use tessera::color::Color;
 use tessera::light::viscache::{shadow, VisQuery, VisTable};
-
-/// A small deterministic generator (splitmix64).
-struct Rng(u64);
-
-impl Rng {
-    fn next(&mut self) -> u64 {
-        self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
-        let mut z = self.0;
-        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
-        z ^ (z >> 31)
-    }
-    fn unit(&mut self) -> f64 {
-        (self.next() >> 11) as f64 / (1u64 << 53) as f64
-    }
-}
+use tessera::render::sampler::Sampler;
 
 /// Spin for about `iters` dependent multiply-adds; returns a value the caller keeps.
 #[inline(never)]
@@ -51,11 +39,11 @@ fn work(iters: u64, seed: f64) -> f64 {
 }
 
 /// The query points of one thread: cube centres, the cube index squared-skewed.
-fn points(cubes: usize, n: usize, seed: u64) -> Vec<DVec3> {
-    let mut rng = Rng(seed);
+fn points(cubes: usize, n: usize, seed: u32) -> Vec<DVec3> {
+    let mut rng = Sampler::for_pixel(0, seed, 0, 0);
     (0..n)
         .map(|_| {
-            let u = rng.unit();
+            let u = rng.uniform();
             let c = ((u * u) * cubes as f64) as usize;
             // Cubes of side 0.125 along a 20 m strip of wall, 8 across.
             DVec3::new(
@@ -97,21 +85,13 @@ fn run(tables: &[VisTable], pts: &[Vec<DVec3>], iters: u64) -> (f64, f64) {
 }
 
 fn main() -> ExitCode {
-    let args: Vec<String> = std::env::args()
-        .skip(1)
-        .filter(|a| a != "--bench")
-        .collect();
+    let args = args::bench_args();
     let (mut queries, mut cubes, mut work_ns, mut repeat, mut threads) =
         (2_000_000usize, 20_000usize, 300.0f64, 3usize, 1usize);
     let mut separate = false;
     let mut it = args.iter();
     while let Some(a) = it.next() {
-        let mut num = |name: &str| -> Result<f64, String> {
-            it.next()
-                .and_then(|v| v.parse::<f64>().ok())
-                .filter(|v| v.is_finite() && *v >= 0.0)
-                .ok_or(format!("{name} needs a number of at least 0"))
-        };
+        let mut num = |name: &str| args::number(&mut it, name, true);
         let r = match a.as_str() {
             "--queries" => num("--queries").map(|v| queries = (v as usize).max(1)),
             "--cubes" => num("--cubes").map(|v| cubes = (v as usize).max(1)),
@@ -136,7 +116,7 @@ fn main() -> ExitCode {
     let per_ns = cal as f64 / (t0.elapsed().as_secs_f64() * 1e9);
     let iters = (work_ns * per_ns).round() as u64;
     let pts: Vec<Vec<DVec3>> = (0..threads)
-        .map(|k| points(cubes, queries, 0x5EED + k as u64))
+        .map(|k| points(cubes, queries, k as u32))
         .collect();
     // The work alone, on as many threads.
     let mut alone = f64::INFINITY;
