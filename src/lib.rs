@@ -47,6 +47,7 @@ pub mod session;
 pub mod tpict;
 pub mod ttrace;
 pub mod view;
+pub mod zeroed;
 
 /// Radiance's intersection tolerance (`FTINY` in a double build).
 pub const FTINY: f64 = 1e-6;

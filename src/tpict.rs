@@ -230,7 +230,11 @@ struct Run<'a> {
 
 impl Run<'_> {
     /// One picture of the options' view, to `-o` (never clobbered) or standard output.
+    /// A Radiance picture is written as its rows are finished (to a temporary file beside
+    /// `-o`, or one that is copied to standard output at the end), so that a one-thread
+    /// render never holds the whole frame; nothing is written when the render fails.
     fn render_single(&self) -> Result<()> {
+        use crate::image::PictureFormat;
         let out = self.opts.run.output.as_deref();
         if let Some(o) = out {
             if Path::new(o).exists() {
@@ -238,11 +242,53 @@ impl Run<'_> {
             }
             crate::image::check_output_path(Path::new(o)).map_err(anyhow::Error::msg)?;
         }
-        let mut img = self.render_view(&self.opts.picture.view, 0)?;
-        img.header.commands.push(self.command_line.clone());
+        let view = &self.opts.picture.view;
         match out {
-            Some(o) => write_new_picture(Path::new(o), &img),
-            None => Ok(write_picture(None, &img)?),
+            Some(o) if PictureFormat::from_path(Path::new(o)) == PictureFormat::Hdr => {
+                let path = Path::new(o);
+                let mut failed = None;
+                let written = output::write_atomic_noclobber(path, |f| {
+                    let mut stream = Stream::new(std::io::BufWriter::new(f));
+                    match self.render_view(view, None, &mut stream) {
+                        Ok(()) => stream.finish()?.flush(),
+                        Err(e) => {
+                            failed = Some(e);
+                            Err(std::io::Error::other("render failed"))
+                        }
+                    }
+                });
+                if let Some(e) = failed {
+                    return Err(e);
+                }
+                written.with_context(|| format!("cannot write {}", path.display()))
+            }
+            Some(o) => {
+                let img = self.render_image(view, None)?;
+                write_new_picture(Path::new(o), &img)
+            }
+            None => {
+                // Spooled, so that a render that fails writes nothing.
+                let Ok(mut spool) = tempfile::tempfile() else {
+                    let img = self.render_image(view, None)?;
+                    return Ok(write_picture(None, &img)?);
+                };
+                let mut stream = Stream::new(std::io::BufWriter::new(&mut spool));
+                self.render_view(view, None, &mut stream)?;
+                stream
+                    .finish()
+                    .and_then(|mut w| w.flush())
+                    .context("cannot write the picture to a temporary file")?;
+                use std::io::Seek;
+                spool
+                    .rewind()
+                    .context("cannot read the picture's temporary file")?;
+                let stdout = std::io::stdout();
+                let mut lock = stdout.lock();
+                std::io::copy(&mut spool, &mut lock)
+                    .and_then(|_| lock.flush())
+                    .context("cannot write the picture to standard output")?;
+                Ok(())
+            }
         }
     }
 
@@ -280,10 +326,16 @@ impl Run<'_> {
 
     /// One frame of a sequence with its header.
     fn render_frame(&self, view: &View, n: u32) -> Result<Image> {
-        let mut img = self.render_view(view, n)?;
-        img.header.commands.push(self.command_line.clone());
-        img.header.frame = Some(n);
-        Ok(img)
+        self.render_image(view, Some(n))
+    }
+
+    /// One picture of `view` in memory; `frame`: its number in a sequence (`FRAME=`).
+    fn render_image(&self, view: &View, frame: Option<u32>) -> Result<Image> {
+        let mut collect = Collect(None);
+        self.render_view(view, frame, &mut collect)?;
+        collect
+            .0
+            .ok_or_else(|| anyhow!("the render produced no picture"))
     }
 
     /// One frame of a sequence to its own file, claimed first as rpict does: a frame whose
@@ -314,8 +366,16 @@ impl Run<'_> {
         Ok(())
     }
 
-    /// Render one view at the options' resolution into a picture with its header.
-    fn render_view(&self, view: &View, frame: u32) -> Result<Image> {
+    /// Render one view at the options' resolution into `out`: its header, then its rows
+    /// as they are finished. `frame`: the frame's number in a sequence (`FRAME=`; None: a
+    /// single picture, seeded as frame 0).
+    fn render_view(
+        &self,
+        view: &View,
+        numbered: Option<u32>,
+        out: &mut (dyn FrameOut + Send),
+    ) -> Result<()> {
+        let frame = numbered.unwrap_or(0);
         let (opts, session) = (self.opts, self.session);
         let vf = view.frame().map_err(|e| anyhow!("bad view: {e}"))?;
         let mut pa = opts.picture.pa;
@@ -336,6 +396,28 @@ impl Run<'_> {
         if budget.is_some() {
             fs.aa = *self.budget_aa.lock().unwrap_or_else(|e| e.into_inner());
         }
+        let mut header = Header {
+            software: Some(SOFTWARE.to_string()),
+            view: Some(view.to_radiance_string()),
+            pixaspect: if (0.995..=1.005).contains(&pa) {
+                None
+            } else {
+                Some(pa)
+            },
+            exposure: 1.0,
+            format: "32-bit_rle_rgbe".to_string(),
+            extra: session.ambient_header(),
+            commands: vec![self.command_line.clone()],
+            frame: numbered,
+            ..Header::default()
+        };
+        if let (Some(aa), true) = (fs.aa, session.cached_ambient().is_some()) {
+            // The frame's own -aa when it varies (-ax, -axg, -axt).
+            header
+                .extra
+                .push(("TESSERA_FRAME_AA".to_string(), format!(" {aa}")));
+        }
+        out.begin(header, x, y)?;
         let cpu0 = crate::runinfo::process_cpu_seconds();
         let progress = RenderProgress::default();
         let start = Instant::now();
@@ -345,8 +427,10 @@ impl Run<'_> {
             x1: x,
             y1: y,
         };
-        let pixels =
-            self.with_reports(&progress, start, || session.render(&fs, region, &progress))?;
+        self.with_reports(&progress, start, || {
+            session.render_rows(&fs, region, &progress, &mut |rows| out.rows(rows))
+        })?;
+        out.done()?;
         if let (Some(b), Some(aa), Some(c0), Some(c1)) =
             (budget, fs.aa, cpu0, crate::runinfo::process_cpu_seconds())
         {
@@ -370,33 +454,7 @@ impl Run<'_> {
                 wall_seconds: start.elapsed().as_secs_f64(),
             });
         }
-        let header = Header {
-            software: Some(SOFTWARE.to_string()),
-            view: Some(view.to_radiance_string()),
-            pixaspect: if (0.995..=1.005).contains(&pa) {
-                None
-            } else {
-                Some(pa)
-            },
-            exposure: 1.0,
-            format: "32-bit_rle_rgbe".to_string(),
-            extra: session.ambient_header(),
-            ..Header::default()
-        };
-        // The pixels move into the picture (no second buffer of the frame's size).
-        let mut img = Image {
-            width: x,
-            height: y,
-            pixels,
-            header,
-        };
-        if let (Some(aa), true) = (fs.aa, session.cached_ambient().is_some()) {
-            // The frame's own -aa when it varies (-ax, -axg, -axt).
-            img.header
-                .extra
-                .push(("TESSERA_FRAME_AA".to_string(), format!(" {aa}")));
-        }
-        Ok(img)
+        Ok(())
     }
 
     /// Run `render` while a progress bar (on a terminal) or `-t` reports show its progress.
@@ -456,6 +514,104 @@ impl Run<'_> {
             self.log.say(&report_line(progress, 100.0, start, ambient));
         }
         out
+    }
+}
+
+/// Where a frame's pixels go ([`Run::render_view`]): its header and size first, then its
+/// rows top first as the render finishes them.
+trait FrameOut {
+    /// The frame's header and size, before any row.
+    fn begin(&mut self, header: Header, width: usize, height: usize) -> Result<()>;
+    /// Finished rows (whole rows, top first).
+    fn rows(&mut self, rows: Vec<[f32; 3]>);
+    /// The render is over: the first error met while taking its rows, if any.
+    fn done(&mut self) -> Result<()>;
+}
+
+/// The frame as a picture in memory.
+struct Collect(Option<Image>);
+
+impl FrameOut for Collect {
+    fn begin(&mut self, header: Header, width: usize, height: usize) -> Result<()> {
+        self.0 = Some(Image {
+            width,
+            height,
+            pixels: Vec::new(),
+            header,
+        });
+        Ok(())
+    }
+
+    fn rows(&mut self, rows: Vec<[f32; 3]>) {
+        if let Some(img) = &mut self.0 {
+            if img.pixels.is_empty() {
+                // The pixels move into the picture (no second buffer of the frame's size).
+                img.pixels = rows;
+            } else {
+                img.pixels.extend_from_slice(&rows);
+            }
+        }
+    }
+
+    fn done(&mut self) -> Result<()> {
+        Ok(())
+    }
+}
+
+/// The frame written as a Radiance picture as its rows come.
+struct Stream<W: Write> {
+    w: Option<W>,
+    rows: Option<crate::image::hdr::HdrRows<W>>,
+    err: Option<std::io::Error>,
+}
+
+impl<W: Write> Stream<W> {
+    fn new(w: W) -> Self {
+        Stream {
+            w: Some(w),
+            rows: None,
+            err: None,
+        }
+    }
+
+    /// The writer, once the whole picture went through it.
+    fn finish(self) -> std::io::Result<W> {
+        if let Some(e) = self.err {
+            return Err(e);
+        }
+        match self.rows {
+            Some(r) => r.finish(),
+            None => Err(std::io::Error::other("no picture was rendered")),
+        }
+    }
+}
+
+impl<W: Write> FrameOut for Stream<W> {
+    fn begin(&mut self, header: Header, width: usize, height: usize) -> Result<()> {
+        let w = self
+            .w
+            .take()
+            .ok_or_else(|| anyhow!("a second picture into one output"))?;
+        self.rows = Some(crate::image::hdr::HdrRows::new(w, &header, width, height)?);
+        Ok(())
+    }
+
+    fn rows(&mut self, rows: Vec<[f32; 3]>) {
+        if self.err.is_some() {
+            return;
+        }
+        if let Some(r) = &mut self.rows {
+            if let Err(e) = r.rows(&rows) {
+                self.err = Some(e);
+            }
+        }
+    }
+
+    fn done(&mut self) -> Result<()> {
+        match self.err.take() {
+            Some(e) => Err(anyhow!("cannot write the picture: {e}")),
+            None => Ok(()),
+        }
     }
 }
 

@@ -294,6 +294,73 @@ fn expression_errors_stop_with_a_message() {
     );
 }
 
+/// A one-thread render hands its rows to the output as it goes (through a temporary file):
+/// the same picture on standard output and in `-o`, the same pixels as on two threads, and
+/// nothing at all, on standard output or in `-o`, when the render stops on an error.
+#[test]
+fn one_thread_pictures_stream_and_fail_cleanly() {
+    let t = workdir();
+    for ps in ["1", "4"] {
+        let run = |n: &str, extra: &[&str]| {
+            let mut c = tpict_in(t.path());
+            c.args([
+                "-vf", "room.vf", "-x", "64", "-y", "48", "-ab", "0", "-ps", ps,
+            ])
+            .args(["-n", n])
+            .args(extra)
+            .arg("room.rad");
+            let o = output(&mut c);
+            assert!(
+                o.status.success(),
+                "{c:?}: {}",
+                String::from_utf8_lossy(&o.stderr)
+            );
+            o.stdout
+        };
+        let one = run("1", &[]);
+        let pic = read_picture_bytes(&one);
+        assert!(
+            pic.pixels.iter().any(|p| largest(*p) > 0.0),
+            "-ps {ps}: a black picture"
+        );
+        assert_eq!(after_header(&one), after_header(&run("2", &[])), "-ps {ps}");
+        let _ = std::fs::remove_file(t.path().join("o.hdr"));
+        run("1", &["-o", "o.hdr"]);
+        let file = std::fs::read(t.path().join("o.hdr")).unwrap();
+        assert_eq!(after_header(&file), after_header(&one), "-ps {ps}");
+    }
+    let floor = "\npat plastic red\n0\n0\n5 .5 .5 .5 0 0\n\
+                 red polygon floor\n0\n0\n12 -9 -9 0 9 -9 0 9 9 0 -9 9 0\n";
+    std::fs::write(
+        t.path().join("bad.rad"),
+        format!("{LAMP}\nvoid brightfunc pat\n2 Px*nosuchvar .\n0\n0\n{floor}"),
+    )
+    .unwrap();
+    for out in [None, Some("bad.hdr")] {
+        let mut c = tpict_in(t.path());
+        c.args(SMALL).args(["-n", "1"]);
+        if let Some(o) = out {
+            c.args(["-o", o]);
+        }
+        let o = output(c.arg("bad.rad"));
+        assert!(!o.status.success());
+        assert!(o.stdout.is_empty(), "{} bytes written", o.stdout.len());
+        let left: Vec<_> = std::fs::read_dir(t.path())
+            .unwrap()
+            .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+            .filter(|n| n.contains("bad.hdr"))
+            .collect();
+        assert!(left.is_empty(), "leftover output files {left:?}");
+    }
+}
+
+/// A picture from its bytes.
+fn read_picture_bytes(bytes: &[u8]) -> Image {
+    let t = tempfile::NamedTempFile::new().unwrap();
+    std::fs::write(t.path(), bytes).unwrap();
+    read_picture(t.path()).unwrap()
+}
+
 // ---------------------------------------------------------------------------------------
 // Inline commands
 

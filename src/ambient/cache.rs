@@ -275,7 +275,7 @@ pub struct AmbientCache {
     /// Per level, a bit per hash of a cell's coordinates, set when a value is filed in a
     /// cell of that hash: a lookup skips a level whose bit is clear without taking a lock
     /// or reading the grid (most levels hold nothing near a given point).
-    occupied: Vec<AtomicU64>,
+    occupied: Box<[AtomicU64]>,
     origin_id: u64,
     max_level_seen: AtomicU32,
     sink: OnceLock<Box<dyn ValueSink>>,
@@ -307,9 +307,7 @@ impl AmbientCache {
             aa,
             shards: Sharded::new(SHARDS, Grid::default),
             levels_used: AtomicU64::new(0),
-            occupied: (0..MAX_LEVELS as usize * OCCUPIED_WORDS)
-                .map(|_| AtomicU64::new(0))
-                .collect(),
+            occupied: crate::zeroed::atomic_u64s(MAX_LEVELS as usize * OCCUPIED_WORDS),
             origin_id,
             max_level_seen: AtomicU32::new(0),
             sink: OnceLock::new(),

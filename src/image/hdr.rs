@@ -65,7 +65,12 @@ fn one_line(s: &str) -> String {
 
 /// The complete header and resolution line `write_hdr` writes for `img`.
 pub fn header_bytes(img: &Image) -> Vec<u8> {
-    let h = &img.header;
+    header_bytes_for(&img.header, img.width, img.height)
+}
+
+/// The header `h` and the resolution line of a `width` × `height` picture, as
+/// [`header_bytes`].
+pub fn header_bytes_for(h: &Header, width: usize, height: usize) -> Vec<u8> {
     let xyze = h.is_xyze();
     let mut s = String::with_capacity(512);
     s.push_str("#?RADIANCE\n");
@@ -112,7 +117,7 @@ pub fn header_bytes(img: &Image) -> Vec<u8> {
         "FORMAT={}\n\n",
         if xyze { FORMAT_XYZE } else { FORMAT_RGBE }
     ));
-    s.push_str(&format!("-Y {:8} +X {:8}\n", img.height, img.width));
+    s.push_str(&format!("-Y {height:8} +X {width:8}\n"));
     s.into_bytes()
 }
 
@@ -122,29 +127,92 @@ pub fn header_bytes(img: &Image) -> Vec<u8> {
 /// memory stays bounded; the bytes do not depend on the thread count. Writes in large blocks,
 /// so `w` need not be buffered.
 pub fn write_hdr<W: Write>(w: &mut W, img: &Image) -> io::Result<()> {
-    use rayon::prelude::*;
     super::check_writable(img).map_err(|msg| io::Error::new(io::ErrorKind::InvalidInput, msg))?;
-    w.write_all(&header_bytes(img))?;
-    // Rows per parallel task (about 64K pixels) and per batch written out at once.
-    let block = (65536 / img.width).clamp(1, img.height);
-    let batch = block * 4 * rayon::current_num_threads().max(1);
-    for rows in img.pixels.chunks(batch * img.width) {
-        let encoded: Vec<Vec<u8>> = rows
-            .par_chunks(block * img.width)
-            .map(|blk| {
-                let mut out = Vec::with_capacity(blk.len() * 4 + 64);
-                let mut comp: [Vec<u8>; 4] = std::array::from_fn(|_| Vec::with_capacity(img.width));
-                for row in blk.chunks_exact(img.width) {
-                    encode_row(row, &mut out, &mut comp);
-                }
-                out
-            })
-            .collect();
-        for e in &encoded {
-            w.write_all(e)?;
+    let mut rows = HdrRows::new(w, &img.header, img.width, img.height)?;
+    rows.rows(&img.pixels)?;
+    rows.finish().map(drop)
+}
+
+/// A Radiance RGBE picture written a block of rows at a time, as a render finishes them:
+/// the header and resolution line first ([`HdrRows::new`]), then the rows top first
+/// ([`HdrRows::rows`]); the bytes are those [`write_hdr`] writes for the whole picture.
+pub struct HdrRows<W: Write> {
+    w: W,
+    width: usize,
+    /// Rows still to come.
+    left: usize,
+}
+
+impl<W: Write> HdrRows<W> {
+    /// Write the header `h` of a `width` × `height` picture to `w`. Fails with `InvalidInput`
+    /// for an empty size.
+    pub fn new(mut w: W, h: &Header, width: usize, height: usize) -> io::Result<Self> {
+        if width == 0 || height == 0 || width.checked_mul(height).is_none() {
+            return Err(io::Error::new(
+                io::ErrorKind::InvalidInput,
+                format!("cannot write an empty {width}x{height} picture"),
+            ));
         }
+        w.write_all(&header_bytes_for(h, width, height))?;
+        Ok(HdrRows {
+            w,
+            width,
+            left: height,
+        })
     }
-    Ok(())
+
+    /// Write whole rows (`width` pixels each, top first). Large blocks are encoded on
+    /// several threads (rayon) in batches, so memory stays bounded; the bytes do not depend
+    /// on the thread count. Fails with `InvalidInput` for a partial row or rows beyond the
+    /// picture's height.
+    pub fn rows(&mut self, pixels: &[[f32; 3]]) -> io::Result<()> {
+        use rayon::prelude::*;
+        let width = self.width;
+        let n = pixels.len() / width;
+        if !pixels.len().is_multiple_of(width) || n > self.left {
+            return Err(io::Error::new(
+                io::ErrorKind::InvalidInput,
+                format!(
+                    "{} pixels are not whole rows of {width} within the {} rows left",
+                    pixels.len(),
+                    self.left
+                ),
+            ));
+        }
+        self.left -= n;
+        // Rows per parallel task (about 64K pixels) and per batch written out at once.
+        let block = (65536 / width).clamp(1, n.max(1));
+        let batch = block * 4 * rayon::current_num_threads().max(1);
+        for rows in pixels.chunks(batch * width) {
+            let encoded: Vec<Vec<u8>> = rows
+                .par_chunks(block * width)
+                .map(|blk| {
+                    let mut out = Vec::with_capacity(blk.len() * 4 + 64);
+                    let mut comp: [Vec<u8>; 4] = std::array::from_fn(|_| Vec::with_capacity(width));
+                    for row in blk.chunks_exact(width) {
+                        encode_row(row, &mut out, &mut comp);
+                    }
+                    out
+                })
+                .collect();
+            for e in &encoded {
+                self.w.write_all(e)?;
+            }
+        }
+        Ok(())
+    }
+
+    /// The writer, once every row was written; fails with `InvalidInput` while rows are
+    /// missing.
+    pub fn finish(self) -> io::Result<W> {
+        if self.left > 0 {
+            return Err(io::Error::new(
+                io::ErrorKind::InvalidInput,
+                format!("the picture lacks its last {} rows", self.left),
+            ));
+        }
+        Ok(self.w)
+    }
 }
 
 /// Write `img` as an RGBE picture to `path`, atomically (see [`super::output::write_atomic`]).
@@ -471,6 +539,38 @@ pub fn read_hdr_file(path: &Path) -> Result<Image, ImageError> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn rows_written_in_blocks_give_the_whole_pictures_bytes() {
+        let (width, height) = (37, 11);
+        let img = Image {
+            width,
+            height,
+            pixels: (0..width * height)
+                .map(|i| [i as f32 * 0.01, (i % 7) as f32, 0.5])
+                .collect(),
+            header: Header {
+                commands: vec!["tpict -x 37".into()],
+                ..Header::default()
+            },
+        };
+        let mut whole = Vec::new();
+        write_hdr(&mut whole, &img).unwrap();
+        for block in [1, 2, 5, 11] {
+            let mut rows = HdrRows::new(Vec::new(), &img.header, width, height).unwrap();
+            for b in img.pixels.chunks(block * width) {
+                rows.rows(b).unwrap();
+            }
+            assert_eq!(rows.finish().unwrap(), whole, "blocks of {block} rows");
+        }
+        // A partial row, rows past the end, a missing row or an empty size: errors.
+        let mut rows = HdrRows::new(Vec::new(), &img.header, width, height).unwrap();
+        assert!(rows.rows(&img.pixels[..width + 1]).is_err());
+        assert!(rows.rows(&img.pixels[..width * 10]).is_ok());
+        assert!(rows.rows(&img.pixels[..width * 2]).is_err());
+        assert!(rows.finish().is_err());
+        assert!(HdrRows::new(Vec::new(), &img.header, 0, 5).is_err());
+    }
 
     #[test]
     fn c_exp_formats_like_printf() {

@@ -24,10 +24,11 @@
 //! The grid lives in a direct-mapped table of 2^[`SLOTS_LOG2`] slots ([`VisTable`]) that
 //! the render threads of one calculation share: a process holds one table however many
 //! threads render (a worker's tile loops, `tpict -n`), and a cube one thread learnt
-//! answers the others. A slot is two words (16 bytes: the cube's tag and counts, and its
-//! mean transmission) updated with relaxed atomic loads and stores, no locks: two threads
-//! updating one slot at once may lose one shadow ray's answer from the running mean, which
-//! a single store writes whole (so a reader always gets a mean of answers the cube saw). A
+//! answers the others. A slot is one word (8 bytes: part of the cube's tag, its counts and
+//! its mean transmission) updated with relaxed atomic loads and stores, no locks: two
+//! threads updating one slot at once may lose one shadow ray's answer from the running
+//! mean, which a single store writes whole with its tag (so a reader always gets a mean of
+//! answers the cube saw). A
 //! cube whose slot another cube takes over starts
 //! afresh. `ttrace`'s per-ray epochs ([`new_epoch`]) use a private table per thread instead,
 //! so that no other thread's rays can evict a ray's cubes and its values stay the same
@@ -47,7 +48,7 @@ pub const TRUST: u16 = 8;
 /// A trusted cube still traces every `RECHECK`-th query it answers.
 pub const RECHECK: u16 = 8;
 
-/// Slots of a table (a power of two; 16 bytes each, so 1 MiB). The table is direct-mapped:
+/// Slots of a table (a power of two; 8 bytes each, so 512 KiB). The table is direct-mapped:
 /// a cube whose slot another cube takes starts afresh. 2^16 rather than 2^18: the same
 /// pictures within their noise (means within 0.02% on the three scenes of
 /// `bench/realscenes.sh`), the same CPU within the runs' spread and a quarter of the memory.
@@ -114,60 +115,83 @@ fn floor_i64(x: f64) -> i64 {
     }
 }
 
-/// A table of cubes: per slot, two words.
-/// - word 0: the low 32 bits of the cube's tag ([`VisQuery::tag`]; the slot's index is the
-///   tag's top bits, so two cubes share a slot unnoticed only when 48 bits of their tags
-///   agree), the shadow rays traced (16 bits), the answers given since the last check
-///   (8 bits, used modulo [`RECHECK`]) and [`LIT`] | [`DARK`] (8 bits);
-/// - word 1: the running mean of the traced transmissions, three non-negative numbers of
-///   21 bits each ([`pack_mean`]: an `f32` without its sign and its 10 lowest mantissa
-///   bits, rounded to nearest; a relative error of at most 2⁻¹⁴).
+/// A table of cubes: per slot, one word.
+/// - bits 0–15: the low 16 bits of the cube's tag ([`VisQuery::tag`]; the slot's index is
+///   the tag's top bits, so two cubes share a slot unnoticed only when 32 bits of their tags
+///   agree);
+/// - bits 16–20: the shadow rays traced, up to 31 (past that the mean weighs the last ones
+///   most, as a running average of 31);
+/// - bits 21–23: the answers given since the last check (modulo [`RECHECK`]);
+/// - bits 24–25: [`LIT`] | [`DARK`];
+/// - bits 26–63: the running mean of the traced transmissions ([`pack_mean`]: an exponent
+///   shared by the three numbers and a 10-bit mantissa each, as a Radiance picture's
+///   pixels, rounded to nearest: within 2⁻¹⁰ of the largest of the three).
 ///
-/// A fresh slot's state is that of an empty one (all zero), so tag 0 needs no meaning of its
-/// own.
+/// One word, so that a slot is read and written whole (its tag and its mean always belong
+/// together) in 8 bytes; a fresh slot's state is that of an empty one (all zero), so tag 0
+/// needs no meaning of its own.
 pub struct VisTable {
-    slots: Box<[[AtomicU64; 2]]>,
+    slots: Box<[AtomicU64]>,
 }
 
 /// A shadow ray of the cube reached the source.
 const LIT: u64 = 1;
 /// A shadow ray of the cube was blocked.
 const DARK: u64 = 2;
+/// The most shadow rays a slot counts.
+const MAX_TRACED: u64 = 31;
+/// Where the mean starts in a slot's word.
+const MEAN_SHIFT: u32 = 26;
 
 impl Default for VisTable {
     fn default() -> Self {
         VisTable {
             slots: (0..1usize << SLOTS_LOG2)
-                .map(|_| Default::default())
+                .map(|_| AtomicU64::new(0))
                 .collect(),
         }
     }
 }
 
-/// Three non-negative finite `f32` in one word, 21 bits each: the exponent and the 13 top
-/// mantissa bits, rounded to nearest (a negative or NaN number is stored as 0, one too
-/// large for 21 bits as the largest).
+/// Three non-negative finite numbers in 38 bits: a biased exponent `e` (8 bits, 0 for
+/// zero) shared by the three, so that the largest lies in [2^(e−127), 2^(e−126)), and a
+/// 10-bit mantissa each, `x · 2^(136−e)` rounded to nearest (a negative or NaN number is
+/// stored as 0; anything above 2^125 as 2^125).
 fn pack_mean(m: [f32; 3]) -> u64 {
-    let one = |x: f32| -> u64 {
-        if x.is_nan() || x <= 0.0 {
-            return 0;
-        }
-        let b = u64::from(x.to_bits());
-        ((b + (1 << 9)) >> 10).min((1 << 21) - 1)
+    let m = m.map(|x| if x > 0.0 { x.min(2f32.powi(125)) } else { 0.0 });
+    let largest = m[0].max(m[1]).max(m[2]);
+    let mut e = u64::from((largest.to_bits() >> 23) & 0xFF);
+    if e < 10 {
+        return 0; // below 2^-117: no transmission
+    }
+    let scaled = |e: u64| -> [u64; 3] {
+        // 2^(136 - e) as an f32: biased exponent 263 - e (e <= 253).
+        let f = f32::from_bits(((263 - e) as u32) << 23);
+        m.map(|x| (x * f).round() as u64)
     };
-    one(m[0]) | one(m[1]) << 21 | one(m[2]) << 42
+    let mut q = scaled(e);
+    if q.iter().any(|&v| v > 1023) {
+        e += 1;
+        q = scaled(e);
+    }
+    e | q[0] << 8 | q[1] << 18 | q[2] << 28
 }
 
 /// The three numbers of [`pack_mean`].
 fn unpack_mean(w: u64) -> [f32; 3] {
-    let one = |k: u32| f32::from_bits((((w >> (21 * k)) & ((1 << 21) - 1)) << 10) as u32);
-    [one(0), one(1), one(2)]
+    let e = w & 0xFF;
+    if e < 10 {
+        return [0.0; 3];
+    }
+    // 2^(e - 136) as an f32: biased exponent e - 9.
+    let f = f32::from_bits(((e - 9) as u32) << 23);
+    [8, 18, 28].map(|s| ((w >> s) & 0x3FF) as f32 * f)
 }
 
 impl VisTable {
     /// The slot of `tag`: the tag's top bits.
     #[inline]
-    fn slot(&self, tag: u64) -> &[AtomicU64; 2] {
+    fn slot(&self, tag: u64) -> &AtomicU64 {
         &self.slots[(tag >> (64 - SLOTS_LOG2)) as usize]
     }
 
@@ -175,37 +199,47 @@ impl VisTable {
     /// `trace()`, whose answer the cube learns; and whether a ray was traced.
     fn query(&self, tag: u64, trace: impl FnOnce() -> Color) -> (Color, bool) {
         let slot = self.slot(tag);
-        let low = tag & 0xFFFF_FFFF;
-        let w = slot[0].load(Relaxed);
-        let (traced, mut uses, seen) = if w & 0xFFFF_FFFF == low {
-            ((w >> 32) & 0xFFFF, (w >> 48) & 0xFF, w >> 56)
+        let low = tag & 0xFFFF;
+        let w = slot.load(Relaxed);
+        let (traced, mut uses, seen, mean) = if w & 0xFFFF == low {
+            (
+                (w >> 16) & 0x1F,
+                (w >> 21) & 0x7,
+                (w >> 24) & 0x3,
+                w >> MEAN_SHIFT,
+            )
         } else {
-            (0, 0, 0)
+            (0, 0, 0, 0)
         };
-        let mean = || unpack_mean(slot[1].load(Relaxed));
-        let pack = |traced: u64, uses: u64, seen: u64| low | traced << 32 | uses << 48 | seen << 56;
+        let word = |traced: u64, uses: u64, seen: u64, mean: u64| {
+            low | traced << 16 | uses << 21 | seen << 24 | mean << MEAN_SHIFT
+        };
         if traced >= u64::from(TRUST) && seen != LIT | DARK {
-            uses = (uses + 1) & 0xFF;
-            if uses % u64::from(RECHECK) != 0 {
-                slot[0].store(pack(traced, uses, seen), Relaxed);
-                let m = mean();
+            uses = (uses + 1) % u64::from(RECHECK);
+            if uses != 0 {
+                slot.store(word(traced, uses, seen, mean), Relaxed);
+                let m = unpack_mean(mean);
                 return (Color::new(m[0] as f64, m[1] as f64, m[2] as f64), false);
             }
         }
         let t = trace();
         let seen = seen | if bright(t) > 0.0 { LIT } else { DARK };
-        let mut traced = traced;
-        if traced < 0xFFFF && t.is_finite() {
-            traced += 1;
-            let old = if traced == 1 { [0.0; 3] } else { mean() };
+        let (mut traced, mut mean) = (traced, mean);
+        if t.is_finite() {
+            traced = (traced + 1).min(MAX_TRACED);
+            let old = if traced == 1 {
+                [0.0; 3]
+            } else {
+                unpack_mean(mean)
+            };
             let n = traced as f32;
             let m: [f32; 3] = std::array::from_fn(|i| {
                 let v = t.to_array()[i] as f32;
                 old[i] + (v - old[i]) / n
             });
-            slot[1].store(pack_mean(m), Relaxed);
+            mean = pack_mean(m);
         }
-        slot[0].store(pack(traced, uses, seen), Relaxed);
+        slot.store(word(traced, uses, seen, mean), Relaxed);
         (t, true)
     }
 }
@@ -232,7 +266,7 @@ pub fn new_epoch(epoch: u64) {
 }
 
 /// Bring in the slot of the shared table that [`shadow`] will read for `q` toward `src` (the
-/// slots are spread over 1 MiB, so a query's first read is usually a cache miss); nothing
+/// slots are spread over 512 KiB, so a query's first read is usually a cache miss); nothing
 /// in an epoch, whose queries go to the thread's private table.
 pub fn prefetch(shared: &VisTable, q: &VisQuery, src: usize) {
     if EPOCH.with(|e| e.get()) == 0 {
@@ -296,9 +330,9 @@ mod tests {
                 traced += 1;
                 Color::splat(0.8)
             });
-            // The mean is kept in 21-bit floats.
+            // The mean is kept in 10-bit mantissas.
             assert!(
-                (c - Color::splat(0.8)).abs().max_element() < 1e-4,
+                (c - Color::splat(0.8)).abs().max_element() < 1e-3,
                 "query {i}"
             );
             assert_eq!(
@@ -319,18 +353,20 @@ mod tests {
     }
 
     #[test]
-    fn means_pack_into_one_word() {
+    fn means_pack_into_38_bits() {
         for v in [0.0f32, 1e-30, 0.2, 0.25, 0.8, 0.86, 1.0, 3.5, 1e6] {
-            let m = unpack_mean(pack_mean([v, v * 0.5, 1.0 - v.min(1.0)]));
-            for (got, want) in m.iter().zip([v, v * 0.5, 1.0 - v.min(1.0)]) {
-                assert!(
-                    (got - want).abs() <= want * 2f32.powi(-14),
-                    "{got} vs {want}"
-                );
+            let want = [v, v * 0.5, 1.0 - v.min(1.0)];
+            let w = pack_mean(want);
+            assert_eq!(w >> 38, 0, "{w:x}");
+            let got = unpack_mean(w);
+            let largest = want.iter().fold(0f32, |a, &b| a.max(b));
+            for (g, x) in got.iter().zip(want) {
+                assert!((g - x).abs() <= largest * 2f32.powi(-10), "{g} vs {x}");
             }
         }
-        // Exact where 13 mantissa bits hold the number; the fields stay apart.
+        // Exact where 10 bits hold the numbers; the fields stay apart.
         assert_eq!(unpack_mean(pack_mean([0.5, 0.25, 1.0])), [0.5, 0.25, 1.0]);
+        assert_eq!(unpack_mean(pack_mean([1.0, 0.0, 1.0])), [1.0, 0.0, 1.0]);
         assert_eq!(
             unpack_mean(pack_mean([-1.0, f32::NAN, 0.0])),
             [0.0, 0.0, 0.0]
@@ -338,6 +374,26 @@ mod tests {
         // Rounding to nearest, not down: the mean of many answers of 1 stays 1.
         let below_one = f32::from_bits(1.0f32.to_bits() - 1);
         assert_eq!(unpack_mean(pack_mean([below_one; 3])), [1.0; 3]);
+        assert_eq!(unpack_mean(pack_mean([0.9996; 3])), [1.0; 3]);
+        // Huge or infinite numbers saturate, never wrap.
+        let big = unpack_mean(pack_mean([f32::INFINITY, 1.0, 0.0]));
+        assert_eq!(big[0], 2f32.powi(125));
+    }
+
+    #[test]
+    fn a_slot_counts_to_31_and_keeps_a_running_mean() {
+        let table = VisTable::default();
+        let p = DVec3::new(2.5, 0.5, 0.5);
+        // 300 queries of a cube whose rays all pass 0.5: trusted after TRUST, then traced
+        // every RECHECK-th (8 + 292 / 8 = 44 rays), and the counter stops at 31 without
+        // spilling into the other fields.
+        for _ in 0..300 {
+            shadow(Some(&table), &q(4, p), 1, || Color::splat(0.5));
+        }
+        let w = table.slot(q(4, p).tag(1)).load(Relaxed);
+        assert_eq!((w >> 16) & 0x1F, MAX_TRACED);
+        assert_eq!((w >> 24) & 0x3, LIT);
+        assert_eq!(unpack_mean(w >> MEAN_SHIFT), [0.5; 3]);
     }
 
     #[test]

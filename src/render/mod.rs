@@ -12,5 +12,5 @@ pub mod srcdraw;
 pub mod trace;
 pub mod world;
 
-pub use picture::{cell_size, render_region, FrameSetup, RenderProgress};
+pub use picture::{cell_size, render_region, render_region_rows, FrameSetup, RenderProgress};
 pub use trace::Tracer;

@@ -214,8 +214,49 @@ fn bigdiff(a: &Sample, b: &Sample, pt: f64) -> bool {
 }
 
 /// Render the pixels of the region `[x0, x1) × [y0, y1)` of the full picture (y counted from
-/// the top), returned row by row from the top. Uses the current rayon pool.
+/// the top), returned row by row from the top. Uses the current rayon pool: on one thread
+/// the bands in reading order ([`super::splitting::render_region_rows`]), on more the
+/// schedule of [`super::schedule`].
 pub fn render_region(
+    tr: &Tracer,
+    fs: &FrameSetup,
+    x0: usize,
+    y0: usize,
+    x1: usize,
+    y1: usize,
+    progress: &RenderProgress,
+) -> Vec<[f32; 3]> {
+    let mut out = Vec::new();
+    render_region_rows(tr, fs, (x0, y0, x1, y1), progress, &mut |rows| {
+        if out.is_empty() {
+            out = rows;
+        } else {
+            out.extend_from_slice(&rows);
+        }
+    });
+    out.resize(x1.saturating_sub(x0) * y1.saturating_sub(y0), [0f32; 3]);
+    out
+}
+
+/// [`render_region`], its rows handed to `sink` top first as they are finished: on one
+/// thread a band at a time (so a frame's pixels are never all held at once), on more the
+/// whole region at once.
+pub fn render_region_rows(
+    tr: &Tracer,
+    fs: &FrameSetup,
+    (x0, y0, x1, y1): (usize, usize, usize, usize),
+    progress: &RenderProgress,
+    sink: &mut dyn FnMut(Vec<[f32; 3]>),
+) {
+    if rayon::current_num_threads() <= 1 {
+        super::splitting::render_region_rows(tr, fs, (x0, y0, x1, y1), progress, sink);
+    } else {
+        sink(render_parallel(tr, fs, x0, y0, x1, y1, progress));
+    }
+}
+
+/// [`render_region`] on several threads.
+fn render_parallel(
     tr: &Tracer,
     fs: &FrameSetup,
     x0: usize,

@@ -17,9 +17,10 @@
 //!   which the second is under half full, and the odd bands again): threads wait only when
 //!   every band left is an odd band whose neighbours are still running.
 //!
-//! On one thread both keep the order of a single-thread render (reading order; the even
-//! bands, then the odd ones), so one-thread pictures do not depend on this module, with
-//! indirect light too. A pixel's value never depends on the job it falls in.
+//! A render on one thread does not come here: it renders its bands in reading order, one at
+//! a time, with the overture just ahead of them ([`super::splitting::render_region_rows`]),
+//! and hands each band's rows on as it finishes them. A pixel's value never depends on the
+//! job it falls in.
 
 use std::sync::{Condvar, Mutex};
 

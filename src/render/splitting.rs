@@ -10,6 +10,7 @@
 //! those [`super::render_region`] gives (with indirect light, up to the order in which
 //! ambient values are made: the overture runs band by band here, just ahead of the bands).
 
+use super::lightcells::FrameSources;
 use super::picture::{
     cell_size, draw_sources, frame_sources, overture, overture_rows, render_cell, sample_pixel,
     to_f32, CellEdges, CellScratch, FrameSetup, RenderProgress, Sample,
@@ -70,6 +71,9 @@ impl SplitPoint {
     }
 }
 
+/// Asked before each cell where a render stands; what it returns is given away.
+pub type SplitHook<'a> = dyn FnMut(&SplitPoint) -> Option<Cut> + 'a;
+
 /// What a hook gives away.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Cut {
@@ -88,7 +92,7 @@ pub fn render_region_split(
     fs: &FrameSetup,
     (x0, y0, x1, y1): (usize, usize, usize, usize),
     progress: &RenderProgress,
-    hook: &mut dyn FnMut(&SplitPoint) -> Option<Cut>,
+    hook: &mut SplitHook<'_>,
 ) -> Vec<[f32; 3]> {
     let w = x1.saturating_sub(x0);
     let h = y1.saturating_sub(y0);
@@ -96,6 +100,70 @@ pub fn render_region_split(
     if w == 0 || h == 0 {
         return out;
     }
+    let frame_src = frame_sources(tr, fs, cell_size(fs.ps));
+    let region = (x0, y0, x1, y1);
+    in_order(
+        tr,
+        fs,
+        region,
+        &frame_src,
+        progress,
+        Some(hook),
+        &mut |by0, band| {
+            let at = (by0 - y0) * w;
+            out[at..at + band.len()].copy_from_slice(band);
+        },
+    );
+    // Over the whole region, the parts given away included (their pieces draw them too).
+    draw_sources(tr, fs, &frame_src, (x0, y0, x1, y1), &mut out, progress);
+    out
+}
+
+/// Render `[x0, x1) × [y0, y1)` on the calling thread in reading order, handing each band's
+/// finished rows to `sink` (top band first, `w · rows` pixels each, small light sources
+/// drawn): the pixels of [`super::render_region`], with only one band's held at a time.
+pub fn render_region_rows(
+    tr: &Tracer,
+    fs: &FrameSetup,
+    (x0, y0, x1, y1): (usize, usize, usize, usize),
+    progress: &RenderProgress,
+    sink: &mut dyn FnMut(Vec<[f32; 3]>),
+) {
+    if x1 <= x0 || y1 <= y0 {
+        return;
+    }
+    let frame_src = frame_sources(tr, fs, cell_size(fs.ps));
+    let region = (x0, y0, x1, y1);
+    in_order(
+        tr,
+        fs,
+        region,
+        &frame_src,
+        progress,
+        None,
+        &mut |by0, band| {
+            let mut rows = band.to_vec();
+            let by1 = by0 + band.len() / (x1 - x0);
+            draw_sources(tr, fs, &frame_src, (x0, by0, x1, by1), &mut rows, progress);
+            sink(rows);
+        },
+    );
+}
+
+/// The bands of `[x0, x1) × [y0, y1)` in reading order on the calling thread, each handed to
+/// `emit` (its first row, its `w · rows` pixels) when done; with `hook`, asked before each
+/// cell whether to give part of what is left away (the pixels given away stay zero, the
+/// bands below a row cut are not emitted).
+fn in_order(
+    tr: &Tracer,
+    fs: &FrameSetup,
+    (x0, y0, x1, y1): (usize, usize, usize, usize),
+    frame_src: &FrameSources,
+    progress: &RenderProgress,
+    mut hook: Option<&mut SplitHook<'_>>,
+    emit: &mut dyn FnMut(usize, &[[f32; 3]]),
+) {
+    let w = x1 - x0;
     let ps = cell_size(fs.ps);
     // The overture runs band by band just ahead of the picture's pass (its rows up to one
     // overture step below the band), so that what is given away has not been filled yet.
@@ -104,7 +172,6 @@ pub fn render_region_split(
     progress
         .rows_total
         .store(rows.len() + y1.div_ceil(ps) - y0 / ps, Ordering::Relaxed);
-    let frame_src = frame_sources(tr, fs, ps);
     let (mut xe, mut ye) = (x1, y1);
     let mut done = 0;
     let mut rays = 0;
@@ -116,6 +183,7 @@ pub fn render_region_split(
     let mut bottom: Vec<Option<Sample>> = vec![None; line_len];
     let mut left = Vec::new();
     let mut scratch = CellScratch::default();
+    let mut band = Vec::with_capacity(w * ps);
     let mut cy = y0 / ps;
     while cy * ps < ye && tr.scene.fatal_error().is_none() {
         let (by0, by1) = ((cy * ps).max(y0), ((cy + 1) * ps).min(ye));
@@ -126,26 +194,30 @@ pub fn render_region_split(
         overture(tr, fs, x0, xe, &rows[ov..ov + ahead], progress);
         ov += ahead;
         left.clear();
+        band.clear();
+        band.resize((by1 - by0) * w, [0f32; 3]);
         let mut cx = x0 / ps;
         while cx * ps < xe {
             let next_x = (cx * ps).max(x0);
-            let at = SplitPoint {
-                x0,
-                x1: xe,
-                y1: ye,
-                band: (by0, by1),
-                next_x,
-                cell: ps,
-                done,
-            };
-            match hook(&at) {
-                Some(Cut::Rows(k)) if k >= by1 && k < ye && k % ps == 0 => ye = k,
-                Some(Cut::Cols(q)) if q > next_x && q < xe && q % ps == 0 => xe = q,
-                _ => {}
+            if let Some(hook) = hook.as_mut() {
+                let at = SplitPoint {
+                    x0,
+                    x1: xe,
+                    y1: ye,
+                    band: (by0, by1),
+                    next_x,
+                    cell: ps,
+                    done,
+                };
+                match hook(&at) {
+                    Some(Cut::Rows(k)) if k >= by1 && k < ye && k % ps == 0 => ye = k,
+                    Some(Cut::Cols(q)) if q > next_x && q < xe && q % ps == 0 => xe = q,
+                    _ => {}
+                }
             }
             if ps == 1 {
                 let s = sample_pixel(tr, fs, cx, cy, &mut rays);
-                out[(cy - y0) * w + (cx - x0)] = to_f32(s.color);
+                band[cx - x0] = to_f32(s.color);
             } else {
                 let mut edges = CellEdges {
                     top: &mut top[cx * ps - lx0..],
@@ -162,7 +234,7 @@ pub fn render_region_split(
                     &mut rays,
                     &mut |x, y, c| {
                         if x >= x0 && x < xe && y >= by0 && y < by1 {
-                            out[(y - y0) * w + (x - x0)] = to_f32(c);
+                            band[(y - by0) * w + (x - x0)] = to_f32(c);
                         }
                     },
                 );
@@ -177,8 +249,9 @@ pub fn render_region_split(
             .rays
             .fetch_add(std::mem::take(&mut rays), Ordering::Relaxed);
         progress.rows_done.fetch_add(1, Ordering::Relaxed);
+        if tr.scene.fatal_error().is_none() {
+            emit(by0, &band);
+        }
         cy += 1;
     }
-    draw_sources(tr, fs, &frame_src, (x0, y0, x1, y1), &mut out, progress);
-    out
 }

@@ -22,7 +22,7 @@ use crate::light::LightSet;
 use crate::options::RenderParams;
 use crate::render::splitting::{render_region_split, Cut, SplitPoint};
 use crate::render::world::Scene;
-use crate::render::{render_region, FrameSetup, RenderProgress, Tracer};
+use crate::render::{render_region, render_region_rows, FrameSetup, RenderProgress, Tracer};
 use crate::runinfo::{process_origin_id, thread_count};
 use crate::scene::{read_scene_files, Primitive, ReadOptions};
 use anyhow::{Context, Result};
@@ -282,6 +282,29 @@ impl Session {
             anyhow::bail!("{e}");
         }
         Ok(pixels)
+    }
+
+    /// [`Session::render`], the rows handed to `sink` top first as they are finished (on
+    /// one thread a band at a time: [`crate::render::render_region_rows`]). Fails as
+    /// [`Session::render`] does; the rows already handed over are then not the whole region.
+    pub fn render_rows(
+        &self,
+        fs: &FrameSetup,
+        r: Region,
+        progress: &RenderProgress,
+        sink: &mut (dyn FnMut(Vec<[f32; 3]>) + Send),
+    ) -> Result<()> {
+        if let (Some(a), Some(aa)) = (&self.ambient, fs.aa) {
+            a.set_accuracy(aa);
+        }
+        let tracer = self.tracer();
+        self.pool.install(|| {
+            render_region_rows(&tracer, fs, (r.x0, r.y0, r.x1, r.y1), progress, &mut *sink)
+        });
+        if let Some(e) = self.scene.fatal_error() {
+            anyhow::bail!("{e}");
+        }
+        Ok(())
     }
 
     /// A pool of one thread, the calling one, for [`Session::render_here`]: each of a
