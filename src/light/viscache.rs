@@ -30,7 +30,9 @@
 //! mean, which a single store writes whole with its tag (so a reader always gets a mean of
 //! answers the cube saw). A
 //! cube whose slot another cube takes over starts
-//! afresh. `ttrace`'s per-ray epochs ([`new_epoch`]) use a private table per thread instead,
+//! afresh. `ttrace`'s per-ray epochs ([`new_epoch`]) read the shared table but learn in a
+//! private table per thread, whose answers go to the shared table in a fixed order
+//! ([`end_epoch`], [`learn`]) instead,
 //! so that no other thread's rays can evict a ray's cubes and its values stay the same
 //! whatever `-n`.
 
@@ -255,6 +257,8 @@ thread_local! {
     static PRIVATE: RefCell<Private> = RefCell::default();
     /// The current epoch of this thread's queries (0: none, the tags as they are).
     static EPOCH: std::cell::Cell<u64> = const { std::cell::Cell::new(0) };
+    /// The tags (as the shared table knows them) this epoch's queries asked for.
+    static TOUCHED: RefCell<Vec<u64>> = const { RefCell::new(Vec::new()) };
 }
 
 /// Start a new epoch of this thread's queries: no cube learnt before answers after (the tags
@@ -263,6 +267,56 @@ thread_local! {
 /// other, traced before; epoch 0 goes back to the shared table.
 pub fn new_epoch(epoch: u64) {
     EPOCH.with(|e| e.set(epoch));
+    TOUCHED.with(|t| t.borrow_mut().clear());
+}
+
+/// What this thread's current epoch learnt: for each cube and source its queries asked
+/// about, the tag the shared table knows it by and the slot's word as the epoch left it
+/// (in the order of the tags). The epoch ends (back to epoch 0, the shared table).
+///
+/// An epoch reads the shared table but never writes it: a cube it does not know yet starts
+/// from what the shared table knew when it began (`shadow`), and what it learns goes to
+/// the shared table only through [`learn`], which the caller runs for its epochs in a
+/// fixed order once they are all done. So `ttrace`'s rays share shadow answers across its
+/// waves while each ray's values depend only on the waves before it.
+pub fn end_epoch() -> Vec<(u64, u64)> {
+    let epoch = EPOCH.with(|e| e.replace(0));
+    let mut tags = TOUCHED.with(|t| std::mem::take(&mut *t.borrow_mut()));
+    if epoch == 0 {
+        return Vec::new();
+    }
+    tags.sort_unstable();
+    tags.dedup();
+    PRIVATE.with(|p| {
+        let Ok(p) = p.try_borrow() else {
+            return Vec::new();
+        };
+        let Some(table) = &p.table else {
+            return Vec::new();
+        };
+        tags.into_iter()
+            .filter_map(|tag| {
+                let mine = epoch_tag(tag, epoch);
+                let w = table.slot(mine).load(Relaxed);
+                (w & 0xFFFF == mine & 0xFFFF && (w >> 16) & 0x1F > 0).then_some((tag, w))
+            })
+            .collect()
+    })
+}
+
+/// Put what epochs learnt ([`end_epoch`]) into the shared table, in the order given: a
+/// cube's slot takes the state its last epoch left it in.
+pub fn learn(shared: &VisTable, learnt: &[(u64, u64)]) {
+    for &(tag, w) in learnt {
+        shared
+            .slot(tag)
+            .store((w & !0xFFFF) | (tag & 0xFFFF), Relaxed);
+    }
+}
+
+/// The tag of a query's `tag` in epoch `epoch` (never 0).
+fn epoch_tag(tag: u64, epoch: u64) -> u64 {
+    fx_mix(tag, epoch).max(1)
 }
 
 /// Bring in the slot of the shared table that [`shadow`] will read for `q` toward `src` (the
@@ -290,10 +344,11 @@ pub fn shadow(
             return t.query(q.tag(src), trace);
         }
     }
+    let shared_tag = q.tag(src);
     let tag = if epoch == 0 {
-        q.tag(src)
+        shared_tag
     } else {
-        fx_mix(q.tag(src), epoch).max(1)
+        epoch_tag(shared_tag, epoch)
     };
     PRIVATE.with(|p| {
         // A shadow ray never shades, so it never comes back here; if it ever did, the
@@ -305,10 +360,27 @@ pub fn shadow(
             p.owner = q.owner;
             p.table = Some(VisTable::default());
         }
-        match &p.table {
-            Some(t) => t.query(tag, trace),
-            None => (trace(), true),
+        let Some(t) = &p.table else {
+            return (trace(), true);
+        };
+        if epoch != 0 {
+            // A cube new to this epoch starts from what the shared table knew of it.
+            let slot = t.slot(tag);
+            if slot.load(Relaxed) & 0xFFFF != tag & 0xFFFF {
+                let w = shared.map_or(0, |s| s.slot(shared_tag).load(Relaxed));
+                let known = w & 0xFFFF == shared_tag & 0xFFFF && (w >> 16) & 0x1F > 0;
+                slot.store(
+                    if known {
+                        (w & !0xFFFF) | (tag & 0xFFFF)
+                    } else {
+                        0
+                    },
+                    Relaxed,
+                );
+                TOUCHED.with(|v| v.borrow_mut().push(shared_tag));
+            }
         }
+        t.query(tag, trace)
     })
 }
 
@@ -449,19 +521,41 @@ mod tests {
     }
 
     #[test]
-    fn epochs_use_a_private_table() {
+    fn epochs_read_the_shared_table_and_teach_it_only_through_learn() {
         let table = VisTable::default();
         let p = DVec3::new(4.5, 0.5, 0.5);
         for _ in 0..TRUST {
             shadow(Some(&table), &q(9, p), 0, || Color::ONE);
         }
-        // In an epoch, the shared table's trusted cube is not consulted.
+        // In an epoch, the shared table's trusted cube answers.
         new_epoch(77);
         let (_, did) = shadow(Some(&table), &q(9, p), 0, || Color::ONE);
-        new_epoch(0);
-        assert!(did);
-        let (_, did) = shadow(Some(&table), &q(9, p), 0, || Color::ONE);
         assert!(!did);
+        // A cube the epoch learns stays out of the shared table ...
+        let other = DVec3::new(-7.5, 0.5, 0.5);
+        for _ in 0..TRUST {
+            shadow(Some(&table), &q(9, other), 0, || Color::splat(0.5));
+        }
+        let (c, did) = shadow(Some(&table), &q(9, other), 0, || Color::ZERO);
+        assert!(!did);
+        assert_eq!(c, Color::splat(0.5));
+        let learnt = end_epoch();
+        assert_eq!(learnt.len(), 2, "{learnt:?}");
+        let (_, did) = shadow(Some(&table), &q(9, other), 0, || Color::ONE);
+        assert!(did, "an epoch wrote the shared table");
+        // ... until `learn` puts it there (the query above traced a ray the epoch did not
+        // see; learning overwrites the slot with the epoch's state).
+        learn(&table, &learnt);
+        let (c, did) = shadow(Some(&table), &q(9, other), 0, || Color::ZERO);
+        assert!(!did);
+        assert_eq!(c, Color::splat(0.5));
+        // Another epoch starts afresh where the shared table knows nothing, whatever an
+        // earlier epoch of this thread learnt privately.
+        new_epoch(78);
+        let fresh = DVec3::new(30.5, 0.5, 0.5);
+        let (_, did) = shadow(Some(&table), &q(9, fresh), 0, || Color::ONE);
+        assert!(did);
+        assert_eq!(end_epoch().len(), 1);
     }
 
     #[test]

@@ -21,7 +21,7 @@ use crate::options::rtrace::{parse_rtrace_args, Format, RtraceOptions, TraceComm
 use crate::render::picture::{irradiance, irradiance_at};
 use crate::render::ray::{Ray, NO_INST};
 use crate::render::sampler::Sampler;
-use crate::render::trace::Tracer;
+use crate::render::trace::{IndirectLight, Tracer};
 use crate::runinfo::SOFTWARE;
 use crate::scene::ReadOptions;
 use crate::session::{SceneSource, Session};
@@ -338,8 +338,9 @@ const STRIDE: usize = 64;
 /// Trace a batch of rays (the first is record `first`) on the session's threads, results in
 /// input order. With a cached ambient calculation the rays go in **waves** of 1, 2, 4, …
 /// up to [`MAX_WAVE`] rays (counted by `waves` across batches): every ray of a wave sees
-/// the values of the waves before it and its own (made privately, its shadow-reuse table
-/// in an epoch of its own), and the wave's values are filed in a fixed order when it ends.
+/// the values and shadow answers of the waves before it and its own (made privately, its
+/// shadow answers in an epoch of its own), and the wave's values and shadow answers go to
+/// the shared cache and table in a fixed order when it ends.
 /// No ray sees what another ray of its wave makes, so the values do not depend on the
 /// thread count (`-n`), only on the input. Rays of one wave would compute the same values
 /// side by side where they are neighbours, so the waves take the batch's rays [`STRIDE`]
@@ -372,7 +373,12 @@ fn trace_batch(
         let size = (1usize << (*waves).min(8)).min(MAX_WAVE);
         *waves = waves.saturating_add(1);
         let end = (start + size).min(n);
-        let made: Vec<(Traced, Vec<crate::ambient::cache::CachedValue>)> = session.install(|| {
+        type Made = (
+            Traced,
+            Vec<crate::ambient::cache::CachedValue>,
+            Vec<(u64, u64)>,
+        );
+        let made: Vec<Made> = session.install(|| {
             order[start..end]
                 .par_iter()
                 .with_max_len(1)
@@ -381,13 +387,16 @@ fn trace_batch(
                     crate::ambient::cache::begin_private();
                     crate::light::viscache::new_epoch(index.wrapping_add(1));
                     let t = trace_one(session, o, &rays[k], index);
-                    crate::light::viscache::new_epoch(0);
-                    (t, crate::ambient::cache::end_private())
+                    let shadows = crate::light::viscache::end_epoch();
+                    (t, crate::ambient::cache::end_private(), shadows)
                 })
                 .collect()
         });
-        for (&k, (t, values)) in order[start..end].iter().zip(made) {
+        for (&k, (t, values, shadows)) in order[start..end].iter().zip(made) {
             amb.cache.commit(values);
+            if let (false, Some(table)) = (shadows.is_empty(), amb.shadow_table()) {
+                crate::light::viscache::learn(table, &shadows);
+            }
             out[k] = Some(t);
         }
         start = end;
