@@ -215,7 +215,7 @@ fn bigdiff(a: &Sample, b: &Sample, pt: f64) -> bool {
 
 /// Render the pixels of the region `[x0, x1) × [y0, y1)` of the full picture (y counted from
 /// the top), returned row by row from the top. Uses the current rayon pool: on one thread
-/// the bands in reading order ([`super::splitting::render_region_rows`]), on more the
+/// the bands in reading order ([`super::splitting::in_order`]), on more the
 /// schedule of [`super::schedule`].
 pub fn render_region(
     tr: &Tracer,
@@ -248,10 +248,17 @@ pub fn render_region_rows(
     progress: &RenderProgress,
     sink: &mut dyn FnMut(Vec<[f32; 3]>),
 ) {
-    if rayon::current_num_threads() <= 1 {
-        super::splitting::render_region_rows(tr, fs, (x0, y0, x1, y1), progress, sink);
-    } else {
-        sink(render_parallel(tr, fs, x0, y0, x1, y1, progress));
+    if rayon::current_num_threads() > 1 {
+        sink(render_parallel(tr, fs, (x0, y0, x1, y1), progress));
+    } else if x1 > x0 && y1 > y0 {
+        // The bands in reading order, each drawn and handed on when done.
+        let region = (x0, y0, x1, y1);
+        super::splitting::in_order(tr, fs, region, progress, None, &mut |by0, band, src| {
+            let mut rows = band.to_vec();
+            let by1 = by0 + band.len() / (x1 - x0);
+            draw_sources(tr, fs, src, (x0, by0, x1, by1), &mut rows, progress);
+            sink(rows);
+        });
     }
 }
 
@@ -259,10 +266,7 @@ pub fn render_region_rows(
 fn render_parallel(
     tr: &Tracer,
     fs: &FrameSetup,
-    x0: usize,
-    y0: usize,
-    x1: usize,
-    y1: usize,
+    (x0, y0, x1, y1): (usize, usize, usize, usize),
     progress: &RenderProgress,
 ) -> Vec<[f32; 3]> {
     let w = x1.saturating_sub(x0);

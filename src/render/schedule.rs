@@ -18,7 +18,7 @@
 //!   every band left is an odd band whose neighbours are still running.
 //!
 //! A render on one thread does not come here: it renders its bands in reading order, one at
-//! a time, with the overture just ahead of them ([`super::splitting::render_region_rows`]),
+//! a time, with the overture just ahead of them ([`super::splitting::in_order`]),
 //! and hands each band's rows on as it finishes them. A pixel's value never depends on the
 //! job it falls in.
 

@@ -1,5 +1,7 @@
-//! A region rendered on one thread in reading order, whose unstarted part can be given away
-//! while it renders (the batch workers' tile splitting, `job::piece`).
+//! A region rendered on one thread in reading order ([`in_order`]): every one-thread render
+//! ([`super::render_region_rows`], which hands each band on as it is done), and a region
+//! whose unstarted part can be given away while it renders (the batch workers' tile
+//! splitting, `job::piece`).
 //!
 //! [`render_region_split`] renders the cells of the sampling grid band by band, top to bottom,
 //! each band's cells left to right, and before each cell asks a hook whether to cut: either
@@ -7,8 +9,9 @@
 //! a cell start right of the next cell, in the band in progress and every band below
 //! ([`Cut::Cols`]). What is cut is not rendered (its pixels stay zero). Every sample depends on
 //! its pixel alone and cells lie on the picture's grid, so the pixels rendered are exactly
-//! those [`super::render_region`] gives (with indirect light, up to the order in which
-//! ambient values are made: the overture runs band by band here, just ahead of the bands).
+//! those [`super::render_region`] gives (on one thread, where nothing is cut, the same
+//! render; on several, with indirect light, up to the order in which ambient values are
+//! made).
 
 use super::lightcells::FrameSources;
 use super::picture::{
@@ -17,6 +20,7 @@ use super::picture::{
 };
 use super::trace::Tracer;
 use std::sync::atomic::Ordering;
+use std::sync::Arc;
 
 /// Where a splittable render stands, before its next cell.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -100,71 +104,35 @@ pub fn render_region_split(
     if w == 0 || h == 0 {
         return out;
     }
-    let frame_src = frame_sources(tr, fs, cell_size(fs.ps));
-    let region = (x0, y0, x1, y1);
-    in_order(
-        tr,
-        fs,
-        region,
-        &frame_src,
-        progress,
-        Some(hook),
-        &mut |by0, band| {
-            let at = (by0 - y0) * w;
-            out[at..at + band.len()].copy_from_slice(band);
-        },
-    );
+    let emit = &mut |by0: usize, band: &[[f32; 3]], _: &FrameSources| {
+        let at = (by0 - y0) * w;
+        out[at..at + band.len()].copy_from_slice(band);
+    };
+    let src = in_order(tr, fs, (x0, y0, x1, y1), progress, Some(hook), emit);
     // Over the whole region, the parts given away included (their pieces draw them too).
-    draw_sources(tr, fs, &frame_src, (x0, y0, x1, y1), &mut out, progress);
+    draw_sources(tr, fs, &src, (x0, y0, x1, y1), &mut out, progress);
     out
 }
 
-/// Render `[x0, x1) × [y0, y1)` on the calling thread in reading order, handing each band's
-/// finished rows to `sink` (top band first, `w · rows` pixels each, small light sources
-/// drawn): the pixels of [`super::render_region`], with only one band's held at a time.
-pub fn render_region_rows(
-    tr: &Tracer,
-    fs: &FrameSetup,
-    (x0, y0, x1, y1): (usize, usize, usize, usize),
-    progress: &RenderProgress,
-    sink: &mut dyn FnMut(Vec<[f32; 3]>),
-) {
-    if x1 <= x0 || y1 <= y0 {
-        return;
-    }
-    let frame_src = frame_sources(tr, fs, cell_size(fs.ps));
-    let region = (x0, y0, x1, y1);
-    in_order(
-        tr,
-        fs,
-        region,
-        &frame_src,
-        progress,
-        None,
-        &mut |by0, band| {
-            let mut rows = band.to_vec();
-            let by1 = by0 + band.len() / (x1 - x0);
-            draw_sources(tr, fs, &frame_src, (x0, by0, x1, by1), &mut rows, progress);
-            sink(rows);
-        },
-    );
-}
+/// What [`in_order`] hands on for each band: its first row, its `w · rows` pixels (small
+/// light sources not drawn yet) and the frame's small sources.
+pub(super) type BandSink<'a> = dyn FnMut(usize, &[[f32; 3]], &FrameSources) + 'a;
 
-/// The bands of `[x0, x1) × [y0, y1)` in reading order on the calling thread, each handed to
-/// `emit` (its first row, its `w · rows` pixels) when done; with `hook`, asked before each
-/// cell whether to give part of what is left away (the pixels given away stay zero, the
-/// bands below a row cut are not emitted).
-fn in_order(
+/// The bands of `[x0, x1) × [y0, y1)` (not empty) in reading order on the calling thread,
+/// each handed to `emit` when done; with `hook`, asked before each cell whether to give
+/// part of what is left away (the pixels given away stay zero, the bands below a row cut
+/// are not emitted). Returns the frame's small light sources.
+pub(super) fn in_order(
     tr: &Tracer,
     fs: &FrameSetup,
     (x0, y0, x1, y1): (usize, usize, usize, usize),
-    frame_src: &FrameSources,
     progress: &RenderProgress,
     mut hook: Option<&mut SplitHook<'_>>,
-    emit: &mut dyn FnMut(usize, &[[f32; 3]]),
-) {
+    emit: &mut BandSink<'_>,
+) -> Arc<FrameSources> {
     let w = x1 - x0;
     let ps = cell_size(fs.ps);
+    let frame_src = frame_sources(tr, fs, ps);
     // The overture runs band by band just ahead of the picture's pass (its rows up to one
     // overture step below the band), so that what is given away has not been filled yet.
     let rows = overture_rows(fs, y0, y1);
@@ -250,8 +218,9 @@ fn in_order(
             .fetch_add(std::mem::take(&mut rays), Ordering::Relaxed);
         progress.rows_done.fetch_add(1, Ordering::Relaxed);
         if tr.scene.fatal_error().is_none() {
-            emit(by0, &band);
+            emit(by0, &band, &frame_src);
         }
         cy += 1;
     }
+    frame_src
 }
