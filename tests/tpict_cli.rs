@@ -143,10 +143,15 @@ fn scene_error(files: &[(&str, &str)], want_loc: &str, want: &[&str]) {
         !t.path().join("out.hdr").exists(),
         "an output file was written despite the error"
     );
-    let left: Vec<_> = std::fs::read_dir(t.path())
+    assert_no_files_like(t.path(), "out");
+}
+
+/// No file in `dir` has `part` in its name (no output, no temporary file left behind).
+fn assert_no_files_like(dir: &Path, part: &str) {
+    let left: Vec<_> = std::fs::read_dir(dir)
         .unwrap()
         .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
-        .filter(|n| n.contains("out"))
+        .filter(|n| n.contains(part))
         .collect();
     assert!(left.is_empty(), "leftover output files {left:?}");
 }
@@ -345,12 +350,7 @@ fn one_thread_pictures_stream_and_fail_cleanly() {
         let o = output(c.arg("bad.rad"));
         assert!(!o.status.success());
         assert!(o.stdout.is_empty(), "{} bytes written", o.stdout.len());
-        let left: Vec<_> = std::fs::read_dir(t.path())
-            .unwrap()
-            .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
-            .filter(|n| n.contains("bad.hdr"))
-            .collect();
-        assert!(left.is_empty(), "leftover output files {left:?}");
+        assert_no_files_like(t.path(), "bad.hdr");
     }
 }
 
