@@ -325,9 +325,10 @@ fn render_parallel(
     // pixel, so sharing changes no pixel, only how often a border sample is traced.
     let lx0 = cx0 * ps;
     let line_len = (cx1 * ps).min(fs.xres - 1) + 1 - lx0;
-    let lines: Vec<Mutex<Vec<Option<Sample>>>> = (cy0..=cy1)
-        .map(|_| Mutex::new(vec![None; line_len]))
-        .collect();
+    // Each line is made when a band first needs it and dropped after the odd band that
+    // shares it, so that only the lines of the bands in progress are held.
+    let lines: Vec<Mutex<Vec<Option<Sample>>>> =
+        (cy0..=cy1).map(|_| Mutex::new(Vec::new())).collect();
     // Each band writes its own rows of `out`.
     let band = |(cy, rows): (usize, &mut [[f32; 3]])| {
         let mut rays = 0;
@@ -338,6 +339,11 @@ fn render_parallel(
         let ry0 = (cy * ps).max(y0);
         let mut top = lines[b].lock().unwrap_or_else(|e| e.into_inner());
         let mut bottom = lines[b + 1].lock().unwrap_or_else(|e| e.into_inner());
+        for line in [&mut *top, &mut *bottom] {
+            if line.is_empty() {
+                line.resize(line_len, None);
+            }
+        }
         let mut left = Vec::new();
         let mut scratch = CellScratch::default();
         for cx in cx0..cx1 {
@@ -361,6 +367,12 @@ fn render_parallel(
                     }
                 },
             );
+        }
+        if b % 2 == 1 {
+            // Both even neighbours of an odd band ran before it (super::schedule), so no
+            // band reads its two lines again: they go (40 bytes a pixel of a line).
+            *top = Vec::new();
+            *bottom = Vec::new();
         }
         progress.rays.fetch_add(rays, Ordering::Relaxed);
         progress.rows_done.fetch_add(1, Ordering::Relaxed);
