@@ -544,12 +544,7 @@ impl FrameOut for Collect {
 
     fn rows(&mut self, rows: Vec<[f32; 3]>) {
         if let Some(img) = &mut self.0 {
-            if img.pixels.is_empty() {
-                // The pixels move into the picture (no second buffer of the frame's size).
-                img.pixels = rows;
-            } else {
-                img.pixels.extend_from_slice(&rows);
-            }
+            crate::render::picture::append_rows(&mut img.pixels, rows);
         }
     }
 

@@ -28,13 +28,11 @@
 //! its mean transmission) updated with relaxed atomic loads and stores, no locks: two
 //! threads updating one slot at once may lose one shadow ray's answer from the running
 //! mean, which a single store writes whole with its tag (so a reader always gets a mean of
-//! answers the cube saw). A
-//! cube whose slot another cube takes over starts
-//! afresh. `ttrace`'s per-ray epochs ([`new_epoch`]) read the shared table but learn in a
-//! private table per thread, whose answers go to the shared table in a fixed order
-//! ([`end_epoch`], [`learn`]) instead,
-//! so that no other thread's rays can evict a ray's cubes and its values stay the same
-//! whatever `-n`.
+//! answers the cube saw). A cube whose slot another cube takes over starts afresh.
+//! `ttrace`'s per-ray epochs ([`new_epoch`]) read the shared table but learn in a private
+//! table per thread, whose answers go to the shared table in a fixed order ([`end_epoch`],
+//! [`learn`]), so that no other thread's rays can evict a ray's cubes and its values stay
+//! the same whatever `-n`.
 
 use std::cell::RefCell;
 use std::sync::atomic::{AtomicU64, Ordering::Relaxed};
@@ -142,15 +140,31 @@ const LIT: u64 = 1;
 const DARK: u64 = 2;
 /// The most shadow rays a slot counts.
 const MAX_TRACED: u64 = 31;
+
+/// Whether slot word `w` holds the cube of `tag` (its low 16 bits).
+#[inline]
+fn holds(w: u64, tag: u64) -> bool {
+    w & 0xFFFF == tag & 0xFFFF
+}
+
+/// Slot word `w` with its tag bits those of `tag`.
+#[inline]
+fn retag(w: u64, tag: u64) -> u64 {
+    (w & !0xFFFF) | (tag & 0xFFFF)
+}
+
+/// The shadow rays slot word `w` counts.
+#[inline]
+fn traced_in(w: u64) -> u64 {
+    (w >> 16) & 0x1F
+}
 /// Where the mean starts in a slot's word.
 const MEAN_SHIFT: u32 = 26;
 
 impl Default for VisTable {
     fn default() -> Self {
         VisTable {
-            slots: (0..1usize << SLOTS_LOG2)
-                .map(|_| AtomicU64::new(0))
-                .collect(),
+            slots: crate::zeroed::atomic_u64s(1 << SLOTS_LOG2),
         }
     }
 }
@@ -203,9 +217,9 @@ impl VisTable {
         let slot = self.slot(tag);
         let low = tag & 0xFFFF;
         let w = slot.load(Relaxed);
-        let (traced, mut uses, seen, mean) = if w & 0xFFFF == low {
+        let (traced, mut uses, seen, mean) = if holds(w, tag) {
             (
-                (w >> 16) & 0x1F,
+                traced_in(w),
                 (w >> 21) & 0x7,
                 (w >> 24) & 0x3,
                 w >> MEAN_SHIFT,
@@ -298,7 +312,7 @@ pub fn end_epoch() -> Vec<(u64, u64)> {
             .filter_map(|tag| {
                 let mine = epoch_tag(tag, epoch);
                 let w = table.slot(mine).load(Relaxed);
-                (w & 0xFFFF == mine & 0xFFFF && (w >> 16) & 0x1F > 0).then_some((tag, w))
+                (holds(w, mine) && traced_in(w) > 0).then_some((tag, w))
             })
             .collect()
     })
@@ -308,9 +322,7 @@ pub fn end_epoch() -> Vec<(u64, u64)> {
 /// cube's slot takes the state its last epoch left it in.
 pub fn learn(shared: &VisTable, learnt: &[(u64, u64)]) {
     for &(tag, w) in learnt {
-        shared
-            .slot(tag)
-            .store((w & !0xFFFF) | (tag & 0xFFFF), Relaxed);
+        shared.slot(tag).store(retag(w, tag), Relaxed);
     }
 }
 
@@ -366,17 +378,10 @@ pub fn shadow(
         if epoch != 0 {
             // A cube new to this epoch starts from what the shared table knew of it.
             let slot = t.slot(tag);
-            if slot.load(Relaxed) & 0xFFFF != tag & 0xFFFF {
+            if !holds(slot.load(Relaxed), tag) {
                 let w = shared.map_or(0, |s| s.slot(shared_tag).load(Relaxed));
-                let known = w & 0xFFFF == shared_tag & 0xFFFF && (w >> 16) & 0x1F > 0;
-                slot.store(
-                    if known {
-                        (w & !0xFFFF) | (tag & 0xFFFF)
-                    } else {
-                        0
-                    },
-                    Relaxed,
-                );
+                let known = holds(w, shared_tag) && traced_in(w) > 0;
+                slot.store(if known { retag(w, tag) } else { 0 }, Relaxed);
                 TOUCHED.with(|v| v.borrow_mut().push(shared_tag));
             }
         }

@@ -228,14 +228,20 @@ pub fn render_region(
 ) -> Vec<[f32; 3]> {
     let mut out = Vec::new();
     render_region_rows(tr, fs, (x0, y0, x1, y1), progress, &mut |rows| {
-        if out.is_empty() {
-            out = rows;
-        } else {
-            out.extend_from_slice(&rows);
-        }
+        append_rows(&mut out, rows)
     });
     out.resize(x1.saturating_sub(x0) * y1.saturating_sub(y0), [0f32; 3]);
     out
+}
+
+/// Append rows handed on by [`render_region_rows`] to `out`; the first block moves in
+/// whole (no second buffer of a frame's size when one block is the whole region).
+pub fn append_rows(out: &mut Vec<[f32; 3]>, rows: Vec<[f32; 3]>) {
+    if out.is_empty() {
+        *out = rows;
+    } else {
+        out.extend_from_slice(&rows);
+    }
 }
 
 /// [`render_region`], its rows handed to `sink` top first as they are finished: on one

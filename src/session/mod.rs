@@ -263,30 +263,11 @@ impl Session {
         t
     }
 
-    /// Render a region of a frame on the session's threads. Fails when a function
-    /// evaluation met an error rpict treats as fatal (the render stops at the next row).
-    pub fn render(
-        &self,
-        fs: &FrameSetup,
-        r: Region,
-        progress: &RenderProgress,
-    ) -> Result<Vec<[f32; 3]>> {
-        if let (Some(a), Some(aa)) = (&self.ambient, fs.aa) {
-            a.set_accuracy(aa);
-        }
-        let tracer = self.tracer();
-        let pixels = self
-            .pool
-            .install(|| render_region(&tracer, fs, r.x0, r.y0, r.x1, r.y1, progress));
-        if let Some(e) = self.scene.fatal_error() {
-            anyhow::bail!("{e}");
-        }
-        Ok(pixels)
-    }
-
-    /// [`Session::render`], the rows handed to `sink` top first as they are finished (on
-    /// one thread a band at a time: [`crate::render::render_region_rows`]). Fails as
-    /// [`Session::render`] does; the rows already handed over are then not the whole region.
+    /// Render a region of a frame on the session's threads, its rows handed to `sink` top
+    /// first as they are finished (on one thread a band at a time:
+    /// [`crate::render::render_region_rows`]). Fails when a function evaluation met an
+    /// error rpict treats as fatal (the render stops at the next row); the rows already
+    /// handed over are then not the whole region.
     pub fn render_rows(
         &self,
         fs: &FrameSetup,
