@@ -7,13 +7,12 @@
 //! cell holding P: every value whose reach covers P is there; per-level occupancy bits let
 //! it skip, without a lock or a probe, levels with nothing filed near P. A cell keeps its
 //! values in spans of one ambient level each, and per value its position (relative to the
-//! cell's corner) and squared reach in single precision, four values to a cache line, and
-//! its weight beside them; a lookup reads only the spans of the levels it may use, tests
-//! four values at a time, tests again in double precision those within rounding of their
-//! reach (so it sees exactly the values a double-precision test would), reads the weight
-//! of the values in reach, and reads a value itself only when these let the lookup use it
-//! (prefetching the usable values of the cell together, so that their cache misses
-//! overlap), handing them on in filing order.
+//! cell's corner) and squared reach in single precision, four values to a cache line; a
+//! lookup reads only the spans of the levels it may use, tests four values at a time,
+//! tests again in double precision those within rounding of their reach (so it sees
+//! exactly the values a double-precision test would), prefetches the values in reach
+//! together (so that their cache misses overlap), and hands on, in filing order, those
+//! whose weight lets the lookup use them.
 //! The grid is split into shards, each behind its own lock ([`super::sharded`]): lookups
 //! take short read holds on the shards they touch (no global lock; a reader writes only a
 //! cache line of its thread's own, so threads looking up in the same shards do not move
@@ -413,10 +412,7 @@ impl AmbientCache {
         let pad = rr * (1.0 + 1e-6) + 1e-9 * s;
         let lo = self.in_cells(l, v.pos - DVec3::splat(pad)).floor();
         let hi = self.in_cells(l, v.pos + DVec3::splat(pad)).floor();
-        let tag = Tag {
-            weight: v.weight,
-            lvl: v.lvl,
-        };
+        let tag = Tag { lvl: v.lvl };
         let (c, r2) = (self.in_cells(l, v.pos), ((rr / s) * (rr / s)) as f32);
         let near = |key: &Key| {
             let [x, y, z] = local(key, c);
@@ -512,7 +508,10 @@ impl AmbientCache {
                 cell.scan(
                     at,
                     &usable,
-                    |v| self.within(p, v),
+                    (
+                        |v: &Arc<CachedValue>| self.within(p, v),
+                        |v: &Arc<CachedValue>| v.weight,
+                    ),
                     |v| crate::prefetch::prefetch::<CachedValue>(&**v),
                     |v| f(v),
                 );
@@ -531,7 +530,10 @@ impl AmbientCache {
                     cell.scan(
                         at,
                         &usable,
-                        |&k| self.within(p, &own.vals[k as usize]),
+                        (
+                            |&k: &u32| self.within(p, &own.vals[k as usize]),
+                            |&k: &u32| own.vals[k as usize].weight,
+                        ),
                         |&k| crate::prefetch::prefetch::<CachedValue>(&own.vals[k as usize]),
                         |&k| f(&own.vals[k as usize]),
                     );
