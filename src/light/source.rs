@@ -26,6 +26,8 @@ pub enum SourceShape {
         eu: DVec3,
         /// Rectangle edge vectors.
         ev: DVec3,
+        /// What sampling reads at every shading point, computed once ([`PolygonRect`]).
+        rect: PolygonRect,
     },
     /// A disk or annulus.
     Ring {
@@ -97,6 +99,61 @@ pub struct Source {
     pub center: DVec3,
     /// Set for virtual sources (reflections of `real` in a mirror).
     pub relay: Option<Relay>,
+}
+
+/// A polygon source's rectangle as sampling reads it, computed once when the source is
+/// collected (the same operations in the same order as at each shading point before, so
+/// every sample is bit-identical).
+#[derive(Clone, Copy, Debug)]
+pub struct PolygonRect {
+    /// The rectangle's centre, `corner + (eu + ev) · 0.5`.
+    mid: DVec3,
+    /// `|eu|` and `|ev|`.
+    lu: f64,
+    lv: f64,
+    /// `|eu × ev|`.
+    area: f64,
+    /// The polygon is a quadrilateral with its rectangle's area: it IS the rectangle, and
+    /// every sample lies on it (no per-sample inside test).
+    fills: bool,
+}
+
+impl PolygonRect {
+    /// `poly`: the polygon's vertex count and area.
+    fn new(corner: DVec3, eu: DVec3, ev: DVec3, poly: (usize, f64)) -> Self {
+        let area = eu.cross(ev).length();
+        PolygonRect {
+            mid: corner + (eu + ev) * 0.5,
+            lu: eu.length(),
+            lv: ev.length(),
+            area,
+            fills: poly.0 == 4 && (poly.1 - area).abs() <= 1e-9 * poly.1,
+        }
+    }
+}
+
+/// Partitions of a flat source `size` across (its larger side) whose centre lies at
+/// squared distance `d2` (at least `eps²`): `(1, 1)` when certainly `size / d ≤ thr`
+/// ([`partitions`]' test, `d = max(√d2, eps)`), decided without the square root; else
+/// `partitions(su / d, sv / d)` computed as it always was. The margin of 10⁻⁹ is far
+/// above the rounding of either test, so the answer is the one [`partitions`] gives.
+#[inline]
+fn flat_partitions(
+    (su, sv): (f64, f64),
+    d2: f64,
+    eps: f64,
+    (ds, weight): (f64, f64),
+) -> (usize, usize) {
+    if ds > 0.0 {
+        let thr = ds / weight.clamp(1e-3, 1.0);
+        let size = su.max(sv);
+        let bound = thr * thr * d2.max(eps * eps) * (1.0 - 1e-9);
+        if size.is_finite() && bound.is_finite() && size * size <= bound {
+            return (1, 1);
+        }
+    }
+    let d = d2.sqrt().max(eps);
+    partitions(su / d, sv / d, ds, weight)
 }
 
 /// How finely a source is partitioned and jittered from a shading point.
@@ -223,11 +280,14 @@ impl LightSet {
                         v0 = v0.min(d.dot(v));
                         v1 = v1.max(d.dot(v));
                     }
+                    let (corner, eu, ev) =
+                        (centroid + u * u0 + v * v0, u * (u1 - u0), v * (v1 - v0));
                     SourceShape::Polygon {
                         normal: n,
-                        corner: centroid + u * u0 + v * v0,
-                        eu: u * (u1 - u0),
-                        ev: v * (v1 - v0),
+                        corner,
+                        eu,
+                        ev,
+                        rect: PolygonRect::new(corner, eu, ev, (p.len(), p.area)),
                     }
                 }
                 SurfaceRef::Ring(r) => SourceShape::Ring {
@@ -404,18 +464,16 @@ impl LightSet {
                 corner,
                 eu,
                 ev,
+                rect,
             } => {
-                let c = *corner + (*eu + *ev) * 0.5;
-                let d = (c - q).length().max(scene.eps);
-                let (nu, nv) = partitions(eu.length() / d, ev.length() / d, ds, weight);
-                let rect_area = eu.cross(*ev).length();
-                let cell = rect_area / (nu * nv) as f64;
-                let obj = src.obj.map(|i| scene.objects.surface(i));
-                // A quadrilateral with the area of its bounding rectangle IS that rectangle:
-                // every sample lies on it, so the per-sample inside test is skipped.
-                let fills_rect = matches!(obj, Some(SurfaceRef::Polygon(pg))
-                    if pg.len() == 4 && (pg.area - rect_area).abs() <= 1e-9 * pg.area);
-                let obj = if fills_rect { None } else { obj };
+                let d2 = (rect.mid - q).length_squared();
+                let (nu, nv) = flat_partitions((rect.lu, rect.lv), d2, scene.eps, (ds, weight));
+                let cell = rect.area / (nu * nv) as f64;
+                // A polygon that fills its rectangle needs no per-sample inside test.
+                let obj = match rect.fills {
+                    true => None,
+                    false => src.obj.map(|i| scene.objects.surface(i)),
+                };
                 for i in 0..nu {
                     for j in 0..nv {
                         let s = *corner + *eu * strat(i, nu, dj, rng) + *ev * strat(j, nv, dj, rng);
@@ -440,8 +498,9 @@ impl LightSet {
                 r0,
                 r1,
             } => {
-                let d = (*center - q).length().max(scene.eps);
-                let (nr, nphi) = partitions(2.0 * r1 / d, 2.0 * r1 / d, ds, weight);
+                let d2 = (*center - q).length_squared();
+                let size = 2.0 * r1;
+                let (nr, nphi) = flat_partitions((size, size), d2, scene.eps, (ds, weight));
                 let u = any_perpendicular(*normal);
                 let v = normal.cross(u);
                 let cell = PI * (r1 * r1 - r0 * r0) / (nr * nphi) as f64;
@@ -652,6 +711,53 @@ mod tests {
                 assert!(d.dot(axis) >= cos_max - 1e-9);
             }
         }
+    }
+
+    #[test]
+    fn flat_partitions_agree_with_partitions() {
+        // Sizes and distances around every threshold a shading point can meet (including
+        // sizes within rounding of `thr · d`), and the degenerate ones.
+        let mut x = 0x2545_f491_4f6c_dd1du64;
+        let mut next = || {
+            x ^= x << 13;
+            x ^= x >> 7;
+            x ^= x << 17;
+            (x >> 11) as f64 / (1u64 << 53) as f64
+        };
+        let eps = 1e-6;
+        for k in 0..200_000 {
+            let ds = [0.0, 0.1, 0.2, 0.25, 0.5, 1.0][k % 6];
+            let weight = [1.0, 0.5, 1e-2, 1e-3, 1e-5][(k / 6) % 5];
+            let d = 10f64.powf(next() * 8.0 - 5.0);
+            let thr = ds / f64::clamp(weight, 1e-3, 1.0);
+            let su = match k % 4 {
+                // Right at the threshold, give or take a few units in the last place.
+                0 => f64::from_bits(
+                    (thr * d)
+                        .to_bits()
+                        .wrapping_add((k as u64 % 7).wrapping_sub(3)),
+                ),
+                1 => thr * d * (0.5 + next()),
+                2 => 10f64.powf(next() * 8.0 - 5.0),
+                _ => [0.0, f64::INFINITY, f64::NAN, eps][(k / 4) % 4],
+            };
+            let sv = su * next();
+            let d2 = d * d;
+            let exact = {
+                let d = d2.sqrt().max(eps);
+                partitions(su / d, sv / d, ds, weight)
+            };
+            assert_eq!(
+                flat_partitions((su, sv), d2, eps, (ds, weight)),
+                exact,
+                "su {su:e} sv {sv:e} d2 {d2:e} ds {ds} weight {weight}"
+            );
+        }
+        // Within eps of the source the distance is eps.
+        assert_eq!(
+            flat_partitions((1e-6, 1e-6), 0.0, 1e-6, (0.25, 1.0)),
+            partitions(1.0, 1.0, 0.25, 1.0)
+        );
     }
 
     #[test]
