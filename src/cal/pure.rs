@@ -127,6 +127,8 @@ pub struct Pure {
     roots: Vec<u32>,
     /// Whether there are no jump steps (the simpler loop).
     straight: bool,
+    /// The ray channels the steps read: bit `c` for channel `c` (0-based).
+    chans: u32,
 }
 
 /// Expansion state: the code, the node budget and the variables expanded so far.
@@ -359,6 +361,7 @@ pub(crate) fn expand(code: &Code, roots: &[NodeId], function: bool) -> Option<Pu
             ops: Vec::new(),
             roots: Vec::new(),
             straight: false,
+            chans: 0,
         },
         vars: HashMap::new(),
     };
@@ -372,10 +375,20 @@ pub(crate) fn expand(code: &Code, roots: &[NodeId], function: bool) -> Option<Pu
     }
     let mut out = e.out;
     out.straight = out.ops.iter().all(|s| matches!(s, Step::Val(..)));
+    out.chans = out.ops.iter().fold(0, |m, s| match s {
+        Step::Val(_, P::Chan(c)) if *c < 32 => m | 1 << c,
+        _ => m,
+    });
     Some(out)
 }
 
 impl Pure {
+    /// The ray channels an evaluation reads (bit `c` for channel `c`, 0-based): the others
+    /// may hold anything ([`crate::modifier::frame::PatternFrame::channels_for`]).
+    pub fn channels_read(&self) -> u32 {
+        self.chans
+    }
+
     /// The value for ray channels `chan`, real arguments `args` and the call's values
     /// `values` (of the first root); None wherever the machine could raise an error (see
     /// the module documentation).

@@ -58,6 +58,8 @@ struct PureCall {
     funcs: Vec<Pure>,
     /// Whether function `i` takes its own value (see [`DataCall::apply`]).
     own: Vec<bool>,
+    /// The ray channels they read ([`crate::cal::Pure::channels_read`]).
+    chans: u32,
 }
 
 impl PureCall {
@@ -69,7 +71,15 @@ impl PureCall {
             .map(|f| prog.pure_func(*f))
             .collect::<Option<Vec<_>>>()?;
         let own = (0..c.funcs.len()).map(|i| c.takes_own(prog, i)).collect();
-        Some(PureCall { coords, funcs, own })
+        let chans = funcs
+            .iter()
+            .fold(coords.channels_read(), |m, f| m | f.channels_read());
+        Some(PureCall {
+            coords,
+            funcs,
+            own,
+            chans,
+        })
     }
 }
 
@@ -212,7 +222,7 @@ impl DataCall {
             .pure
             .get_or_init(|| PureCall::new(prog, self))
             .as_ref()?;
-        let chan = self.call.frame().channels(sp);
+        let chan = self.call.frame().channels_for(sp, pc.chans);
         let args = self.call.args();
         let mut x = [0.0; 6];
         let x = x.get_mut(..self.coords.len())?;

@@ -100,6 +100,65 @@ impl PatternFrame {
         }
     }
 
+    /// The ray channels of `mask` (bit `c` for channel index `c`) at `sp`, each computed
+    /// as [`PatternFrame::channels`] computes it; the others are 0. A pattern's pure
+    /// expression reads a few channels (an ies2rad luminaire's `src_theta` and `flatcorr`:
+    /// `Dz` and `Rdot`), and the transform of the point, the normal and the frame's axes
+    /// are then not computed.
+    pub fn channels_for(&self, sp: &ShadingPoint, mask: u32) -> [f64; CHANNELS] {
+        // Direction, normal and point; axes; lengths and scale.
+        const DIR: u32 = 0b111;
+        const NORMAL: u32 = 0b111 << 3;
+        const POINT: u32 = 0b111 << 6;
+        const AXES: u32 = 0xfff << 12;
+        if mask & (NORMAL | POINT | AXES) == (NORMAL | POINT | AXES) {
+            return self.channels(sp);
+        }
+        let mut c = [0.0; CHANNELS];
+        let plain = self.forward.is_none() && sp.transform.is_none();
+        let (m, s) = if plain {
+            (self.inverse, 1.0)
+        } else {
+            self.to_pattern(sp)
+        };
+        let unit = |v: DVec3| m.transform_vector3(v) / s;
+        if mask & DIR != 0 {
+            let d = if plain { sp.dir } else { unit(sp.dir) };
+            c[..3].copy_from_slice(&d.to_array());
+        }
+        if mask & NORMAL != 0 {
+            let n = if plain {
+                sp.hit.normal
+            } else {
+                unit(sp.hit.normal)
+            };
+            c[3..6].copy_from_slice(&n.to_array());
+        }
+        if mask & POINT != 0 {
+            let p = if plain {
+                sp.world_point()
+            } else {
+                m.transform_point3(sp.world_point())
+            };
+            c[6..9].copy_from_slice(&p.to_array());
+        }
+        if mask & AXES != 0 {
+            let a = match sp.transform {
+                None => self.axes,
+                Some(_) => axes(&m),
+            };
+            c[12..24].copy_from_slice(&a);
+        }
+        let (lu, lv) = sp.uv.map(|[u, v]| (u, v)).unwrap_or((0.0, 0.0));
+        c[9] = sp.path_len * s;
+        c[10] = (-sp.dir.dot(sp.hit.normal)).clamp(-1.0, 1.0);
+        c[11] = s;
+        c[24] = sp.ray_len * s;
+        c[25] = lu;
+        c[26] = lv;
+        c
+    }
+
     /// The ray channels `$1..$27` at `sp` (index 0 is `$1`).
     pub fn channels(&self, sp: &ShadingPoint) -> [f64; CHANNELS] {
         let (d, n, p, a, s) = if self.forward.is_none() && sp.transform.is_none() {
@@ -223,6 +282,52 @@ mod tests {
         ));
         let c = channels("");
         assert!(near([c[6] + 1.0, c[7] + 1.0, c[8] + 1.0], [1.5, 1.25, 1.0]));
+    }
+
+    #[test]
+    fn channels_for_a_mask_are_the_channels() {
+        let w = |s: &str| s.split_whitespace().map(String::from).collect::<Vec<_>>();
+        let (object, _) = parse_transform(&w("-rx 30 -s 1.5 -t 2 0 -1")).unwrap();
+        let ray = Ray::primary(
+            DVec3::new(0.3, -0.2, 2.0),
+            DVec3::new(0.1, 0.2, -1.0).normalize(),
+            9.0,
+        );
+        let hit = Hit {
+            obj: 0,
+            inst: crate::render::ray::NO_INST,
+            t: 1.7,
+            point: DVec3::new(0.47, 0.14, 0.3),
+            normal: DVec3::new(0.0, 0.6, 0.8),
+            back: false,
+            flat: true,
+            material: None,
+            antimatter: [None; MAX_ANTIMATTER],
+        };
+        for words in ["", "-t 1 2 3", "-rz 90 -t 1 2 3 -s 2", "-mx -ry 20"] {
+            let f = PatternFrame::from_words(&w(words)).unwrap();
+            for transform in [None, Some(&object)] {
+                let mut sp = ShadingPoint::new(&ray, &hit, DVec3::new(5.0, -3.0, 1.0));
+                sp.transform = transform;
+                sp.uv = Some([0.25, 0.75]);
+                let all = f.channels(&sp);
+                for mask in [
+                    0u32,
+                    1 << 2 | 1 << 10,
+                    0b111 << 6,
+                    0xfff << 12,
+                    1 << 3,
+                    0x7ff_ffff,
+                ] {
+                    let some = f.channels_for(&sp, mask);
+                    for c in 0..CHANNELS {
+                        if mask & (1 << c) != 0 {
+                            assert_eq!(some[c].to_bits(), all[c].to_bits(), "{words} {c}");
+                        }
+                    }
+                }
+            }
+        }
     }
 
     #[test]

@@ -212,7 +212,8 @@ impl PureExprs {
         let pure = self.0.get_or_init(|| prog.pure_exprs(exprs)).as_ref()?;
         let mut out = [0.0; 3];
         let o = out.get_mut(..exprs.len())?;
-        pure.eval_into(&call.frame().channels(sp), call.args(), &[], o)?;
+        let chan = call.frame().channels_for(sp, pure.channels_read());
+        pure.eval_into(&chan, call.args(), &[], o)?;
         Some(out)
     }
 }
