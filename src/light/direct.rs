@@ -18,7 +18,11 @@ const MIN_SHADOW_TESTS: usize = 2;
 #[derive(Default)]
 struct Scratch {
     samples: Vec<SourceSample>,
-    cands: Vec<(f64, Color, usize)>,
+    /// The samples with a potential, as sort keys: the potential's bits inverted
+    /// (brightest first: positive finite potentials order as their bits) and the sample.
+    cands: Vec<(u64, u32)>,
+    /// Each sample's unoccluded contribution (read for those in `cands`).
+    contrib: Vec<Color>,
     stats: Vec<(f64, u32)>,
     /// `⌈n^dc⌉` by candidate count n, for the `dc` in `nshad_dc` (a `powf` per call saved).
     nshad: Vec<usize>,
@@ -82,6 +86,9 @@ fn direct_with(
     // potential whatever its pattern, which is then not evaluated (as Radiance's direct()).
     let cands = &mut scratch.cands;
     cands.clear();
+    let contrib = &mut scratch.contrib;
+    contrib.clear();
+    contrib.resize(samples.len(), Color::ZERO);
     for (k, s) in samples.iter_mut().enumerate() {
         let w = coef(s.dir, s.omega);
         if w == Color::ZERO {
@@ -91,14 +98,18 @@ fn direct_with(
         let c = w * s.radiance;
         let b = bright(c);
         if b > 0.0 && b.is_finite() {
-            cands.push((b, c, k));
+            contrib[k] = c;
+            cands.push((!b.to_bits(), k as u32));
         }
     }
     if cands.is_empty() {
         return Color::ZERO;
     }
-    // A strict total order (indices are unique), so the unstable sort gives the same order.
-    cands.sort_unstable_by(|a, b| b.0.total_cmp(&a.0).then(a.2.cmp(&b.2)));
+    // Brightest first, then by sample: a strict total order (indices are unique), so the
+    // unstable sort gives the same order. The keys are integers of 16 bytes, compared
+    // inline.
+    cands.sort_unstable();
+    let potential = |c: &(u64, u32)| f64::from_bits(!c.0);
     let n = cands.len();
     if scratch.nshad_dc.to_bits() != params.dc.to_bits() {
         scratch.nshad.clear();
@@ -129,21 +140,24 @@ fn direct_with(
     };
     // The shadow-reuse slots of the first tests, fetched together.
     if let (Some(q), Some(t)) = (vis, table) {
-        for &(_, _, k) in cands.iter().take(8) {
-            viscache::prefetch(t, q, samples[k].src);
+        for &(_, k) in cands.iter().take(8) {
+            viscache::prefetch(t, q, samples[k as usize].src);
         }
     }
     let mut untested_from = n;
     for (tested, i) in (0..n).enumerate() {
         if thresh > 0.0 && tested >= MIN_SHADOW_TESTS {
-            let ahead: f64 = cands[i..(i + nshadcheck).min(n)].iter().map(|c| c.0).sum();
+            let ahead: f64 = cands[i..(i + nshadcheck).min(n)]
+                .iter()
+                .map(potential)
+                .sum();
             if ahead < thresh * bright(known + result) {
                 untested_from = i;
                 break;
             }
         }
-        let (_, c, k) = cands[i];
-        let s = &samples[k];
+        let k = cands[i].1 as usize;
+        let (c, s) = (contrib[k], &samples[k]);
         let t = match vis {
             Some(q) => {
                 let (t, traced) = viscache::shadow(table, q, s.src, || {
@@ -173,8 +187,8 @@ fn direct_with(
         } else {
             0.5
         };
-        for &(_, c, k) in &cands[untested_from..] {
-            let st = stats[samples[k].src];
+        for &(_, k) in &cands[untested_from..] {
+            let (c, st) = (contrib[k as usize], stats[samples[k as usize].src]);
             let vis = if st.1 > 0 { st.0 / st.1 as f64 } else { global };
             result += c * vis;
         }
