@@ -104,11 +104,18 @@ impl Program {
     /// Expressions `es` (one to six) as one [`Pure`] expression with a root each, when
     /// they are pure (see [`Pure`]).
     pub fn pure_exprs(&self, es: &[ExprId]) -> Option<Pure> {
+        self.pure_exprs_with(es, None)
+    }
+
+    /// [`Program::pure_exprs`] for evaluations that will always pass the real arguments
+    /// `args` (a primitive's own): `arg(n)` and what follows from it alone are computed once
+    /// (the same values; an evaluation must then pass these `args`).
+    pub fn pure_exprs_with(&self, es: &[ExprId], args: Option<&[f64]>) -> Option<Pure> {
         let roots = es
             .iter()
             .map(|e| self.roots.get(e.0 as usize).copied())
             .collect::<Option<Vec<_>>>()?;
-        super::pure::expand(&self.code, &roots, false)
+        super::pure::expand(&self.code, &roots, false, args)
     }
 
     /// Expression `e` as a [`Pure`] expression, when it is one.
@@ -118,9 +125,14 @@ impl Program {
 
     /// Function `f`'s body as a [`Pure`] expression of the call's values, when it is one.
     pub fn pure_func(&self, f: FuncRef) -> Option<Pure> {
+        self.pure_func_with(f, None)
+    }
+
+    /// [`Program::pure_func`] with the real arguments known ([`Program::pure_exprs_with`]).
+    pub fn pure_func_with(&self, f: FuncRef, args: Option<&[f64]>) -> Option<Pure> {
         use super::code::Def;
         match self.code.slots.get(f.0 as usize)?.def {
-            Def::Func { body, .. } => super::pure::expand(&self.code, &[body], true),
+            Def::Func { body, .. } => super::pure::expand(&self.code, &[body], true, args),
             _ => None,
         }
     }

@@ -138,24 +138,72 @@ struct Expand<'a> {
     /// Each variable's node: a variable read several times (within an expression or by
     /// several roots) is computed once, as the machine computes it once per evaluation.
     vars: HashMap<SlotId, u32>,
+    /// The real arguments every evaluation will pass, when known at expansion (a
+    /// primitive's own): `arg(n)` of a number is then a number.
+    args: Option<&'a [f64]>,
+    /// Which nodes are numbers (in [`Pure::init`], computed by no step).
+    konst: Vec<bool>,
 }
 
 impl Expand<'_> {
-    /// A new node: a number goes into the initial values, anything else becomes a step.
+    /// A new node: a number goes into the initial values, anything else becomes a step,
+    /// except that an operation of numbers alone is a number ([`Expand::fold`]).
     fn push(&mut self, p: P) -> Option<u32> {
+        let p = self.fold(p).map_or(p, P::Num);
         let k = self.out.count;
         if k >= MAX_NODES {
             return None;
         }
         self.out.count += 1;
         match p {
-            P::Num(x) => self.out.init.push(x),
+            P::Num(x) => {
+                self.out.init.push(x);
+                self.konst.push(true);
+            }
             _ => {
                 self.out.init.push(0.0);
+                self.konst.push(false);
                 self.out.ops.push(Step::Val(k as u32, p));
             }
         }
         Some(k as u32)
+    }
+
+    /// The number node `k` stands for, if it is one.
+    fn number(&self, k: u32) -> Option<f64> {
+        match self.konst.get(k as usize) {
+            Some(true) => self.out.init.get(k as usize).copied(),
+            _ => None,
+        }
+    }
+
+    /// The value of an operation whose operands are all numbers (and `arg(n)` of a number
+    /// when the arguments are known), computed now by [`Pure::value`] itself: every
+    /// evaluation would compute the same `f64` operations on the same numbers, so the
+    /// values stay bit for bit the machine's. None for anything else, and for a result the
+    /// machine would refuse (NaN here), which stays a step so that evaluations give up as
+    /// before.
+    fn fold(&self, p: P) -> Option<f64> {
+        let all = |ks: &[u32]| ks.iter().all(|&k| self.number(k).is_some());
+        let foldable = match p {
+            P::Neg(a) | P::Unary(_, a) => all(&[a]),
+            P::Add(a, b) | P::Sub(a, b) | P::Mul(a, b) | P::Div(a, b) | P::Pow(a, b) => {
+                all(&[a, b])
+            }
+            P::Atan2(y, x) => all(&[y, x]),
+            P::Arg(a) => self.args.is_some() && all(&[a]),
+            _ => false,
+        };
+        if !foldable {
+            return None;
+        }
+        let mut v = [0.0f64; MAX_NODES];
+        let n = self.out.init.len().min(MAX_NODES);
+        v[..n].copy_from_slice(&self.out.init[..n]);
+        let r = self
+            .out
+            .value(p, &v, &[0.0; 27], self.args.unwrap_or(&[]), &[]);
+        (!r.is_nan()).then_some(r)
     }
 
     /// A jump step to be aimed later ([`Expand::aim`]); its index.
@@ -272,6 +320,11 @@ impl Expand<'_> {
                     return None;
                 }
                 let c = a(0, self)?;
+                // A condition that is a number takes its branch alone, as every evaluation
+                // would (a NaN one stays, for the `if` to refuse).
+                if let Some(x) = self.number(c).filter(|x| !x.is_nan()) {
+                    return a(if x > 0.0 { 1 } else { 2 }, self);
+                }
                 let j = self.jump(Step::Unless(c, 0));
                 let x = self.branch(args, 1, params, depth)?;
                 let g = self.jump(Step::Goto(0));
@@ -350,8 +403,15 @@ impl Expand<'_> {
 /// The pure form of nodes `roots` of `code`: expressions when `function` is false (they
 /// have no parameters), one function's body when true (its parameters are the call's
 /// values).
-pub(crate) fn expand(code: &Code, roots: &[NodeId], function: bool) -> Option<Pure> {
+pub(crate) fn expand(
+    code: &Code,
+    roots: &[NodeId],
+    function: bool,
+    args: Option<&[f64]>,
+) -> Option<Pure> {
     let mut e = Expand {
+        args,
+        konst: Vec::new(),
         code,
         out: Pure {
             count: 0,
@@ -604,6 +664,12 @@ impl Pure {
         } else {
             f64::NAN
         }
+    }
+
+    /// Number of steps an evaluation runs at most (for tests).
+    #[cfg(test)]
+    pub(crate) fn steps(&self) -> usize {
+        self.ops.len()
     }
 
     /// Whether some branches are skipped by jumps (for tests).

@@ -700,6 +700,20 @@ fn pure_functions_match_the_machine() {
     for (n, fr) in &fs {
         assert_eq!(prog.pure_func(*fr).is_some(), pure_ones.contains(n), "{n}");
     }
+    // With the arguments known, `corr` is `A1*v` (two steps: the value, the product; the
+    // `if` and `arg` are gone), `flat` four (and `Rdot`, the quotient), and `theta`'s
+    // `DEGREE` (PI/180) is a number either way.
+    let steps = |n: &str, args: Option<&[f64]>| {
+        let fr = fs.iter().find(|f| f.0 == n).unwrap().1;
+        prog.pure_func_with(fr, args).unwrap().steps()
+    };
+    assert!(steps("corr", None) >= 4, "{}", steps("corr", None));
+    assert_eq!(steps("corr", Some(&[2.0, 3.0])), 2);
+    assert_eq!(steps("flat", Some(&[2.0, 3.0])), 4);
+    assert_eq!(steps("corr", Some(&[])), 1);
+    let theta = prog.pure_expr(exprs[0]).unwrap().steps();
+    // Dz, the two differences and two `if`s of `bound`, `acos`, the quotient.
+    assert_eq!(theta, 7, "theta takes {theta} steps");
     let (mut same, mut left) = (0, 0);
     for i in 0..3000 {
         let x = |k: f64| ((i as f64 + 1.0) * k).sin();
@@ -737,16 +751,20 @@ fn pure_functions_match_the_machine() {
         for (n, fr) in &fs {
             let nv = if *n == "miss" { 1 } else { 2 };
             let vm = prog.begin(&env).call(*fr, &vals[..nv]);
-            check(prog.pure_func(*fr), vm, n);
+            check(prog.pure_func(*fr), vm.clone(), n);
+            // Specialised to the arguments the evaluation passes: `arg(n)` and what
+            // follows from it alone computed once (`corr`'s `if` takes one branch).
+            check(prog.pure_func_with(*fr, Some(args)), vm, n);
         }
         for e in &exprs {
             let vm = prog.begin(&env).eval(*e);
-            check(prog.pure_expr(*e), vm, "expr");
+            check(prog.pure_expr(*e), vm.clone(), "expr");
+            check(prog.pure_exprs_with(&[*e], Some(args)), vm, "expr");
         }
     }
     // Nearly all evaluate purely; a missing argument, Rdot = 0 and the like go back.
     assert!(
-        same > 30_000 && left > 100,
+        same > 60_000 && left > 200,
         "{same} pure, {left} left to the machine"
     );
 }

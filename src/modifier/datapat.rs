@@ -64,11 +64,13 @@ struct PureCall {
 
 impl PureCall {
     fn new(prog: &Program, c: &DataCall) -> Option<PureCall> {
-        let coords = prog.pure_exprs(&c.coords)?;
+        // The primitive's own arguments, which every evaluation passes.
+        let args = Some(c.call.args());
+        let coords = prog.pure_exprs_with(&c.coords, args)?;
         let funcs = c
             .funcs
             .iter()
-            .map(|f| prog.pure_func(*f))
+            .map(|f| prog.pure_func_with(*f, args))
             .collect::<Option<Vec<_>>>()?;
         let own = (0..c.funcs.len()).map(|i| c.takes_own(prog, i)).collect();
         let chans = funcs

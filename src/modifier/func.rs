@@ -209,7 +209,11 @@ impl PureExprs {
     /// [`FuncCall::eval`] gives the same values, or the error).
     pub fn values(&self, call: &FuncCall, exprs: &[ExprId], sp: &ShadingPoint) -> Option<[f64; 3]> {
         let prog = call.live_program()?;
-        let pure = self.0.get_or_init(|| prog.pure_exprs(exprs)).as_ref()?;
+        // The primitive's own arguments, which every evaluation below passes.
+        let pure = self
+            .0
+            .get_or_init(|| prog.pure_exprs_with(exprs, Some(call.args())))
+            .as_ref()?;
         let mut out = [0.0; 3];
         let o = out.get_mut(..exprs.len())?;
         let chan = call.frame().channels_for(sp, pure.channels_read());
