@@ -184,3 +184,5 @@ pub fn icalc_env(
 
 #[cfg(test)]
 mod tests;
+#[cfg(test)]
+mod tests_machine;
