@@ -157,7 +157,24 @@ impl LightSet {
     /// length. Returns the last leg (its start, direction and remaining length), the one that
     /// reaches the real source; `(p, dir, dist)` for a real source; None when a mirror is
     /// missed.
+    #[inline]
     pub fn relay_path(
+        &self,
+        scene: &Scene,
+        si: usize,
+        p: DVec3,
+        dir: DVec3,
+        dist: f64,
+    ) -> Option<(DVec3, DVec3, f64)> {
+        // Inline for the common case, a real source (every shading point asks, per sample).
+        match self.sources[si].relay {
+            None => Some((p, dir, dist)),
+            Some(_) => self.mirror_path(scene, si, p, dir, dist),
+        }
+    }
+
+    /// [`LightSet::relay_path`] through the mirrors of virtual source `si`.
+    fn mirror_path(
         &self,
         scene: &Scene,
         si: usize,

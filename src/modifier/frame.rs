@@ -100,21 +100,19 @@ impl PatternFrame {
         }
     }
 
-    /// The ray channels of `mask` (bit `c` for channel index `c`) at `sp`, each computed
-    /// as [`PatternFrame::channels`] computes it; the others are 0. A pattern's pure
-    /// expression reads a few channels (an ies2rad luminaire's `src_theta` and `flatcorr`:
-    /// `Dz` and `Rdot`), and the transform of the point, the normal and the frame's axes
-    /// are then not computed.
+    /// The ray channels of `mask` (bit `c` for channel index `c`) at `sp`; the others are
+    /// 0. A pattern's pure expression reads a few channels (an ies2rad luminaire's
+    /// `src_theta` and `flatcorr`: `Dz` and `Rdot`), and the transform of the point, the
+    /// normal and the frame's axes are then not computed.
     pub fn channels_for(&self, sp: &ShadingPoint, mask: u32) -> [f64; CHANNELS] {
-        // Direction, normal and point; axes; lengths and scale.
+        // Direction, normal and point; axes. The lengths, Rdot, the scale and (u, v) cost
+        // a product at most, and are always computed.
         const DIR: u32 = 0b111;
         const NORMAL: u32 = 0b111 << 3;
         const POINT: u32 = 0b111 << 6;
         const AXES: u32 = 0xfff << 12;
-        if mask & (NORMAL | POINT | AXES) == (NORMAL | POINT | AXES) {
-            return self.channels(sp);
-        }
         let mut c = [0.0; CHANNELS];
+        // No transform at all: the hit as it is.
         let plain = self.forward.is_none() && sp.transform.is_none();
         let (m, s) = if plain {
             (self.inverse, 1.0)
@@ -161,50 +159,7 @@ impl PatternFrame {
 
     /// The ray channels `$1..$27` at `sp` (index 0 is `$1`).
     pub fn channels(&self, sp: &ShadingPoint) -> [f64; CHANNELS] {
-        let (d, n, p, a, s) = if self.forward.is_none() && sp.transform.is_none() {
-            // No transform at all: the hit as it is.
-            (sp.dir, sp.hit.normal, sp.world_point(), self.axes, 1.0)
-        } else {
-            let (m, s) = self.to_pattern(sp);
-            let unit = |v: DVec3| m.transform_vector3(v) / s;
-            let a = match sp.transform {
-                None => self.axes,
-                Some(_) => axes(&m),
-            };
-            let p = m.transform_point3(sp.world_point());
-            (unit(sp.dir), unit(sp.hit.normal), p, a, s)
-        };
-        let rdot = (-sp.dir.dot(sp.hit.normal)).clamp(-1.0, 1.0);
-        let (lu, lv) = sp.uv.map(|[u, v]| (u, v)).unwrap_or((0.0, 0.0));
-        [
-            d.x,
-            d.y,
-            d.z,
-            n.x,
-            n.y,
-            n.z,
-            p.x,
-            p.y,
-            p.z,
-            sp.path_len * s,
-            rdot,
-            s,
-            a[0],
-            a[1],
-            a[2],
-            a[3],
-            a[4],
-            a[5],
-            a[6],
-            a[7],
-            a[8],
-            a[9],
-            a[10],
-            a[11],
-            sp.ray_len * s,
-            lu,
-            lv,
-        ]
+        self.channels_for(sp, u32::MAX)
     }
 
     /// A world direction in the pattern frame, unit length for a unit `v` (a BRDF

@@ -135,11 +135,8 @@ impl Tracer<'_> {
             return Color::ONE;
         }
         // The leg of the path that reaches the source.
-        let leg = match src.relay {
-            None => Some((p, s.dir, s.dist)),
-            Some(_) => self.lights.relay_path(self.scene, s.src, p, s.dir, s.dist),
-        };
-        let Some((org, dir, reach)) = leg else {
+        let Some((org, dir, reach)) = self.lights.relay_path(self.scene, s.src, p, s.dir, s.dist)
+        else {
             return Color::ONE;
         };
         let ray = Ray::shadow(org, dir);
