@@ -25,6 +25,9 @@ use crate::render::world::Scene;
 use crate::FTINY;
 use glam::DVec3;
 
+/// A leg of a path toward a source: its start, unit direction and length.
+type Leg = (DVec3, DVec3, f64);
+
 /// Most virtual sources a scene may have (all generations together); beyond it the later
 /// generations are cut short, with a warning.
 pub const MAX_VIRTUAL: usize = 4096;
@@ -169,20 +172,14 @@ impl LightSet {
         // Inline for the common case, a real source (every shading point asks, per sample).
         match self.sources[si].relay {
             None => Some((p, dir, dist)),
-            Some(_) => self.mirror_path(scene, si, p, dir, dist),
+            Some(_) => self.mirror_path(scene, si, (p, dir, dist)),
         }
     }
 
-    /// [`LightSet::relay_path`] through the mirrors of virtual source `si`.
-    fn mirror_path(
-        &self,
-        scene: &Scene,
-        si: usize,
-        p: DVec3,
-        dir: DVec3,
-        dist: f64,
-    ) -> Option<(DVec3, DVec3, f64)> {
-        let (mut o, mut d, mut rest) = (p, dir, dist);
+    /// [`LightSet::relay_path`] through the mirrors of virtual source `si`, from the leg
+    /// `(start, direction, length)`.
+    fn mirror_path(&self, scene: &Scene, si: usize, leg: Leg) -> Option<Leg> {
+        let (mut o, mut d, mut rest) = leg;
         for r in self.relays(si) {
             if d.dot(r.normal) >= -FTINY {
                 return None;
