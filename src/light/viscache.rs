@@ -21,14 +21,23 @@
 //! Other rays (eye rays and their specular rays, every ray of the uncached `-aa 0`
 //! calculation) always trace their shadow rays.
 //!
-//! The grid lives in a direct-mapped table of 2^[`SLOTS_LOG2`] slots ([`VisTable`]) that
-//! the render threads of one calculation share: a process holds one table however many
-//! threads render (a worker's tile loops, `tpict -n`), and a cube one thread learnt
-//! answers the others. A slot is one word (8 bytes: part of the cube's tag, its counts and
-//! its mean transmission) updated with relaxed atomic loads and stores, no locks: two
-//! threads updating one slot at once may lose one shadow ray's answer from the running
-//! mean, which a single store writes whole with its tag (so a reader always gets a mean of
-//! answers the cube saw). A cube whose slot another cube takes over starts afresh.
+//! The grid lives in a table of 2^[`SLOTS_LOG2`] slots ([`VisTable`]) that the render
+//! threads of one calculation share: a process holds one table however many threads render
+//! (a worker's tile loops, `tpict -n`), and a cube one thread learnt answers the others. A
+//! slot is one word (8 bytes: part of the cube's tag, its counts and its mean transmission)
+//! updated with relaxed atomic loads and stores, no locks: two threads updating one slot at
+//! once may lose one shadow ray's answer from the running mean, which a single store writes
+//! whole with its tag (so a reader always gets a mean of answers the cube saw).
+//!
+//! The table is set-associative: a cube may sit in any of the [`WAYS`] slots of its set (one
+//! 64-byte cache line), and a cube new to a full set takes the slot of the cube that traced
+//! the fewest shadow rays (which starts afresh if it comes back). Most cubes are asked about
+//! once or twice (a footprint's cube at one of several levels, on a surface few rays reach);
+//! a few are asked about hundreds of times (the ceiling above a desk, at the level of the
+//! values beside it). With one slot per cube, as before, the rare ones kept evicting the
+//! common ones, which then traced their first [`TRUST`] rays again: on the office of
+//! `bench/realscenes.sh` (`-ab 1`, 256²) 978,532 of 1.74 million queries were such learning
+//! rays, against 640,000 had no cube ever been evicted.
 //! `ttrace`'s per-ray epochs ([`new_epoch`]) read the shared table but learn in a private
 //! table per thread, whose answers go to the shared table in a fixed order ([`end_epoch`],
 //! [`learn`]), so that no other thread's rays can evict a ray's cubes and its values stay
@@ -48,11 +57,18 @@ pub const TRUST: u16 = 8;
 /// A trusted cube still traces every `RECHECK`-th query it answers.
 pub const RECHECK: u16 = 8;
 
-/// Slots of a table (a power of two; 8 bytes each, so 512 KiB). The table is direct-mapped:
-/// a cube whose slot another cube takes starts afresh. 2^16 rather than 2^18: the same
-/// pictures within their noise (means within 0.02% on the three scenes of
-/// `bench/realscenes.sh`), the same CPU within the runs' spread and a quarter of the memory.
+/// Slots of a table (a power of two; 8 bytes each, so 512 KiB).
 pub const SLOTS_LOG2: u32 = 16;
+
+/// Slots of a set: the slots one cube may take (one 64-byte cache line).
+pub const WAYS: usize = 8;
+
+/// Sets of a table.
+const SETS_LOG2: u32 = SLOTS_LOG2 - WAYS.trailing_zeros();
+
+/// The [`WAYS`] slots of one set, in one cache line.
+#[repr(C, align(64))]
+struct Set([AtomicU64; WAYS]);
 
 /// Where a shadow query comes from: the cube around the hit of an ambient sample ray.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -116,9 +132,7 @@ fn floor_i64(x: f64) -> i64 {
 }
 
 /// A table of cubes: per slot, one word.
-/// - bits 0–15: the low 16 bits of the cube's tag ([`VisQuery::tag`]; the slot's index is
-///   the tag's top bits, so two cubes share a slot unnoticed only when 32 bits of their tags
-///   agree);
+/// - bits 0–15: the low 16 bits of the cube's tag ([`VisQuery::tag`]);
 /// - bits 16–20: the shadow rays traced, up to 31 (past that the mean weighs the last ones
 ///   most, as a running average of 31);
 /// - bits 21–23: the answers given since the last check (modulo [`RECHECK`]);
@@ -129,9 +143,11 @@ fn floor_i64(x: f64) -> i64 {
 ///
 /// One word, so that a slot is read and written whole (its tag and its mean always belong
 /// together) in 8 bytes; a fresh slot's state is that of an empty one (all zero), so tag 0
-/// needs no meaning of its own.
+/// needs no meaning of its own. A slot whose cube has traced no ray counts as empty. The
+/// set's index is the tag's top bits, so two cubes share a slot unnoticed only when 29 bits
+/// of their tags agree.
 pub struct VisTable {
-    slots: Box<[AtomicU64]>,
+    sets: Box<[Set]>,
 }
 
 /// A shadow ray of the cube reached the source.
@@ -163,8 +179,11 @@ const MEAN_SHIFT: u32 = 26;
 
 impl Default for VisTable {
     fn default() -> Self {
+        let sets = Box::<[Set]>::new_zeroed_slice(1 << SETS_LOG2);
+        // SAFETY: the slice was allocated zeroed, and all-zero bytes are a valid Set (an
+        // array of AtomicU64, which has the bit validity of u64).
         VisTable {
-            slots: crate::zeroed::atomic_u64s(1 << SLOTS_LOG2),
+            sets: unsafe { sets.assume_init() },
         }
     }
 }
@@ -205,19 +224,40 @@ fn unpack_mean(w: u64) -> [f32; 3] {
 }
 
 impl VisTable {
-    /// The slot of `tag`: the tag's top bits.
+    /// The set of `tag`: the tag's top bits.
     #[inline]
-    fn slot(&self, tag: u64) -> &AtomicU64 {
-        &self.slots[(tag >> (64 - SLOTS_LOG2)) as usize]
+    fn set(&self, tag: u64) -> &Set {
+        &self.sets[(tag >> (64 - SETS_LOG2)) as usize]
+    }
+
+    /// The slot holding the cube of `tag` and its word; else, with word 0, the slot a new
+    /// cube of `tag` takes: the first empty one of its set, or the one whose cube traced the
+    /// fewest rays (the first of those).
+    #[inline]
+    fn place(&self, tag: u64) -> (&AtomicU64, u64) {
+        let set = &self.set(tag).0;
+        let mut victim = 0;
+        let mut fewest = u64::MAX;
+        for (i, slot) in set.iter().enumerate() {
+            let w = slot.load(Relaxed);
+            let traced = traced_in(w);
+            if traced > 0 && holds(w, tag) {
+                return (slot, w);
+            }
+            if traced < fewest {
+                fewest = traced;
+                victim = i;
+            }
+        }
+        (&set[victim], 0)
     }
 
     /// The transmission toward the source of `tag`: the cube's mean when it is trusted, else
     /// `trace()`, whose answer the cube learns; and whether a ray was traced.
     fn query(&self, tag: u64, trace: impl FnOnce() -> Color) -> (Color, bool) {
-        let slot = self.slot(tag);
+        let (slot, w) = self.place(tag);
         let low = tag & 0xFFFF;
-        let w = slot.load(Relaxed);
-        let (traced, mut uses, seen, mean) = if holds(w, tag) {
+        let (traced, mut uses, seen, mean) = if w != 0 {
             (
                 traced_in(w),
                 (w >> 21) & 0x7,
@@ -310,9 +350,8 @@ pub fn end_epoch() -> Vec<(u64, u64)> {
         };
         tags.into_iter()
             .filter_map(|tag| {
-                let mine = epoch_tag(tag, epoch);
-                let w = table.slot(mine).load(Relaxed);
-                (holds(w, mine) && traced_in(w) > 0).then_some((tag, w))
+                let w = table.place(epoch_tag(tag, epoch)).1;
+                (w != 0).then_some((tag, w))
             })
             .collect()
     })
@@ -322,7 +361,7 @@ pub fn end_epoch() -> Vec<(u64, u64)> {
 /// cube's slot takes the state its last epoch left it in.
 pub fn learn(shared: &VisTable, learnt: &[(u64, u64)]) {
     for &(tag, w) in learnt {
-        shared.slot(tag).store(retag(w, tag), Relaxed);
+        shared.place(tag).0.store(retag(w, tag), Relaxed);
     }
 }
 
@@ -331,12 +370,12 @@ fn epoch_tag(tag: u64, epoch: u64) -> u64 {
     fx_mix(tag, epoch).max(1)
 }
 
-/// Bring in the slot of the shared table that [`shadow`] will read for `q` toward `src` (the
-/// slots are spread over 512 KiB, so a query's first read is usually a cache miss); nothing
+/// Bring in the set of the shared table that [`shadow`] will read for `q` toward `src` (the
+/// sets are spread over 512 KiB, so a query's first read is usually a cache miss); nothing
 /// in an epoch, whose queries go to the thread's private table.
 pub fn prefetch(shared: &VisTable, q: &VisQuery, src: usize) {
     if EPOCH.with(|e| e.get()) == 0 {
-        crate::prefetch::prefetch(shared.slot(q.tag(src)));
+        crate::prefetch::prefetch(shared.set(q.tag(src)));
     }
 }
 
@@ -377,11 +416,10 @@ pub fn shadow(
         };
         if epoch != 0 {
             // A cube new to this epoch starts from what the shared table knew of it.
-            let slot = t.slot(tag);
-            if !holds(slot.load(Relaxed), tag) {
-                let w = shared.map_or(0, |s| s.slot(shared_tag).load(Relaxed));
-                let known = holds(w, shared_tag) && traced_in(w) > 0;
-                slot.store(if known { retag(w, tag) } else { 0 }, Relaxed);
+            let (slot, w) = t.place(tag);
+            if w == 0 {
+                let known = shared.map_or(0, |s| s.place(shared_tag).1);
+                slot.store(if known != 0 { retag(known, tag) } else { 0 }, Relaxed);
                 TOUCHED.with(|v| v.borrow_mut().push(shared_tag));
             }
         }
@@ -467,10 +505,37 @@ mod tests {
         for _ in 0..300 {
             shadow(Some(&table), &q(4, p), 1, || Color::splat(0.5));
         }
-        let w = table.slot(q(4, p).tag(1)).load(Relaxed);
+        let w = table.place(q(4, p).tag(1)).1;
         assert_eq!((w >> 16) & 0x1F, MAX_TRACED);
         assert_eq!((w >> 24) & 0x3, LIT);
         assert_eq!(unpack_mean(w >> MEAN_SHIFT), [0.5; 3]);
+    }
+
+    #[test]
+    fn a_set_keeps_the_cubes_that_traced_most() {
+        let table = VisTable::default();
+        // Tags of one set (the same top bits), told apart by their low bits.
+        let tag = |k: u64| (0x0ABC << (64 - SETS_LOG2)) | k;
+        let busy: Vec<u64> = (1..WAYS as u64).map(tag).collect();
+        for &b in &busy {
+            for _ in 0..TRUST {
+                table.query(b, || Color::ONE);
+            }
+        }
+        // A thousand cubes asked about once each take turns in the one slot left ...
+        for k in 0..1000 {
+            let (_, traced) = table.query(tag(100 + k), || Color::ZERO);
+            assert!(traced);
+        }
+        // ... and the busy cubes still answer without a ray.
+        for &b in &busy {
+            let (c, traced) = table.query(b, || Color::ZERO);
+            assert!(!traced, "cube {b:x} was evicted");
+            assert_eq!(c, Color::ONE);
+        }
+        // A cube of another set is not among them.
+        let (_, traced) = table.query(busy[0] ^ (1 << 63), || Color::ONE);
+        assert!(traced);
     }
 
     #[test]
