@@ -66,10 +66,6 @@ pub const WAYS: usize = 8;
 /// Sets of a table.
 const SETS_LOG2: u32 = SLOTS_LOG2 - WAYS.trailing_zeros();
 
-/// The [`WAYS`] slots of one set, in one cache line.
-#[repr(C, align(64))]
-struct Set([AtomicU64; WAYS]);
-
 /// Where a shadow query comes from: the cube around the hit of an ambient sample ray.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct VisQuery {
@@ -147,7 +143,13 @@ fn floor_i64(x: f64) -> i64 {
 /// set's index is the tag's top bits, so two cubes share a slot unnoticed only when 29 bits
 /// of their tags agree.
 pub struct VisTable {
-    sets: Box<[Set]>,
+    /// The slots, [`WAYS`] more than the sets hold, so that the sets can start on a 64-byte
+    /// boundary (`base`): an allocation of that alignment would be zeroed by writing it,
+    /// making every page resident, where a plain zeroed one leaves the pages no query
+    /// reaches untouched.
+    slots: Box<[AtomicU64]>,
+    /// The index of the first set's first slot.
+    base: usize,
 }
 
 /// A shadow ray of the cube reached the source.
@@ -179,12 +181,10 @@ const MEAN_SHIFT: u32 = 26;
 
 impl Default for VisTable {
     fn default() -> Self {
-        let sets = Box::<[Set]>::new_zeroed_slice(1 << SETS_LOG2);
-        // SAFETY: the slice was allocated zeroed, and all-zero bytes are a valid Set (an
-        // array of AtomicU64, which has the bit validity of u64).
-        VisTable {
-            sets: unsafe { sets.assume_init() },
-        }
+        let slots = crate::zeroed::atomic_u64s((1 << SLOTS_LOG2) + WAYS);
+        // Slots are 8-byte aligned: 0 to 7 of them lie before the first 64-byte boundary.
+        let base = (slots.as_ptr() as usize).wrapping_neg() % 64 / 8;
+        VisTable { slots, base }
     }
 }
 
@@ -226,8 +226,11 @@ fn unpack_mean(w: u64) -> [f32; 3] {
 impl VisTable {
     /// The set of `tag`: the tag's top bits.
     #[inline]
-    fn set(&self, tag: u64) -> &Set {
-        &self.sets[(tag >> (64 - SETS_LOG2)) as usize]
+    fn set(&self, tag: u64) -> &[AtomicU64; WAYS] {
+        let first = self.base + (tag >> (64 - SETS_LOG2)) as usize * WAYS;
+        self.slots[first..first + WAYS]
+            .try_into()
+            .expect("a set is WAYS slots")
     }
 
     /// The slot holding the cube of `tag` and its word; else, with word 0, the slot a new
@@ -235,7 +238,7 @@ impl VisTable {
     /// fewest rays (the first of those).
     #[inline]
     fn place(&self, tag: u64) -> (&AtomicU64, u64) {
-        let set = &self.set(tag).0;
+        let set = self.set(tag);
         let mut victim = 0;
         let mut fewest = u64::MAX;
         for (i, slot) in set.iter().enumerate() {
@@ -536,6 +539,10 @@ mod tests {
         // A cube of another set is not among them.
         let (_, traced) = table.query(busy[0] ^ (1 << 63), || Color::ONE);
         assert!(traced);
+        // Every set is one cache line, the last one included.
+        for t in [0, tag(0), busy[0] ^ (1 << 63), u64::MAX] {
+            assert_eq!(table.set(t).as_ptr() as usize % 64, 0);
+        }
     }
 
     #[test]
