@@ -191,6 +191,8 @@ pub struct LightSet {
     pub warnings: Vec<String>,
     /// [`LightSet::sampled_glows`]: (source index, radius, object), by object.
     glows: Vec<(usize, f64, usize)>,
+    /// Each source's emission plan ([`super::emission`]), made at its first use.
+    pub(super) emission: Vec<std::sync::OnceLock<super::emission::EmissionPlan>>,
 }
 
 /// Map the unit square to the unit disk, area-preserving (Shirley & Chiu 1997).
@@ -362,6 +364,7 @@ impl LightSet {
             })
             .collect();
         set.glows.sort_by_key(|g| g.2);
+        set.plan_slots();
         set
     }
 

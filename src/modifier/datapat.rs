@@ -273,6 +273,12 @@ impl Pattern for DataPattern {
             Color::new(r[0], r[1], r[2])
         })
     }
+
+    fn reads(&self) -> Option<u32> {
+        let prog = self.0.call.live_program()?;
+        let pc = self.0.pure.get_or_init(|| PureCall::new(prog, &self.0));
+        pc.as_ref().map(|pc| pc.chans)
+    }
 }
 
 #[derive(Debug)]

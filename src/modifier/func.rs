@@ -204,6 +204,16 @@ impl FuncCall {
 pub struct PureExprs(OnceLock<Option<Pure>>);
 
 impl PureExprs {
+    /// The ray channels the pure form of `exprs` reads ([`crate::modifier::Pattern::reads`]);
+    /// None when they have none.
+    pub fn reads(&self, call: &FuncCall, exprs: &[ExprId]) -> Option<u32> {
+        let prog = call.live_program()?;
+        let pure = self
+            .0
+            .get_or_init(|| prog.pure_exprs_with(exprs, Some(call.args())));
+        pure.as_ref().map(|p| p.channels_read())
+    }
+
     /// The values of `exprs` (at most three) at `sp` by their pure form: None when they are
     /// not all pure or the evaluation leaves them to the machine (then
     /// [`FuncCall::eval`] gives the same values, or the error).

@@ -66,6 +66,10 @@ impl Pattern for FuncPattern {
             Color::new(c[0], c[1], c[2])
         })
     }
+
+    fn reads(&self) -> Option<u32> {
+        self.pure.reads(&self.call, &self.exprs)
+    }
 }
 
 /// The values of `exprs` (one to three) at `sp`: by their pure form where it gives them,

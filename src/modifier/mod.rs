@@ -38,6 +38,14 @@ pub trait Pattern: Send + Sync + Debug {
     /// The colour at `sp`, or None for a computation error at this point (the pattern is
     /// then skipped for this ray, as Radiance does).
     fn colour(&self, sp: &ShadingPoint) -> Option<Color>;
+
+    /// The ray channels the colour is computed from (a mask as
+    /// [`frame::PatternFrame::channels_for`] takes), when nothing else of the shading point
+    /// can change it: its pure forms' channels (where the machine takes over from them, it
+    /// evaluates the same expressions, which read the same channels). None when unknown.
+    fn reads(&self) -> Option<u32> {
+        None
+    }
 }
 
 /// A texture: a vector added to the shading point's normal perturbation.

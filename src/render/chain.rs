@@ -9,6 +9,8 @@ use super::sampler::Sampler;
 use super::shading::ShadingPoint;
 use super::trace::Tracer;
 use crate::color::{sanitize, Color};
+use crate::geometry::SurfaceRef;
+use crate::light::emission::{EmissionPlan, ALONG_RAY};
 use crate::light::SourceSample;
 use crate::material::MatId;
 use crate::modifier::{MixCoefficient, ModRef, ModifierKind};
@@ -142,13 +144,28 @@ impl Tracer<'_> {
         let ray = Ray::shadow(org, dir);
         match (src.obj, src.distant) {
             (Some(o), _) => {
-                let limit = if reach.is_finite() {
-                    reach * (1.0 + 1e-6) + 16.0 * self.scene.eps
-                } else {
-                    FHUGE
-                };
+                let plan = self.lights.emission(s.src, || self.emission_plan(chain));
                 let surface = self.scene.objects.surface(o);
-                let t = surface.intersect(org, dir, limit).unwrap_or(reach);
+                // A flat source's normal is the same everywhere: patterns that read
+                // nothing along the ray need not the exact hit (`light::emission`).
+                let exact = match plan {
+                    Some(EmissionPlan::Patterns { along, .. }) => {
+                        *along
+                            || !reach.is_finite()
+                            || !matches!(surface, SurfaceRef::Polygon(_) | SurfaceRef::Ring(_))
+                    }
+                    _ => true,
+                };
+                let t = if exact {
+                    let limit = if reach.is_finite() {
+                        reach * (1.0 + 1e-6) + 16.0 * self.scene.eps
+                    } else {
+                        FHUGE
+                    };
+                    surface.intersect(org, dir, limit).unwrap_or(reach)
+                } else {
+                    reach
+                };
                 let r = HitRef::top(o);
                 let (point, normal, flat) = self.scene.hit_geom(r, org, dir, t);
                 let hit = Hit {
@@ -162,11 +179,58 @@ impl Tracer<'_> {
                     material: self.scene.ref_material(r),
                     antimatter: ray.antimatter,
                 };
-                self.emission_pattern(&ray, &hit, chain)
+                match plan {
+                    Some(EmissionPlan::Patterns { mods, .. }) => {
+                        // The walk's patterns in its order, without the walk.
+                        let sp = ShadingPoint::new(&ray, &hit, self.scene.origin);
+                        let mut pcol = Color::ONE;
+                        for &id in mods {
+                            if let ModifierKind::Pattern(p) = &*self.scene.modifiers[id].kind {
+                                if let Some(c) = p.colour(&sp) {
+                                    pcol *= sanitize(c);
+                                }
+                            }
+                        }
+                        pcol
+                    }
+                    _ => self.emission_pattern(&ray, &hit, chain),
+                }
             }
             (None, Some(d)) => self.distant_pattern(&ray, &self.scene.distant[d]),
             (None, None) => Color::ONE,
         }
+    }
+
+    /// The emission plan of a source whose chain starts at `chain`: its patterns when the
+    /// chain (up to the material, then the material's own) holds nothing else.
+    fn emission_plan(&self, chain: ModRef) -> EmissionPlan {
+        let mut mods = Vec::new();
+        let mut along = false;
+        let mut r = chain;
+        let mut own = true;
+        // Names resolve to earlier definitions, so a chain never loops; bound it anyway.
+        for _ in 0..=2 * self.scene.modifiers.len() + 2 {
+            match r {
+                ModRef::Void => return EmissionPlan::Patterns { mods, along },
+                ModRef::Material(m) => {
+                    if !own {
+                        return EmissionPlan::Patterns { mods, along };
+                    }
+                    own = false;
+                    r = self.scene.materials[m].chain;
+                }
+                ModRef::Modifier(id) => {
+                    let def = &self.scene.modifiers[id];
+                    let ModifierKind::Pattern(p) = &*def.kind else {
+                        return EmissionPlan::Walk;
+                    };
+                    along |= p.reads().is_none_or(|c| c & ALONG_RAY != 0);
+                    mods.push(id);
+                    r = def.next;
+                }
+            }
+        }
+        EmissionPlan::Walk
     }
 
     /// [`Tracer::emission_pattern`] of distant source `d` seen along `ray`'s direction: the
