@@ -119,7 +119,8 @@ pub struct Pure {
     list: Vec<u32>,
     /// Targets of [`Step::Switch`].
     jumps: Vec<u32>,
-    /// What an evaluation starts from: each number node's value (0 elsewhere).
+    /// What an evaluation starts from: each number node's value (0 elsewhere), padded with
+    /// zeros to [`SMALL`] values for a form of at most that many nodes.
     init: Vec<f64>,
     /// The steps, in order; every jump goes forward.
     ops: Vec<Step>,
@@ -434,6 +435,11 @@ pub(crate) fn expand(
         e.out.roots.push(top);
     }
     let mut out = e.out;
+    // A small form's initial values fill the whole stack buffer, which an evaluation then
+    // takes in one fixed-size copy (rather than zeroing it and copying the numbers).
+    if out.count <= SMALL {
+        out.init.resize(SMALL, 0.0);
+    }
     out.straight = out.ops.iter().all(|s| matches!(s, Step::Val(..)));
     out.chans = out.ops.iter().fold(0, |m, s| match s {
         Step::Val(_, P::Chan(c)) if *c < 32 => m | 1 << c,
@@ -471,15 +477,18 @@ impl Pure {
             return None;
         }
         if self.count <= SMALL {
-            self.fill(&mut [0.0f64; SMALL], chan, args, values, out)
+            let mut v: [f64; SMALL] = self.init.get(..SMALL)?.try_into().ok()?;
+            self.fill(&mut v, chan, args, values, out)
         } else {
-            self.fill(&mut [0.0f64; MAX_NODES], chan, args, values, out)
+            let mut v = [0.0f64; MAX_NODES];
+            v[..self.init.len()].copy_from_slice(&self.init);
+            self.fill(&mut v, chan, args, values, out)
         }
     }
 
-    /// Evaluate into a buffer of N values (a power of two at least the node count: indices
-    /// are masked by N − 1, which needs no bounds checks) and read the roots; None unless
-    /// all are finite.
+    /// Evaluate in a buffer of N values holding the initial values (a power of two at least
+    /// the node count: indices are masked by N − 1, which needs no bounds checks) and read
+    /// the roots; None unless all are finite.
     fn fill<const N: usize>(
         &self,
         v: &mut [f64; N],
@@ -489,7 +498,6 @@ impl Pure {
         out: &mut [f64],
     ) -> Option<()> {
         const { assert!(N.is_power_of_two()) };
-        v[..self.init.len()].copy_from_slice(&self.init);
         if self.straight {
             self.run_straight(v, chan, args, values);
         } else {
