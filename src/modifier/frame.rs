@@ -114,10 +114,16 @@ impl PatternFrame {
         let mut c = [0.0; CHANNELS];
         // No transform at all: the hit as it is.
         let plain = self.forward.is_none() && sp.transform.is_none();
-        let (m, s) = if plain {
-            (self.inverse, 1.0)
-        } else {
-            self.to_pattern(sp)
+        // The frame's own matrix is borrowed, not copied, unless the hit object has a
+        // transform of its own ([`PatternFrame::to_pattern`]).
+        let through;
+        let (m, s) = match sp.transform {
+            _ if plain => (&self.inverse, 1.0),
+            None => (&self.inverse, self.scale),
+            Some(_) => {
+                through = self.to_pattern(sp);
+                (&through.0, through.1)
+            }
         };
         let unit = |v: DVec3| m.transform_vector3(v) / s;
         if mask & DIR != 0 {
@@ -143,7 +149,7 @@ impl PatternFrame {
         if mask & AXES != 0 {
             let a = match sp.transform {
                 None => self.axes,
-                Some(_) => axes(&m),
+                Some(_) => axes(m),
             };
             c[12..24].copy_from_slice(&a);
         }
