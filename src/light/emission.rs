@@ -21,17 +21,13 @@ use super::source::LightSet;
 use crate::color::Color;
 use crate::scene::object::ModId;
 
-/// The ray channels that depend on where the hit lies along the ray: the point (channels
-/// 6–8), the path's length `T` (9) and the ray's `Ts` (24).
-pub const ALONG_RAY: u32 = 0b111 << 6 | 1 << 9 | 1 << 24;
-
 /// A source's emission chain as [`LightSet::emission`] decided it.
 #[derive(Clone, Debug)]
 pub enum EmissionPlan {
     /// Walk the chain at every sample (it holds a texture or a mixture).
     Walk,
     /// The chain's patterns, in order; `along`: some pattern may read a channel of
-    /// [`ALONG_RAY`], so the hit on the source is found exactly.
+    /// [`crate::modifier::frame::ALONG_RAY`], so the hit on the source is found exactly.
     Patterns { mods: Vec<ModId>, along: bool },
 }
 

@@ -216,14 +216,17 @@ impl DataCall {
         }
     }
 
+    /// The pure forms of the coordinates and the functions, made at their first use; None
+    /// when they are not all pure.
+    fn pure_call(&self) -> Option<&PureCall> {
+        let prog = self.call.live_program()?;
+        self.pure.get_or_init(|| PureCall::new(prog, self)).as_ref()
+    }
+
     /// The functions' results by their pure forms: None when they are not all pure or an
     /// evaluation leaves its result to the machine.
     fn pure_results(&self, sp: &ShadingPoint) -> Option<[f64; 3]> {
-        let prog = self.call.live_program()?;
-        let pc = self
-            .pure
-            .get_or_init(|| PureCall::new(prog, self))
-            .as_ref()?;
+        let pc = self.pure_call()?;
         let chan = self.call.frame().channels_for(sp, pc.chans);
         let args = self.call.args();
         let mut x = [0.0; 6];
@@ -275,9 +278,7 @@ impl Pattern for DataPattern {
     }
 
     fn reads(&self) -> Option<u32> {
-        let prog = self.0.call.live_program()?;
-        let pc = self.0.pure.get_or_init(|| PureCall::new(prog, &self.0));
-        pc.as_ref().map(|pc| pc.chans)
+        self.0.pure_call().map(|pc| pc.chans)
     }
 }
 

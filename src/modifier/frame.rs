@@ -15,6 +15,18 @@ use glam::{DMat4, DVec3};
 /// Number of ray channels (`$1..$27`).
 pub const CHANNELS: usize = 27;
 
+/// Channel masks (bit `c` for channel index `c`) of [`PatternFrame::channels_for`]: the
+/// direction `Dx Dy Dz`, the normal `Nx Ny Nz`, the point `Px Py Pz`, the frame's axes
+/// `Tx … Kz`.
+const DIR: u32 = 0b111;
+const NORMAL: u32 = 0b111 << 3;
+const POINT: u32 = 0b111 << 6;
+const AXES: u32 = 0xfff << 12;
+
+/// The channels that depend on where the hit lies along the ray: the point, the path's
+/// length `T` and the ray's `Ts`.
+pub const ALONG_RAY: u32 = POINT | 1 << 9 | 1 << 24;
+
 /// `Tx Ty Tz` (the world origin) and the unit axes `Ix … Kz` of a world → pattern matrix.
 fn axes(m: &DMat4) -> [f64; 12] {
     let t0 = m.transform_point3(DVec3::ZERO);
@@ -107,10 +119,6 @@ impl PatternFrame {
     pub fn channels_for(&self, sp: &ShadingPoint, mask: u32) -> [f64; CHANNELS] {
         // Direction, normal and point; axes. The lengths, Rdot, the scale and (u, v) cost
         // a product at most, and are always computed.
-        const DIR: u32 = 0b111;
-        const NORMAL: u32 = 0b111 << 3;
-        const POINT: u32 = 0b111 << 6;
-        const AXES: u32 = 0xfff << 12;
         let mut c = [0.0; CHANNELS];
         // No transform at all: the hit as it is.
         let plain = self.forward.is_none() && sp.transform.is_none();

@@ -204,26 +204,26 @@ impl FuncCall {
 pub struct PureExprs(OnceLock<Option<Pure>>);
 
 impl PureExprs {
+    /// The pure form of `exprs`, made at its first use for the primitive's own arguments
+    /// (which every evaluation passes); None when they have none.
+    fn form(&self, call: &FuncCall, exprs: &[ExprId]) -> Option<&Pure> {
+        let prog = call.live_program()?;
+        self.0
+            .get_or_init(|| prog.pure_exprs_with(exprs, Some(call.args())))
+            .as_ref()
+    }
+
     /// The ray channels the pure form of `exprs` reads ([`crate::modifier::Pattern::reads`]);
     /// None when they have none.
     pub fn reads(&self, call: &FuncCall, exprs: &[ExprId]) -> Option<u32> {
-        let prog = call.live_program()?;
-        let pure = self
-            .0
-            .get_or_init(|| prog.pure_exprs_with(exprs, Some(call.args())));
-        pure.as_ref().map(|p| p.channels_read())
+        self.form(call, exprs).map(Pure::channels_read)
     }
 
     /// The values of `exprs` (at most three) at `sp` by their pure form: None when they are
     /// not all pure or the evaluation leaves them to the machine (then
     /// [`FuncCall::eval`] gives the same values, or the error).
     pub fn values(&self, call: &FuncCall, exprs: &[ExprId], sp: &ShadingPoint) -> Option<[f64; 3]> {
-        let prog = call.live_program()?;
-        // The primitive's own arguments, which every evaluation below passes.
-        let pure = self
-            .0
-            .get_or_init(|| prog.pure_exprs_with(exprs, Some(call.args())))
-            .as_ref()?;
+        let pure = self.form(call, exprs)?;
         let mut out = [0.0; 3];
         let o = out.get_mut(..exprs.len())?;
         let chan = call.frame().channels_for(sp, pure.channels_read());
