@@ -275,10 +275,16 @@ impl NormalMat {
     }
 
     /// Transmission seen by a shadow ray through this material (straight through only).
-    pub fn shadow_transmission(&self, sp: &ShadingPoint) -> Color {
+    /// Whether shadow rays never pass this material, whatever the point
+    /// ([`NormalMat::shadow_transmission`] is then zero).
+    pub fn never_transmits(&self) -> bool {
         // `trans2` stops shadow rays whatever its roughness (measured with rtrace: the
         // floor below a trans2 pane is black in its shadow; `trans` passes them).
-        if self.kind != NormalKind::Trans || self.trans <= FTINY || self.orient.is_some() {
+        self.kind != NormalKind::Trans || self.trans <= FTINY || self.orient.is_some()
+    }
+
+    pub fn shadow_transmission(&self, sp: &ShadingPoint) -> Color {
+        if self.never_transmits() {
             return Color::ZERO;
         }
         let (n, dir) = (sp.facing_normal(), sp.dir);

@@ -12,7 +12,7 @@ use crate::color::{sanitize, Color};
 use crate::geometry::SurfaceRef;
 use crate::light::emission::EmissionPlan;
 use crate::light::SourceSample;
-use crate::material::MatId;
+use crate::material::{MatId, Material};
 use crate::modifier::frame::ALONG_RAY;
 use crate::modifier::{MixCoefficient, ModRef, ModifierKind};
 use crate::scene::transform::Transform;
@@ -330,6 +330,15 @@ impl Tracer<'_> {
     /// surface's chain.
     pub(super) fn shadow_through(&self, ray: &Ray, hit: &Hit) -> Color {
         let info = self.scene.hit_info(hit.href());
+        // A surface whose chain ends in a material that never transmits stops the ray
+        // whatever its patterns make of the point: no shading point is built for it.
+        let stops = match hit.material {
+            m if m != info.material => m.is_some_and(|m| self.always_blocks(ModRef::Material(m))),
+            _ => self.always_blocks(info.chain),
+        };
+        if stops {
+            return Color::ZERO;
+        }
         let mut sp = ShadingPoint::new(ray, hit, self.scene.origin);
         if !hit.is_top() {
             self.instanced(&mut sp, info.frame);
@@ -353,6 +362,47 @@ impl Tracer<'_> {
                 self.shadow_chain(&mut a, fg) * c + self.shadow_chain(&mut b, bg) * (1.0 - c)
             }
         }
+    }
+
+    /// Whether a shadow ray stops at every surface of chain `r`, wherever it hits: the
+    /// chain reaches, through patterns and textures only (no mixture), a material whose
+    /// [`Tracer::shadow_transmission`] is zero whatever the shading point.
+    fn always_blocks(&self, mut r: ModRef) -> bool {
+        for _ in 0..=self.scene.modifiers.len() + self.scene.materials.len() {
+            match r {
+                ModRef::Void => return false,
+                ModRef::Modifier(id) => {
+                    let def = &self.scene.modifiers[id];
+                    if matches!(&*def.kind, ModifierKind::Mixture { .. }) {
+                        return false;
+                    }
+                    r = def.next;
+                }
+                ModRef::Material(m) => {
+                    return match self.scene.material(m) {
+                        Material::Normal(n) => n.never_transmits(),
+                        Material::Glass(_) | Material::Brtd(_) | Material::Antimatter(_) => {
+                            false
+                        }
+                        Material::Mirror(mi) if mi.alternate_void => false,
+                        Material::Mirror(mi) => match mi.alternate {
+                            // The alternate is shaded with its own chain: only its kind
+                            // matters here.
+                            Some(alt) => {
+                                r = ModRef::Material(alt);
+                                continue;
+                            }
+                            None => true,
+                        },
+                        Material::Ashik(_)
+                        | Material::Brdf(_)
+                        | Material::Dielectric(_)
+                        | Material::Emitter(_) => true,
+                    };
+                }
+            }
+        }
+        false
     }
 
     pub(super) fn shadow_material(&self, sp: &ShadingPoint, m: MatId) -> Color {
