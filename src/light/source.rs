@@ -62,6 +62,8 @@ pub enum SourceShape {
         dir: DVec3,
         /// Half angular diameter in radians.
         half_angle: f64,
+        /// Its cosine (the sampled cone's edge).
+        cos_max: f64,
         /// Solid angle.
         solid_angle: f64,
     },
@@ -340,6 +342,7 @@ impl LightSet {
                 shape: SourceShape::Distant {
                     dir: d.source.dir,
                     half_angle: (d.source.angle_deg * 0.5).to_radians(),
+                    cos_max: (d.source.angle_deg * 0.5).to_radians().cos(),
                     solid_angle: d.source.solid_angle,
                 },
                 emitter: e.clone(),
@@ -586,11 +589,12 @@ impl LightSet {
             SourceShape::Distant {
                 dir,
                 half_angle,
+                cos_max,
                 solid_angle,
             } => {
                 // Radiance never partitions distant sources (measured with rpict -dt 0).
                 let (na, nb) = (1, 1);
-                let cos_max = half_angle.cos();
+                let cos_max = *cos_max;
                 let omega = solid_angle / (na * nb) as f64;
                 for i in 0..na {
                     for j in 0..nb {
