@@ -49,12 +49,20 @@ pub fn direct(
     if lights.sources.is_empty() {
         return Color::ZERO;
     }
-    // The buffers are taken out of the thread-local (and put back below), so a nested call
-    // would only allocate afresh, never alias them.
-    let mut scratch = SCRATCH.with(|s| std::mem::take(&mut *s.borrow_mut()));
-    let result = direct_with(tr, (weight, known), hit, coef, rng, vis, &mut scratch);
-    SCRATCH.with(|s| *s.borrow_mut() = scratch);
-    result
+    // The thread's buffers, borrowed for the call; a nested call (none today: shadow rays
+    // and source patterns never light a point) would take buffers of its own.
+    SCRATCH.with(|s| match s.try_borrow_mut() {
+        Ok(mut scratch) => direct_with(tr, (weight, known), hit, coef, rng, vis, &mut scratch),
+        Err(_) => direct_with(
+            tr,
+            (weight, known),
+            hit,
+            coef,
+            rng,
+            vis,
+            &mut Scratch::default(),
+        ),
+    })
 }
 
 fn direct_with(

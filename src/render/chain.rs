@@ -381,9 +381,7 @@ impl Tracer<'_> {
                 ModRef::Material(m) => {
                     return match self.scene.material(m) {
                         Material::Normal(n) => n.never_transmits(),
-                        Material::Glass(_) | Material::Brtd(_) | Material::Antimatter(_) => {
-                            false
-                        }
+                        Material::Glass(_) | Material::Brtd(_) | Material::Antimatter(_) => false,
                         Material::Mirror(mi) if mi.alternate_void => false,
                         Material::Mirror(mi) => match mi.alternate {
                             // The alternate is shaded with its own chain: only its kind
