@@ -339,6 +339,12 @@ impl Tracer<'_> {
         if stops {
             return Color::ZERO;
         }
+        self.shadow_shaded(ray, hit)
+    }
+
+    /// [`Tracer::shadow_through`] by shading the point.
+    fn shadow_shaded(&self, ray: &Ray, hit: &Hit) -> Color {
+        let info = self.scene.hit_info(hit.href());
         let mut sp = ShadingPoint::new(ray, hit, self.scene.origin);
         if !hit.is_top() {
             self.instanced(&mut sp, info.frame);
@@ -411,5 +417,98 @@ impl Tracer<'_> {
         let mut own = *sp;
         self.walk(&mut own, chain);
         self.shadow_transmission(&own, m)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::light::LightSet;
+    use crate::options::render::RenderParams;
+    use crate::render::world::Scene;
+    use crate::scene::reader::{parse_scene_text, ReadOptions};
+
+    /// One surface of each kind of chain, side by side at z = 0 (x from i to i + 1, in
+    /// the scene's coordinates; the tracer's are relative to its origin), and whether
+    /// shadow rays always stop there.
+    const SURFACES: [(&str, bool); 10] = [
+        ("grey", true),
+        ("rough", true),
+        ("clear", false),
+        ("opaque_trans", true),
+        ("pane", false),
+        ("half", false),
+        ("mirror_pane", false),
+        ("mirror", true),
+        ("steel", true),
+        ("void", false),
+    ];
+
+    const SCENE: &str = "void plastic grey 0 0 5 .5 .5 .5 0 0\n\
+        void brightfunc spots 2 spots p.cal 0 0\n\
+        spots plastic rough 0 0 5 .6 .6 .6 0 0\n\
+        spots trans clear 0 0 7 .8 .8 .8 0 0 .6 .3\n\
+        void trans opaque_trans 0 0 7 .8 .8 .8 0 0 0 0\n\
+        void glass pane 0 0 3 .9 .9 .9\n\
+        void mixfunc half 4 clear void mix p.cal 0 0\n\
+        void mirror mirror_pane 1 pane 0 3 .9 .9 .9\n\
+        void mirror mirror 0 0 3 .9 .9 .9\n\
+        spots metal steel 0 0 5 .7 .7 .7 .9 0\n";
+
+    #[test]
+    fn surfaces_that_always_block_shade_to_no_transmission() {
+        let dir = tempfile::tempdir().unwrap();
+        std::fs::write(
+            dir.path().join("p.cal"),
+            "spots = .5 + .5 * sin(Px * 7) * sin(Py * 5);\nmix = .5 + .3 * sin(Px * 3);\n",
+        )
+        .unwrap();
+        let opts = ReadOptions {
+            raypath: vec![dir.path().to_path_buf()],
+            ..ReadOptions::default()
+        };
+        let mut text = SCENE.to_string();
+        for (i, (m, _)) in SURFACES.iter().enumerate() {
+            let (a, b) = (i as f64, i as f64 + 1.0);
+            text += &format!("{m} polygon s{i} 0 0 12 {a} 0 0 {b} 0 0 {b} 1 0 {a} 1 0\n");
+        }
+        let prims = parse_scene_text(&text, "t.rad", &opts).unwrap();
+        let scene = Scene::build_on(&prims, &opts.raypath).unwrap();
+        let params = RenderParams::default();
+        let lights = LightSet::collect(&scene, 0);
+        let tr = Tracer::new(&scene, &params, &lights);
+        for (i, &(m, blocks)) in SURFACES.iter().enumerate() {
+            let mut shaded_zero = 0;
+            for k in 0..25 {
+                let (x, y) = (
+                    i as f64 + 0.1 + 0.15 * (k % 5) as f64,
+                    0.1 + 0.15 * (k / 5) as f64,
+                );
+                let ray = Ray::shadow(
+                    DVec3::new(x, y, 1.0) - scene.origin,
+                    DVec3::new(0.1, 0.05, -1.0).normalize(),
+                );
+                let hit = match tr.intersect(&ray) {
+                    Some(h) => h,
+                    // A void surface is invisible: no ray stops there.
+                    None if m == "void" => continue,
+                    None => panic!("{m}: no hit from ({x}, {y})"),
+                };
+                let info = scene.hit_info(hit.href());
+                assert_eq!(tr.always_blocks(info.chain), blocks, "{m}");
+                let shaded = tr.shadow_shaded(&ray, &hit);
+                if blocks {
+                    assert_eq!(tr.shadow_through(&ray, &hit), Color::ZERO, "{m}");
+                    assert_eq!(shaded, Color::ZERO, "{m} at ({x}, {y})");
+                } else {
+                    assert_eq!(tr.shadow_through(&ray, &hit), shaded, "{m}");
+                }
+                shaded_zero += usize::from(shaded == Color::ZERO);
+            }
+            // The surfaces that let light through do so where these rays cross them.
+            if !blocks && m != "void" {
+                assert!(shaded_zero < 25, "{m}: no transmission anywhere");
+            }
+        }
     }
 }
