@@ -65,7 +65,6 @@ mod tests {
     use crate::render::sampler::Sampler;
     use crate::render::trace::Tracer;
     use crate::render::world::Scene;
-    use crate::scene::reader::{parse_scene_text, ReadOptions};
     use glam::DVec3;
 
     const CAL: &str = "theta = acos(Dz) * 180 / 3.14159265358979;\n\
@@ -93,19 +92,13 @@ mod tests {
 
     #[test]
     fn plans_give_the_walks_colours_bit_for_bit() {
-        let dir = tempfile::tempdir().unwrap();
-        std::fs::write(dir.path().join("lum.cal"), CAL).unwrap();
-        std::fs::write(
-            dir.path().join("dist.dat"),
-            "1\n0 180 7\n8 7.6 6.4 4.6 2.6 .9 .3\n",
-        )
-        .unwrap();
-        let opts = ReadOptions {
-            raypath: vec![dir.path().to_path_buf()],
-            ..ReadOptions::default()
-        };
-        let prims = parse_scene_text(SCENE, "t.rad", &opts).unwrap();
-        let scene = Scene::build_on(&prims, &opts.raypath).unwrap();
+        let scene = Scene::from_text(
+            SCENE,
+            &[
+                ("lum.cal", CAL),
+                ("dist.dat", "1\n0 180 7\n8 7.6 6.4 4.6 2.6 .9 .3\n"),
+            ],
+        );
         let params = RenderParams::default();
         let planned = LightSet::collect(&scene, 0);
         let walked = planned.clone().without_plans();

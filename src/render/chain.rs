@@ -12,9 +12,10 @@ use crate::color::{sanitize, Color};
 use crate::geometry::SurfaceRef;
 use crate::light::emission::EmissionPlan;
 use crate::light::SourceSample;
-use crate::material::{MatId, Material};
+use crate::material::MatId;
 use crate::modifier::frame::ALONG_RAY;
 use crate::modifier::{MixCoefficient, ModRef, ModifierKind};
+use crate::scene::sets::HitInfo;
 use crate::scene::transform::Transform;
 use crate::scene::world::DistantObject;
 use crate::{FHUGE, FTINY};
@@ -332,19 +333,19 @@ impl Tracer<'_> {
         let info = self.scene.hit_info(hit.href());
         // A surface whose chain ends in a material that never transmits stops the ray
         // whatever its patterns make of the point: no shading point is built for it.
-        let stops = match hit.material {
-            m if m != info.material => m.is_some_and(|m| self.always_blocks(ModRef::Material(m))),
-            _ => self.always_blocks(info.chain),
+        let chain = if hit.material != info.material {
+            hit.material.map_or(ModRef::Void, ModRef::Material)
+        } else {
+            info.chain
         };
-        if stops {
+        if self.always_blocks(chain) {
             return Color::ZERO;
         }
-        self.shadow_shaded(ray, hit)
+        self.shadow_shaded(ray, hit, &info)
     }
 
-    /// [`Tracer::shadow_through`] by shading the point.
-    fn shadow_shaded(&self, ray: &Ray, hit: &Hit) -> Color {
-        let info = self.scene.hit_info(hit.href());
+    /// [`Tracer::shadow_through`] by shading the point (`info`: the hit's).
+    fn shadow_shaded(&self, ray: &Ray, hit: &Hit, info: &HitInfo) -> Color {
         let mut sp = ShadingPoint::new(ray, hit, self.scene.origin);
         if !hit.is_top() {
             self.instanced(&mut sp, info.frame);
@@ -371,38 +372,20 @@ impl Tracer<'_> {
     }
 
     /// Whether a shadow ray stops at every surface of chain `r`, wherever it hits: the
-    /// chain reaches, through patterns and textures only (no mixture), a material whose
-    /// [`Tracer::shadow_transmission`] is zero whatever the shading point.
+    /// chain reaches, through patterns and textures only (no mixture), a material that
+    /// never transmits ([`Tracer::never_transmits`]).
     fn always_blocks(&self, mut r: ModRef) -> bool {
-        for _ in 0..=self.scene.modifiers.len() + self.scene.materials.len() {
+        // Names resolve to earlier definitions, so a chain never loops; bound it anyway.
+        for _ in 0..=self.scene.modifiers.len() {
             match r {
                 ModRef::Void => return false,
+                ModRef::Material(m) => return self.never_transmits(m),
                 ModRef::Modifier(id) => {
                     let def = &self.scene.modifiers[id];
                     if matches!(&*def.kind, ModifierKind::Mixture { .. }) {
                         return false;
                     }
                     r = def.next;
-                }
-                ModRef::Material(m) => {
-                    return match self.scene.material(m) {
-                        Material::Normal(n) => n.never_transmits(),
-                        Material::Glass(_) | Material::Brtd(_) | Material::Antimatter(_) => false,
-                        Material::Mirror(mi) if mi.alternate_void => false,
-                        Material::Mirror(mi) => match mi.alternate {
-                            // The alternate is shaded with its own chain: only its kind
-                            // matters here.
-                            Some(alt) => {
-                                r = ModRef::Material(alt);
-                                continue;
-                            }
-                            None => true,
-                        },
-                        Material::Ashik(_)
-                        | Material::Brdf(_)
-                        | Material::Dielectric(_)
-                        | Material::Emitter(_) => true,
-                    };
                 }
             }
         }
@@ -426,7 +409,6 @@ mod tests {
     use crate::light::LightSet;
     use crate::options::render::RenderParams;
     use crate::render::world::Scene;
-    use crate::scene::reader::{parse_scene_text, ReadOptions};
 
     /// One surface of each kind of chain, side by side at z = 0 (x from i to i + 1, in
     /// the scene's coordinates; the tracer's are relative to its origin), and whether
@@ -457,23 +439,13 @@ mod tests {
 
     #[test]
     fn surfaces_that_always_block_shade_to_no_transmission() {
-        let dir = tempfile::tempdir().unwrap();
-        std::fs::write(
-            dir.path().join("p.cal"),
-            "spots = .5 + .5 * sin(Px * 7) * sin(Py * 5);\nmix = .5 + .3 * sin(Px * 3);\n",
-        )
-        .unwrap();
-        let opts = ReadOptions {
-            raypath: vec![dir.path().to_path_buf()],
-            ..ReadOptions::default()
-        };
         let mut text = SCENE.to_string();
         for (i, (m, _)) in SURFACES.iter().enumerate() {
             let (a, b) = (i as f64, i as f64 + 1.0);
             text += &format!("{m} polygon s{i} 0 0 12 {a} 0 0 {b} 0 0 {b} 1 0 {a} 1 0\n");
         }
-        let prims = parse_scene_text(&text, "t.rad", &opts).unwrap();
-        let scene = Scene::build_on(&prims, &opts.raypath).unwrap();
+        let cal = "spots = .5 + .5 * sin(Px * 7) * sin(Py * 5);\nmix = .5 + .3 * sin(Px * 3);\n";
+        let scene = Scene::from_text(&text, &[("p.cal", cal)]);
         let params = RenderParams::default();
         let lights = LightSet::collect(&scene, 0);
         let tr = Tracer::new(&scene, &params, &lights);
@@ -496,7 +468,7 @@ mod tests {
                 };
                 let info = scene.hit_info(hit.href());
                 assert_eq!(tr.always_blocks(info.chain), blocks, "{m}");
-                let shaded = tr.shadow_shaded(&ray, &hit);
+                let shaded = tr.shadow_shaded(&ray, &hit, &info);
                 if blocks {
                     assert_eq!(tr.shadow_through(&ray, &hit), Color::ZERO, "{m}");
                     assert_eq!(shaded, Color::ZERO, "{m} at ({x}, {y})");

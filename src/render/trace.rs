@@ -695,4 +695,23 @@ impl<'a> Tracer<'a> {
             _ => Color::ZERO,
         }
     }
+
+    /// Whether [`Tracer::shadow_transmission`] of material `m` is zero whatever the
+    /// shading point (a mirror's answer is its alternate's).
+    pub(super) fn never_transmits(&self, mut m: MatId) -> bool {
+        // Alternates name earlier materials, so this never loops; bound it anyway.
+        for _ in 0..=self.scene.materials.len() {
+            match self.scene.material(m) {
+                Material::Normal(n) => return n.never_transmits(),
+                Material::Brtd(_) | Material::Glass(_) | Material::Antimatter(_) => return false,
+                Material::Mirror(mi) if mi.alternate_void => return false,
+                Material::Mirror(mi) => match mi.alternate {
+                    Some(alt) => m = alt,
+                    None => return true,
+                },
+                _ => return true,
+            }
+        }
+        false
+    }
 }

@@ -547,6 +547,23 @@ impl Scene {
         Scene::build_in(prims, &ModifierTypes::standard(), raypath)
     }
 
+    /// A scene from the text of a scene file, with the files it reads (name, contents)
+    /// written to a temporary folder on its RAYPATH (unit tests).
+    #[cfg(test)]
+    pub(crate) fn from_text(text: &str, files: &[(&str, &str)]) -> Scene {
+        use crate::scene::reader::{parse_scene_text, ReadOptions};
+        let dir = tempfile::tempdir().expect("a temporary folder");
+        for (name, contents) in files {
+            std::fs::write(dir.path().join(name), contents).expect("a test file written");
+        }
+        let opts = ReadOptions {
+            raypath: vec![dir.path().to_path_buf()],
+            ..ReadOptions::default()
+        };
+        let prims = parse_scene_text(text, "t.rad", &opts).expect("the test scene parses");
+        Scene::build_on(&prims, &opts.raypath).expect("the test scene builds")
+    }
+
     /// [`Scene::build_on`] with the reader's options (the RAYPATH, and whether the scene
     /// files of instanced octrees may run inline commands).
     pub fn build_read(prims: &[Primitive], opts: &ReadOptions) -> Result<Scene, SceneError> {
