@@ -494,10 +494,11 @@ impl AmbientCache {
         let used = self.levels_used.load(Ordering::Relaxed);
         let highest = self.max_level_seen.load(Ordering::Relaxed);
         let q0 = p * self.inv_base;
-        for l in 0..=highest {
-            if used & (1u64 << l) == 0 {
-                continue;
-            }
+        // The levels in use, finest first.
+        let mut levels = used & (u64::MAX >> (63 - highest.min(63)));
+        while levels != 0 {
+            let l = levels.trailing_zeros();
+            levels &= levels - 1;
             let (key, at) = cell_of(l, scale_down(q0, l));
             let (w, bit) = occupancy(&key);
             if self.occupied[w].load(Ordering::Relaxed) & bit == 0 {
