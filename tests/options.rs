@@ -457,11 +457,12 @@ prop_compose! {
 prop_compose! {
     fn any_settings()(
         share_max in 1.0f64..4.0, as0_split in 0.0f64..0.9, flags in prop::array::uniform8(any::<bool>()),
-        hessian_cells in 16usize..5000, outlier_limit in 0.0f64..100.0,
+        hessian_cells in 16usize..5000, outlier_limit in 0.0f64..100.0, shadow_trust in 1u16..=31,
     ) -> AmbientSettings {
         let [hessian, reach, gradients, gradient_radii, glow_sampling, corral, shadow_reuse, ss_own] = flags;
         AmbientSettings { share_max, as0_split, hessian, reach, gradients, gradient_radii,
-                          glow_sampling, corral, shadow_reuse, hessian_cells, outlier_limit, ss_own }
+                          glow_sampling, corral, shadow_reuse, shadow_trust, hessian_cells,
+                          outlier_limit, ss_own }
     }
 }
 

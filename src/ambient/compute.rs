@@ -371,6 +371,7 @@ impl IndirectLight for Ambient {
         let reuse = if self.settings.shadow_reuse && s.spread > 0.0 {
             let footprint = (s.reach + hit.t) * s.spread;
             VisQuery::new(self.owner, vis_key(hit), hit.back, footprint, hit.point)
+                .map(|q| q.with_trust(self.settings.shadow_trust))
         } else {
             None
         };

@@ -66,6 +66,9 @@ pub struct AmbientSettings {
     /// `--amb-shadow-reuse on|off`: reuse shadow rays of a value's sample hits within their
     /// footprints ([`crate::light::viscache`]).
     pub shadow_reuse: bool,
+    /// `--amb-shadow-trust N`: agreeing shadow rays a footprint's cube must have traced
+    /// before it answers without one (1 to [`crate::light::viscache::TRUST_MAX`]).
+    pub shadow_trust: u16,
     /// `--amb-hessian-cells N`: cells of the mesh a value's Hessian is taken from at most
     /// (thinned evenly beyond); at least [`HESSIAN_CELLS_MIN`].
     pub hessian_cells: usize,
@@ -90,6 +93,7 @@ impl Default for AmbientSettings {
             glow_sampling: true,
             corral: true,
             shadow_reuse: true,
+            shadow_trust: crate::light::viscache::TRUST,
             hessian_cells: HESSIAN_CELLS,
             outlier_limit: OUTLIER_LIMIT,
             ss_own: true,
@@ -108,6 +112,7 @@ pub const OPTION_NAMES: &[&str] = &[
     "--amb-glow-sampling",
     "--amb-corral",
     "--amb-shadow-reuse",
+    "--amb-shadow-trust",
     "--amb-hessian-cells",
     "--amb-outlier-limit",
     "--amb-ss-own",
@@ -153,6 +158,13 @@ impl AmbientSettings {
             "--amb-glow-sampling" => self.glow_sampling = on_off(o, w)?,
             "--amb-corral" => self.corral = on_off(o, w)?,
             "--amb-shadow-reuse" => self.shadow_reuse = on_off(o, w)?,
+            "--amb-shadow-trust" => {
+                let max = crate::light::viscache::TRUST_MAX;
+                self.shadow_trust = match w.parse::<u16>() {
+                    Ok(n) if (1..=max).contains(&n) => n,
+                    _ => return Err(format!("{o}: expected a count from 1 to {max}, got '{w}'")),
+                }
+            }
             "--amb-hessian-cells" => {
                 self.hessian_cells = match w.parse::<usize>() {
                     Ok(n) if n >= HESSIAN_CELLS_MIN => n,
@@ -184,6 +196,7 @@ impl AmbientSettings {
             b(self.glow_sampling),
             b(self.corral),
             b(self.shadow_reuse),
+            format!("{}", self.shadow_trust),
             format!("{}", self.hessian_cells),
             format!("{}", self.outlier_limit),
             b(self.ss_own),
@@ -231,7 +244,7 @@ mod tests {
         let w = words(
             "--amb-share-max 1.5 --amb-as0-split 0 --amb-hessian off --amb-reach off \
              --amb-gradients off --amb-gradient-radii on --amb-glow-sampling off \
-             --amb-corral off --amb-shadow-reuse off --amb-hessian-cells 64 \
+             --amb-corral off --amb-shadow-reuse off --amb-shadow-trust 9 --amb-hessian-cells 64 \
              --amb-outlier-limit 0 --amb-ss-own off",
         );
         let mut i = 0;
@@ -259,6 +272,9 @@ mod tests {
             "--amb-as0-split 0.95",
             "--amb-corral maybe",
             "--amb-hessian-cells 4",
+            "--amb-shadow-trust 0",
+            "--amb-shadow-trust 32",
+            "--amb-shadow-trust 2.5",
             "--amb-outlier-limit -1",
             "--amb-reach",
         ] {

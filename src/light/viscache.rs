@@ -10,8 +10,8 @@
 //!
 //! So, per render thread, the answers of those shadow rays are kept on a grid: a key is the
 //! hit object, its side, the light source, and a cube whose side is the power of two at or
-//! above the footprint's radius, holding the hit point. A cube whose first [`TRUST`] shadow
-//! rays agree (all blocked, or all reaching the source) answers later queries with their
+//! above the footprint's radius, holding the hit point. A cube whose first `trust` shadow
+//! rays agree (the option `--amb-shadow-trust`, [`TRUST`] by default) (all blocked, or all reaching the source) answers later queries with their
 //! mean transmission, without a ray; every [`RECHECK`]-th query still traces one, and any
 //! disagreement marks the cube as a shadow edge, where every query traces its own ray from
 //! then on. What remains is a cube whose small lit (or shadowed) part none of its rays found:
@@ -35,7 +35,7 @@
 //! once or twice (a footprint's cube at one of several levels, on a surface few rays reach);
 //! a few are asked about hundreds of times (the ceiling above a desk, at the level of the
 //! values beside it). With one slot per cube, as before, the rare ones kept evicting the
-//! common ones, which then traced their first [`TRUST`] rays again: on the office of
+//! common ones, which then traced their first `trust` rays again: on the office of
 //! `bench/realscenes.sh` (`-ab 1`, 256²) 978,532 of 1.74 million queries were such learning
 //! rays, against 640,000 had no cube ever been evicted.
 //! `ttrace`'s per-ray epochs ([`new_epoch`]) read the shared table but learn in a private
@@ -51,8 +51,16 @@ use glam::DVec3;
 use crate::color::{bright, Color};
 use crate::hash::fx_mix;
 
-/// Shadow rays a cube must have traced, all agreeing, before it answers without one.
-pub const TRUST: u16 = 8;
+/// Shadow rays a cube must have traced, all agreeing, before it answers without one, by
+/// default (`--amb-shadow-trust`). It was 8 until 2026-12-07: 4 traces 5% fewer rays on the
+/// office of `bench/realscenes.sh` at `-ab 1` (3% fewer instructions) at the same error
+/// against the converged reference over the equal-error sweep's 40 settings at `-ab 1` and
+/// 21 at `-ab 2` (docs/benchmarks.md); a cube that four rays found all lit or all dark and
+/// that is not is still found out at its next recheck.
+pub const TRUST: u16 = 4;
+
+/// The largest `--amb-shadow-trust` (a slot counts up to 31 traced rays).
+pub const TRUST_MAX: u16 = 31;
 
 /// A trusted cube still traces every `RECHECK`-th query it answers.
 pub const RECHECK: u16 = 8;
@@ -73,6 +81,9 @@ pub struct VisQuery {
     owner: u64,
     /// Hash of the hit object, its side, the cube's level and coordinates.
     cube: u64,
+    /// Agreeing shadow rays a cube needs before it answers without one (1 to
+    /// [`TRUST_MAX`]; [`TRUST`] unless [`VisQuery::with_trust`] says otherwise).
+    trust: u16,
 }
 
 impl VisQuery {
@@ -107,7 +118,20 @@ impl VisQuery {
         for x in [c.x, c.y, c.z] {
             h = fx_mix(h, floor_i64(x) as u64);
         }
-        Some(VisQuery { owner, cube: h })
+        Some(VisQuery {
+            owner,
+            cube: h,
+            trust: TRUST,
+        })
+    }
+
+    /// This query with cubes trusted after `trust` agreeing shadow rays (clamped to 1 ..=
+    /// [`TRUST_MAX`]).
+    pub fn with_trust(self, trust: u16) -> Self {
+        VisQuery {
+            trust: trust.clamp(1, TRUST_MAX),
+            ..self
+        }
     }
 
     /// The slot tag of this cube toward source `src` (never 0, which marks an empty slot).
@@ -255,9 +279,10 @@ impl VisTable {
         (&set[victim], 0)
     }
 
-    /// The transmission toward the source of `tag`: the cube's mean when it is trusted, else
-    /// `trace()`, whose answer the cube learns; and whether a ray was traced.
-    fn query(&self, tag: u64, trace: impl FnOnce() -> Color) -> (Color, bool) {
+    /// The transmission toward the source of `tag`: the cube's mean when it is trusted
+    /// (`trust` agreeing rays traced), else `trace()`, whose answer the cube learns; and
+    /// whether a ray was traced.
+    fn query(&self, tag: u64, trust: u16, trace: impl FnOnce() -> Color) -> (Color, bool) {
         let (slot, w) = self.place(tag);
         let low = tag & 0xFFFF;
         let (traced, mut uses, seen, mean) = if w != 0 {
@@ -273,7 +298,7 @@ impl VisTable {
         let word = |traced: u64, uses: u64, seen: u64, mean: u64| {
             low | traced << 16 | uses << 21 | seen << 24 | mean << MEAN_SHIFT
         };
-        if traced >= u64::from(TRUST) && seen != LIT | DARK {
+        if traced >= u64::from(trust) && seen != LIT | DARK {
             uses = (uses + 1) % u64::from(RECHECK);
             if uses != 0 {
                 slot.store(word(traced, uses, seen, mean), Relaxed);
@@ -395,7 +420,7 @@ pub fn shadow(
     let epoch = EPOCH.with(|e| e.get());
     if epoch == 0 {
         if let Some(t) = shared {
-            return t.query(q.tag(src), trace);
+            return t.query(q.tag(src), q.trust, trace);
         }
     }
     let shared_tag = q.tag(src);
@@ -426,7 +451,7 @@ pub fn shadow(
                 TOUCHED.with(|v| v.borrow_mut().push(shared_tag));
             }
         }
-        t.query(tag, trace)
+        t.query(tag, q.trust, trace)
     })
 }
 
@@ -460,6 +485,23 @@ mod tests {
             );
         }
         assert_eq!(traced, TRUST as usize + 3);
+        // Another trust: answered from the cube after that many agreeing rays.
+        for trust in [1, 2, 8, TRUST_MAX] {
+            let owner = 100 + u64::from(trust);
+            let tq = q(owner, p).with_trust(trust);
+            let mut traced = 0;
+            for i in 0..(trust + 2 * RECHECK) {
+                let (_, did) = shadow(Some(&table), &tq, 0, || {
+                    traced += 1;
+                    Color::ONE
+                });
+                let want = i < trust || (i - trust + 1).is_multiple_of(RECHECK);
+                assert_eq!(did, want, "trust {trust}, query {i}");
+            }
+            assert_eq!(traced, trust as usize + 2, "trust {trust}");
+        }
+        assert_eq!(q(1, p).with_trust(0), q(1, p).with_trust(1));
+        assert_eq!(q(1, p).with_trust(99), q(1, p).with_trust(TRUST_MAX));
         // Another source, another side, or another calculation: nothing reused.
         let (_, did) = shadow(Some(&table), &q(1, p), 1, || Color::ONE);
         assert!(did);
@@ -522,22 +564,22 @@ mod tests {
         let busy: Vec<u64> = (1..WAYS as u64).map(tag).collect();
         for &b in &busy {
             for _ in 0..TRUST {
-                table.query(b, || Color::ONE);
+                table.query(b, TRUST, || Color::ONE);
             }
         }
         // A thousand cubes asked about once each take turns in the one slot left ...
         for k in 0..1000 {
-            let (_, traced) = table.query(tag(100 + k), || Color::ZERO);
+            let (_, traced) = table.query(tag(100 + k), TRUST, || Color::ZERO);
             assert!(traced);
         }
         // ... and the busy cubes still answer without a ray.
         for &b in &busy {
-            let (c, traced) = table.query(b, || Color::ZERO);
+            let (c, traced) = table.query(b, TRUST, || Color::ZERO);
             assert!(!traced, "cube {b:x} was evicted");
             assert_eq!(c, Color::ONE);
         }
         // A cube of another set is not among them.
-        let (_, traced) = table.query(busy[0] ^ (1 << 63), || Color::ONE);
+        let (_, traced) = table.query(busy[0] ^ (1 << 63), TRUST, || Color::ONE);
         assert!(traced);
         // Every set is one cache line, the last one included.
         for t in [0, tag(0), busy[0] ^ (1 << 63), u64::MAX] {

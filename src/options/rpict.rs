@@ -104,6 +104,10 @@ pub fn help_text() -> String {
             "shadow rays reused within sample footprints",
         ),
         (
+            "--amb-shadow-trust N",
+            "agreeing shadow rays before a footprint's cube answers (4)",
+        ),
+        (
             "--amb-hessian-cells N",
             "cells of the Hessian's mesh at most (256)",
         ),
