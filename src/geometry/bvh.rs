@@ -19,7 +19,7 @@
 //! farthest ones are dropped.
 //!
 //! Degenerate inputs (thousands of identical or nested boxes) build deep trees; traversal
-//! stays correct (the traversal stack spills to the heap beyond 32 levels) but obvhs's PLOC
+//! stays correct (the traversal stack spills to the heap beyond 16 entries) but obvhs's PLOC
 //! builder becomes slow on them (about 1 s for 1000 identical boxes in a debug build).
 
 use glam::{uvec2, DVec3, UVec2, Vec3A};
@@ -53,10 +53,17 @@ const _: () = assert!(usize::BITS >= 64);
 /// Capacity of the coincident-hit window of [`Bvh::closest`].
 pub const WINDOW: usize = 16;
 
-/// Traversal stack: 32 entries inline, spilling to the heap for (degenerate) deeper trees.
-/// obvhs's own fixed stack silently drops entries beyond 32 levels, so it is not used.
+/// Entries of the traversal stack kept inline ([`DeepStack`]): a wide tree's traversal
+/// holds one node group per level it descends, so a balanced tree of a million leaves
+/// needs about eight. 16 entries are zeroed with a few stores, where 32 (256 bytes) took a
+/// `memset` call at every traversal.
+const STACK_INLINE: usize = 16;
+
+/// Traversal stack: [`STACK_INLINE`] entries inline, spilling to the heap for (degenerate)
+/// deeper trees. obvhs's own fixed stack silently drops entries beyond 32 levels, so it is
+/// not used.
 struct DeepStack {
-    inline: [UVec2; 32],
+    inline: [UVec2; STACK_INLINE],
     len: usize,
     spill: Vec<UVec2>,
 }
@@ -64,7 +71,7 @@ struct DeepStack {
 impl DeepStack {
     fn new() -> Self {
         DeepStack {
-            inline: [UVec2::ZERO; 32],
+            inline: [UVec2::ZERO; STACK_INLINE],
             len: 0,
             spill: Vec::new(),
         }
@@ -72,7 +79,7 @@ impl DeepStack {
 
     #[inline(always)]
     fn push(&mut self, v: UVec2) {
-        if self.len < 32 {
+        if self.len < STACK_INLINE {
             self.inline[self.len] = v;
         } else {
             self.spill.push(v);
@@ -86,7 +93,7 @@ impl DeepStack {
             return UVec2::ZERO;
         }
         self.len -= 1;
-        if self.len >= 32 {
+        if self.len >= STACK_INLINE {
             self.spill.pop().unwrap_or(UVec2::ZERO)
         } else {
             self.inline[self.len]
@@ -700,5 +707,58 @@ mod tests {
         // Range limits.
         assert_eq!(select_closest([(0, 0.5 * FTINY)], 10.0, |_, _| false), None);
         assert_eq!(select_closest([(0, 10.0)], 10.0, |_, _| false), None);
+    }
+
+    #[test]
+    fn window_keeps_many_coincident_hits() {
+        // Sequences of up to WINDOW hits within FTINY of each other, with far hits mixed
+        // in: the winner is the one the rule picks among all eligible hits.
+        let prefer = |a: usize, b: usize| a % 3 < b % 3;
+        let mut seed = 12345u64;
+        let mut next = || {
+            seed = seed
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
+            (seed >> 33) as f64 / (1u64 << 31) as f64
+        };
+        for case in 0..200 {
+            let n = 1 + case % WINDOW;
+            let base = 1.0 + next();
+            let hits: Vec<(usize, f64)> = (0..n + 4)
+                .map(|i| {
+                    let t = if i % 5 == 4 {
+                        base + 1.0 + next() // never eligible
+                    } else {
+                        base + 0.4 * FTINY * next()
+                    };
+                    (i, t)
+                })
+                .collect();
+            let tmin = hits.iter().map(|h| h.1).fold(f64::INFINITY, f64::min);
+            let eligible: Vec<_> = hits
+                .iter()
+                .copied()
+                .filter(|h| h.1 <= tmin + FTINY)
+                .collect();
+            assert!(eligible.len() <= WINDOW);
+            let mut want = eligible[0];
+            for &c in &eligible[1..] {
+                if beats(c, want, &prefer) {
+                    want = c;
+                }
+            }
+            assert_eq!(
+                select_closest(hits.clone(), 10.0, prefer),
+                Some(want),
+                "case {case}"
+            );
+        }
+        // More coincident hits than the window holds: the farthest are dropped, never the
+        // closest.
+        let hits: Vec<(usize, f64)> = (0..3 * WINDOW)
+            .map(|i| (i, 1.0 + FTINY * (0.9 - 0.02 * i as f64)))
+            .collect();
+        let last = hits[hits.len() - 1];
+        assert_eq!(select_closest(hits, 10.0, |_, _| false), Some(last));
     }
 }
