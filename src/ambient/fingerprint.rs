@@ -232,7 +232,7 @@ mod tests {
             |p: &mut RenderParams| p.amb.share_max = 1.0,
             |p: &mut RenderParams| p.amb.corral = false,
             |p: &mut RenderParams| p.amb.hessian_cells = 64,
-            |p: &mut RenderParams| p.amb.shadow_trust = 8,
+            |p: &mut RenderParams| p.amb.shadow_trust = 4,
             |p: &mut RenderParams| {
                 p.ax = crate::options::schedule::AccuracySchedule::new(0.5, 0.1, 0.1, false).ok()
             },

@@ -105,7 +105,7 @@ pub fn help_text() -> String {
         ),
         (
             "--amb-shadow-trust N",
-            "agreeing shadow rays before a footprint's cube answers (4)",
+            "agreeing shadow rays before a footprint's cube answers (8)",
         ),
         (
             "--amb-hessian-cells N",
