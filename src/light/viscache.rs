@@ -16,8 +16,9 @@
 //! [`RECHECK`]-th query still traces one, and any disagreement marks the cube as a shadow
 //! edge, where every query traces its own ray from then on. What remains is a cube whose
 //! small lit (or shadowed) part none of its rays found: a blur of shadow edges within less
-//! than the footprint's diameter, which shrinks with the footprint as `-ad` grows. A sample ray's specular descendants (through glass, off a
-//! mirror) keep its spread: their footprint is the spread times the whole path's length.
+//! than the footprint's diameter, which shrinks with the footprint as `-ad` grows. A sample
+//! ray's specular descendants (through glass, off a mirror) keep its spread: their
+//! footprint is the spread times the whole path's length.
 //! Other rays (eye rays and their specular rays, every ray of the uncached `-aa 0`
 //! calculation) always trace their shadow rays.
 //!
