@@ -32,7 +32,6 @@ use super::bvh_build::{
     append, build_chunked, build_cw_big_stack, f32_down, f32_up, BoxPrim, Quality, CHUNK,
 };
 use super::plain::Slab;
-use crate::FTINY;
 
 /// Relative box padding (times the largest coordinate magnitude).
 const PAD_REL: f64 = 4e-6;
@@ -50,8 +49,8 @@ const COORD_LIMIT: f64 = 1e15;
 /// [`Bvh::closest_sub`] packs a candidate and a surface index into one `usize`.
 const _: () = assert!(usize::BITS >= 64);
 
-/// Capacity of the coincident-hit window of [`Bvh::closest`].
-pub const WINDOW: usize = 16;
+use super::bvh_window::Window;
+pub use super::bvh_window::{select_closest, WINDOW};
 
 /// Entries of the traversal stack kept inline ([`DeepStack`]): a wide tree's traversal
 /// holds one node group per level it descends, so a balanced tree of a million leaves
@@ -177,100 +176,6 @@ pub struct Bvh {
 /// A tree's nodes, as obvhs's traversal macro reads them.
 struct Nodes<'a> {
     nodes: &'a [CwBvhNode],
-}
-
-/// Hits within `eps` of the closest one (fixed capacity, no allocation).
-struct Window {
-    buf: [(usize, f64); WINDOW],
-    len: usize,
-    tmin: f64,
-    eps: f64,
-}
-
-impl Window {
-    fn new(eps: f64) -> Self {
-        Window {
-            buf: [(0, 0.0); WINDOW],
-            len: 0,
-            tmin: f64::INFINITY,
-            eps,
-        }
-    }
-
-    /// Add a hit; returns true when it lowered the closest distance.
-    fn push(&mut self, i: usize, t: f64) -> bool {
-        if t > self.tmin + self.eps {
-            return false;
-        }
-        let lowered = t < self.tmin;
-        if lowered {
-            self.tmin = t;
-            let lim = t + self.eps;
-            let mut k = 0;
-            for j in 0..self.len {
-                if self.buf[j].1 <= lim {
-                    self.buf[k] = self.buf[j];
-                    k += 1;
-                }
-            }
-            self.len = k;
-        }
-        if self.len < WINDOW {
-            self.buf[self.len] = (i, t);
-            self.len += 1;
-        } else {
-            // Overflow: replace the farthest entry if the new one is nearer.
-            let mut far = 0;
-            for j in 1..WINDOW {
-                if self.buf[j].1 > self.buf[far].1 {
-                    far = j;
-                }
-            }
-            if t < self.buf[far].1 {
-                self.buf[far] = (i, t);
-            }
-        }
-        lowered
-    }
-
-    /// The winner under the documented rule.
-    fn select(&self, prefer: &impl Fn(usize, usize) -> bool) -> Option<(usize, f64)> {
-        let mut it = self.buf[..self.len].iter().copied();
-        let mut w = it.next()?;
-        for c in it {
-            if beats(c, w, prefer) {
-                w = c;
-            }
-        }
-        Some(w)
-    }
-}
-
-/// True when hit `c` beats hit `w` (see the module documentation).
-fn beats(c: (usize, f64), w: (usize, f64), prefer: &impl Fn(usize, usize) -> bool) -> bool {
-    let pc = prefer(c.0, w.0);
-    let pw = prefer(w.0, c.0);
-    if pc != pw {
-        return pc;
-    }
-    (c.1, c.0) < (w.1, w.0)
-}
-
-/// Reference implementation of [`Bvh::closest`]'s selection over an explicit list of hits
-/// `(index, t)` for a BVH built with `eps = FTINY` (hits outside `(FTINY, tmax)` are
-/// ignored). Useful for brute-force checks.
-pub fn select_closest(
-    hits: impl IntoIterator<Item = (usize, f64)>,
-    tmax: f64,
-    prefer: impl Fn(usize, usize) -> bool,
-) -> Option<(usize, f64)> {
-    let mut win = Window::new(FTINY);
-    for (i, t) in hits {
-        if t > FTINY && t < tmax {
-            win.push(i, t);
-        }
-    }
-    win.select(&prefer)
 }
 
 impl Bvh {
@@ -557,7 +462,9 @@ fn walk(
 
 #[cfg(test)]
 mod tests {
+    use super::super::bvh_window::beats;
     use super::*;
+    use crate::FTINY;
 
     #[test]
     fn rounding_helpers() {

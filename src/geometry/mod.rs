@@ -29,6 +29,7 @@ use crate::scene::primitive::Primitive;
 
 pub mod bvh;
 mod bvh_build;
+mod bvh_window;
 pub mod cone;
 pub mod plain;
 pub mod polygon;
