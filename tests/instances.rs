@@ -359,6 +359,92 @@ fn instances_moved_far_away_or_scaled_render_the_same() {
     }
 }
 
+/// A sparse set (a crown of small triangles over a thin trunk, like a tree) placed 40
+/// times, rotated about z by every kind of angle, renders as the same triangles written
+/// out as polygons: the scene's tree holds each placement in a box narrowed to its set's
+/// parts (`scene::sets::placement_boxes`), and no surface may fall outside it. Needs no
+/// Radiance.
+#[test]
+fn rotated_sparse_meshes_render_like_their_polygons() {
+    let t = tempfile::tempdir().unwrap();
+    let d = t.path();
+    let mut seed = 11u64;
+    let mut rnd = || {
+        seed = seed
+            .wrapping_mul(6364136223846793005)
+            .wrapping_add(1442695040888963407);
+        (seed >> 11) as f64 / (1u64 << 53) as f64
+    };
+    // Triangles of the set: a trunk of two thin quads' triangles, then the crown's.
+    let mut tris: Vec<[[f64; 3]; 3]> = vec![
+        [[-0.1, 0.0, 0.0], [0.1, 0.0, 0.0], [0.1, 0.0, 3.0]],
+        [[-0.1, 0.0, 0.0], [0.1, 0.0, 3.0], [-0.1, 0.0, 3.0]],
+    ];
+    for _ in 0..120 {
+        let (r, a, z) = (
+            2.0 * rnd().sqrt(),
+            std::f64::consts::TAU * rnd(),
+            3.0 + 2.0 * rnd(),
+        );
+        let (x, y) = (r * a.cos(), r * a.sin());
+        tris.push([
+            [x, y, z],
+            [x + 0.3 * rnd(), y + 0.3 * rnd(), z + 0.3 * (rnd() - 0.5)],
+            [x - 0.3 * rnd(), y + 0.3 * rnd(), z + 0.3 * rnd()],
+        ]);
+    }
+    let mut obj = String::new();
+    for tri in &tris {
+        for v in tri {
+            obj += &format!("v {:.6} {:.6} {:.6}\n", v[0], v[1], v[2]);
+        }
+    }
+    for k in 0..tris.len() {
+        obj += &format!("f {} {} {}\n", 3 * k + 1, 3 * k + 2, 3 * k + 3);
+    }
+    std::fs::write(d.join("crown.obj"), obj).unwrap();
+    let head = "void light sun 0 0 3 5e5 5e5 5e5\nsun source s 0 0 4 .3 -.4 .8 .5\n\
+                void plastic leaf 0 0 5 .3 .5 .2 0 0\n\
+                leaf polygon ground 0 0 12 -40 -40 0 40 -40 0 40 40 0 -40 40 0\n";
+    let (mut inst, mut flat) = (head.to_string(), head.to_string());
+    for k in 0..40 {
+        let a = (k * 37 % 360) as f64 + if k % 3 == 0 { 0.0 } else { 0.5 };
+        let (x, y) = ((k % 8) as f64 * 7.0 - 24.0, (k / 8) as f64 * 7.0 - 10.0);
+        inst += &format!("void mesh c{k} 9 crown.obj -m leaf -rz {a} -t {x} {y} 0\n0\n0\n");
+        let (s, c) = a.to_radians().sin_cos();
+        for (j, tri) in tris.iter().enumerate() {
+            flat += &format!("leaf polygon p{k}_{j} 0 0 9");
+            for v in tri {
+                let w = [c * v[0] - s * v[1] + x, s * v[0] + c * v[1] + y, v[2]];
+                flat += &format!(" {:.9} {:.9} {:.9}", w[0], w[1], w[2]);
+            }
+            flat += "\n";
+        }
+    }
+    std::fs::write(d.join("inst.rad"), inst).unwrap();
+    std::fs::write(d.join("flat.rad"), flat).unwrap();
+    let render = |scene: &str, out: &str| -> Image {
+        run_ok(tpict_in(d).args([
+            "-vp", "0", "-45", "4", "-vd", "0", "1", "-0.05", "-vh", "70", "-vv", "45", "-x",
+            "160", "-y", "100", "-ab", "0", "-av", ".1", ".1", ".1", "-ps", "1", "-pj", "0", "-o",
+            out, scene,
+        ]));
+        let img = read_picture(&d.join(out)).unwrap();
+        assert_finite(&img);
+        img
+    };
+    let a = render("inst.rad", "inst.hdr");
+    let b = render("flat.rad", "flat.hdr");
+    let c = compare(&reduce(&a, 160, 100), &reduce(&b, 160, 100), 0.01);
+    eprintln!("instanced against flat: {c:?}");
+    assert!(c.rms < 0.01, "relative RMS {}", c.rms);
+    assert!(
+        c.mean_lum < 0.002,
+        "mean luminance differs by {}",
+        c.mean_lum
+    );
+}
+
 fn output(c: &mut Command) -> Output {
     c.output().expect("cannot run tpict")
 }

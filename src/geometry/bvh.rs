@@ -257,6 +257,35 @@ impl Bvh {
         }
     }
 
+    /// Boxes whose union holds every box of the tree: those of the nodes `depth` levels
+    /// below the root (or of the leaves met before), in the tree's own coordinates, as its
+    /// traversal tests them (padded and rounded outward). Empty for an empty tree; a
+    /// chunked tree gives its chunks' boxes at most.
+    pub fn cover(&self, depth: u32) -> Vec<(DVec3, DVec3)> {
+        let mut out = Vec::new();
+        let mut todo = vec![(0u32, 1u32)];
+        while let Some((n, d)) = todo.pop() {
+            let Some(node) = self.nodes.get(n as usize) else {
+                return Vec::new();
+            };
+            for c in 0..8 {
+                if node.is_child_empty(c) {
+                    continue;
+                }
+                if !node.is_leaf(c) && d < depth {
+                    todo.push((node.child_node_index(c), d + 1));
+                    continue;
+                }
+                let b = node.child_aabb(c);
+                out.push((
+                    DVec3::new(b.min.x as f64, b.min.y as f64, b.min.z as f64),
+                    DVec3::new(b.max.x as f64, b.max.y as f64, b.max.z as f64),
+                ));
+            }
+        }
+        out
+    }
+
     /// Number of boxes the BVH was built from.
     pub fn len(&self) -> usize {
         self.count
@@ -487,6 +516,44 @@ mod tests {
         let mut n = 0;
         b.candidates(DVec3::ZERO, DVec3::X, 1e10, |_| n += 1);
         assert_eq!(n, 0);
+    }
+
+    #[test]
+    fn cover_holds_every_box() {
+        // Boxes of random sizes scattered over a region, a wide tree of them and a deep one.
+        let mut seed = 7u64;
+        let mut rnd = || {
+            seed = seed
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
+            (seed >> 11) as f64 / (1u64 << 53) as f64
+        };
+        let scattered: Vec<_> = (0..500)
+            .map(|_| {
+                let c = DVec3::new(rnd(), rnd(), rnd()) * 40.0 - 20.0;
+                let h = DVec3::new(rnd(), rnd(), rnd()) * 0.5;
+                (c - h, c + h)
+            })
+            .collect();
+        let nested: Vec<_> = (0..100)
+            .map(|i| (DVec3::splat(-1.1f64.powi(i)), DVec3::splat(1.1f64.powi(i))))
+            .collect();
+        for input in [&scattered, &nested] {
+            let bvh = Bvh::build(input, FTINY);
+            for depth in 1..=3 {
+                let cover = bvh.cover(depth);
+                assert!(!cover.is_empty() && cover.len() <= 8usize.pow(depth));
+                for &(lo, hi) in input.iter() {
+                    assert!(
+                        cover
+                            .iter()
+                            .any(|&(a, b)| a.cmple(lo).all() && b.cmpge(hi).all()),
+                        "depth {depth}: no cover box holds {lo}..{hi}"
+                    );
+                }
+            }
+        }
+        assert!(Bvh::build(&[], FTINY).cover(2).is_empty());
     }
 
     #[test]

@@ -304,6 +304,42 @@ pub fn placement_count(set: &ObjectSet) -> u64 {
     u64::from(set.bounds.is_some()).saturating_add(set.placements)
 }
 
+/// The boxes of `placements` in the scene's frame, for the scene's tree: each placement's
+/// set's bounds taken through its transform, narrowed to the bounds of the boxes of its
+/// set's tree some levels below the root taken through it
+/// ([`crate::geometry::bvh::Bvh::cover`]). A rotated set's box, or one round a sparse set
+/// (a tree's crown above its trunk), then holds less empty space that rays cross without
+/// meeting a surface. Two levels (at most 64 boxes a set) for up to 2^16 placements, one
+/// level (8) for up to 2^19, none beyond, so that the work stays within about 2^25 points.
+pub fn placement_boxes(sets: &[ObjectSet], placements: &[Placement]) -> Vec<(DVec3, DVec3)> {
+    let depth = match placements.len() {
+        0..=65_536 => 2,
+        65_537..=524_288 => 1,
+        _ => 0,
+    };
+    let mut covers: Vec<Option<Vec<(DVec3, DVec3)>>> = vec![None; sets.len()];
+    placements
+        .iter()
+        .map(|p| {
+            let set = &sets[p.set];
+            let bb = set.bounds.unwrap_or((DVec3::ZERO, DVec3::ZERO));
+            let whole = map_box(bb, |c| p.to_world.transform_point3(c));
+            if depth == 0 {
+                return whole;
+            }
+            let cover = covers[p.set].get_or_insert_with(|| set.bvh.cover(depth));
+            let mut tight = None;
+            for &b in cover.iter() {
+                union(&mut tight, map_box(b, |c| p.to_world.transform_point3(c)));
+            }
+            // Both hold every surface of the set: so does their intersection.
+            tight.map_or(whole, |(lo, hi): (DVec3, DVec3)| {
+                (lo.max(whole.0), hi.min(whole.1))
+            })
+        })
+        .collect()
+}
+
 /// Flatten the scene's instances into placements relative to `origin`.
 pub fn flatten(sets: &[ObjectSet], top: &[Child], origin: DVec3) -> Result<Vec<Placement>, String> {
     let mut out = Vec::new();

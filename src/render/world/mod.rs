@@ -19,7 +19,9 @@ use crate::scene::image::SceneImage;
 pub use crate::scene::object::{Object, Objects};
 use crate::scene::primitive::{Location, Primitive};
 use crate::scene::reader::{ReadOptions, KNOWN_TYPES};
-use crate::scene::sets::{flatten, map_box, placement_count, Child, ObjectSet, MAX_PLACEMENTS};
+use crate::scene::sets::{
+    flatten, map_box, placement_boxes, placement_count, Child, ObjectSet, MAX_PLACEMENTS,
+};
 use crate::scene::transform::Transform;
 use crate::scene::world::surface_counts_ok;
 pub use crate::scene::world::{length_tolerance, DistantObject, SceneGeometry, SURFACE_TYPES};
@@ -699,11 +701,7 @@ impl Scene {
             let mut all: Vec<(DVec3, DVec3)> = (0..level.objects.len())
                 .map(|i| level.objects.surface(i).bounds())
                 .collect();
-            for p in &placements {
-                let set = &b.sets[p.set];
-                let bb = set.bounds.unwrap_or((DVec3::ZERO, DVec3::ZERO));
-                all.push(map_box(bb, |c| p.to_world.transform_point3(c)));
-            }
+            all.extend(placement_boxes(&b.sets, &placements));
             Bvh::build(&all, level.eps)
         };
         let functions = b.mods.files.functions().finish();
