@@ -1,7 +1,7 @@
 //! The in-memory irradiance cache shared by all render threads.
 //!
 //! Values are kept in a multi-level hashed grid: a value of radius `r` lives at the level
-//! whose cell size is the smallest power-of-two multiple of the base size that is at least
+//! whose cell size is the smallest power-of-four multiple of the base size that is at least
 //! twice its reach (`aa·reach·r`), filed (as a shared pointer) in every cell of that level its
 //! reach sphere touches — at most 2×2×2. A lookup at point P reads, per level in use, the one
 //! cell holding P: every value whose reach covers P is there; per-level occupancy bits let
@@ -69,10 +69,11 @@ fn local(key: &Key, q: DVec3) -> [f32; 3] {
     ]
 }
 
-/// `q · 2^-l`, exactly (for `q` far from the subnormals).
+/// `q` in the cells of level `l` from the base level's: `q · 2^-(l·LEVEL_STEP)`, exactly
+/// (for `q` far from the subnormals).
 #[inline(always)]
 fn scale_down(q: DVec3, l: u32) -> DVec3 {
-    q * (1.0 / (1u64 << l) as f64)
+    q * (1.0 / (1u64 << (l * LEVEL_STEP)) as f64)
 }
 
 /// The cell of level `l` holding the point `q` (in cells of that level,
@@ -164,7 +165,12 @@ pub trait ValueSink: Send + Sync {
 pub const REACH_MAX: f64 = 2.0;
 
 const SHARDS: usize = 64;
-const MAX_LEVELS: u32 = 40;
+/// Levels of the grid: each one's cells are `2^LEVEL_STEP` times as wide as the one's
+/// below (four times: a lookup reads one cell of each level in use, half as many as with
+/// levels twice apart, each holding about 2.5 times the values).
+const LEVEL_STEP: u32 = 2;
+const MAX_LEVELS: u32 = 30;
+const _: () = assert!(MAX_LEVELS * LEVEL_STEP < 64);
 /// Words of a level's occupancy bits ([`AmbientCache::occupied`]): 32,768 bits, 4 KiB.
 const OCCUPIED_WORDS: usize = 512;
 
@@ -365,14 +371,14 @@ impl AmbientCache {
         let mut l = 0;
         let mut size = self.base;
         while size < reach && l < MAX_LEVELS - 1 {
-            size *= 2.0;
+            size *= (1u64 << LEVEL_STEP) as f64;
             l += 1;
         }
         l
     }
 
     fn cell_size(&self, level: u32) -> f64 {
-        self.base * (1u64 << level) as f64
+        self.base * (1u64 << (level * LEVEL_STEP)) as f64
     }
 
     /// `p` in units of the cells of level `l`. Monotone in each coordinate (a product by a
