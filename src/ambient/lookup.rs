@@ -27,6 +27,26 @@ thread_local! {
     static CANDIDATES: std::cell::RefCell<Vec<Candidate>> = const { std::cell::RefCell::new(Vec::new()) };
 }
 
+thread_local! {
+    /// The last ray weight [`widening`] was asked for, and its answer.
+    static WIDENING: std::cell::Cell<(f64, f64)> = const { std::cell::Cell::new((f64::NAN, 0.0)) };
+}
+
+/// `rweight^0.13`, the widening of the angle limit for light rays: the sample rays of one
+/// value, whose lookups follow one another, share a weight, so the last answer is kept
+/// (a `powf` call was 0.6% of an `-ab 2` frame).
+fn widening(rweight: f64) -> f64 {
+    WIDENING.with(|c| {
+        let (w, f) = c.get();
+        if w == rweight {
+            return f;
+        }
+        let f = rweight.powf(0.13);
+        c.set((rweight, f));
+        f
+    })
+}
+
 /// One lookup: the point, its normal, and the limits Radiance's tests use.
 struct Lookup<'o> {
     p: DVec3,
@@ -98,7 +118,7 @@ impl Ambient {
         let aa = self.aa();
         let mut maxangle = 10f64.to_radians() + aa;
         if rweight < 0.6 {
-            maxangle = (maxangle - PI / 2.0) * rweight.powf(0.13) + PI / 2.0;
+            maxangle = (maxangle - PI / 2.0) * widening(rweight) + PI / 2.0;
         }
         let mut q = Lookup {
             p,
