@@ -368,13 +368,7 @@ fn instances_moved_far_away_or_scaled_render_the_same() {
 fn rotated_sparse_meshes_render_like_their_polygons() {
     let t = tempfile::tempdir().unwrap();
     let d = t.path();
-    let mut seed = 11u64;
-    let mut rnd = || {
-        seed = seed
-            .wrapping_mul(6364136223846793005)
-            .wrapping_add(1442695040888963407);
-        (seed >> 11) as f64 / (1u64 << 53) as f64
-    };
+    let mut rnd = uniform(11);
     // Triangles of the set: a trunk of two thin quads' triangles, then the crown's.
     let mut tris: Vec<[[f64; 3]; 3]> = vec![
         [[-0.1, 0.0, 0.0], [0.1, 0.0, 0.0], [0.1, 0.0, 3.0]],

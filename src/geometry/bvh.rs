@@ -521,13 +521,7 @@ mod tests {
     #[test]
     fn cover_holds_every_box() {
         // Boxes of random sizes scattered over a region, a wide tree of them and a deep one.
-        let mut seed = 7u64;
-        let mut rnd = || {
-            seed = seed
-                .wrapping_mul(6364136223846793005)
-                .wrapping_add(1442695040888963407);
-            (seed >> 11) as f64 / (1u64 << 53) as f64
-        };
+        let mut rnd = crate::hash::test_uniform(7);
         let scattered: Vec<_> = (0..500)
             .map(|_| {
                 let c = DVec3::new(rnd(), rnd(), rnd()) * 40.0 - 20.0;
