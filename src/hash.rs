@@ -8,9 +8,9 @@ pub fn fx_mix(h: u64, x: u64) -> u64 {
 }
 
 /// Uniform numbers in [0, 1) from a 64-bit linear congruential generator seeded with
-/// `seed`: reproducible inputs for tests.
-#[cfg(test)]
-pub(crate) fn test_uniform(seed: u64) -> impl FnMut() -> f64 {
+/// `seed`: reproducible inputs for tests (the crate's and the integration tests'), never
+/// for rendering.
+pub fn test_uniform(seed: u64) -> impl FnMut() -> f64 {
     let mut s = seed;
     move || {
         s = s

@@ -368,7 +368,7 @@ fn instances_moved_far_away_or_scaled_render_the_same() {
 fn rotated_sparse_meshes_render_like_their_polygons() {
     let t = tempfile::tempdir().unwrap();
     let d = t.path();
-    let mut rnd = uniform(11);
+    let mut rnd = tessera::hash::test_uniform(11);
     // Triangles of the set: a trunk of two thin quads' triangles, then the crown's.
     let mut tris: Vec<[[f64; 3]; 3]> = vec![
         [[-0.1, 0.0, 0.0], [0.1, 0.0, 0.0], [0.1, 0.0, 3.0]],

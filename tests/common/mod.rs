@@ -6,18 +6,6 @@ use std::path::{Path, PathBuf};
 use std::process::Command;
 use tessera::image::Image;
 
-/// Uniform numbers in [0, 1) from a 64-bit linear congruential generator seeded with
-/// `seed`: reproducible inputs for tests.
-pub fn uniform(seed: u64) -> impl FnMut() -> f64 {
-    let mut s = seed;
-    move || {
-        s = s
-            .wrapping_mul(6364136223846793005)
-            .wrapping_add(1442695040888963407);
-        (s >> 11) as f64 / (1u64 << 53) as f64
-    }
-}
-
 /// The folder holding Radiance's binaries, or None (tests then skip, unless
 /// `TESSERA_REQUIRE_RADIANCE=1`, as in CI, where a missing Radiance is a failure).
 pub fn radiance_bin() -> Option<PathBuf> {
