@@ -277,10 +277,7 @@ impl Bvh {
                     continue;
                 }
                 let b = node.child_aabb(c);
-                out.push((
-                    DVec3::new(b.min.x as f64, b.min.y as f64, b.min.z as f64),
-                    DVec3::new(b.max.x as f64, b.max.y as f64, b.max.z as f64),
-                ));
+                out.push((b.min.as_dvec3(), b.max.as_dvec3()));
             }
         }
         out
@@ -682,13 +679,7 @@ mod tests {
         // Sequences of up to WINDOW hits within FTINY of each other, with far hits mixed
         // in: the winner is the one the rule picks among all eligible hits.
         let prefer = |a: usize, b: usize| a % 3 < b % 3;
-        let mut seed = 12345u64;
-        let mut next = || {
-            seed = seed
-                .wrapping_mul(6364136223846793005)
-                .wrapping_add(1442695040888963407);
-            (seed >> 33) as f64 / (1u64 << 31) as f64
-        };
+        let mut next = crate::hash::test_uniform(12345);
         for case in 0..200 {
             let n = 1 + case % WINDOW;
             let base = 1.0 + next();

@@ -87,11 +87,10 @@ impl Window {
 
     /// The winner under the documented rule.
     pub(super) fn select(&self, prefer: &impl Fn(usize, usize) -> bool) -> Option<(usize, f64)> {
-        let mut w = if self.len > 0 {
-            self.at(0)
-        } else {
+        if self.len == 0 {
             return None;
-        };
+        }
+        let mut w = self.at(0);
         for j in 1..self.len {
             let c = self.at(j);
             if beats(c, w, prefer) {
