@@ -65,8 +65,10 @@ fn cheap(s: &Step) -> bool {
     )
 }
 
-/// Expressions of at most this many nodes are evaluated in a buffer on the stack.
+/// Expressions of at most this many nodes are evaluated in a buffer on the stack, of the
+/// first of these sizes that holds them (a small buffer is copied inline, not by `memcpy`).
 const SMALL: usize = 32;
+const TIERS: [usize; 3] = [8, 16, SMALL];
 
 /// One node of a pure expression; children are indices into [`Pure::nodes`], always
 /// smaller than the node's own index (the root is the last).
@@ -120,7 +122,7 @@ pub struct Pure {
     /// Targets of [`Step::Switch`].
     jumps: Vec<u32>,
     /// What an evaluation starts from: each number node's value (0 elsewhere), padded with
-    /// zeros to [`SMALL`] values for a form of at most that many nodes.
+    /// zeros to the size of its buffer ([`TIERS`]) for a form of at most [`SMALL`] nodes.
     init: Vec<f64>,
     /// The steps, in order; every jump goes forward.
     ops: Vec<Step>,
@@ -437,8 +439,8 @@ pub(crate) fn expand(
     let mut out = e.out;
     // A small form's initial values fill the whole stack buffer, which an evaluation then
     // takes in one fixed-size copy (rather than zeroing it and copying the numbers).
-    if out.count <= SMALL {
-        out.init.resize(SMALL, 0.0);
+    if let Some(&size) = TIERS.iter().find(|&&t| out.count <= t) {
+        out.init.resize(size, 0.0);
     }
     out.straight = out.ops.iter().all(|s| matches!(s, Step::Val(..)));
     out.chans = out.ops.iter().fold(0, |m, s| match s {
@@ -476,7 +478,13 @@ impl Pure {
         if self.count == 0 || out.len() > self.roots.len() {
             return None;
         }
-        if self.count <= SMALL {
+        if self.count <= TIERS[0] {
+            let mut v: [f64; TIERS[0]] = self.init.get(..TIERS[0])?.try_into().ok()?;
+            self.fill(&mut v, chan, args, values, out)
+        } else if self.count <= TIERS[1] {
+            let mut v: [f64; TIERS[1]] = self.init.get(..TIERS[1])?.try_into().ok()?;
+            self.fill(&mut v, chan, args, values, out)
+        } else if self.count <= SMALL {
             let mut v: [f64; SMALL] = self.init.get(..SMALL)?.try_into().ok()?;
             self.fill(&mut v, chan, args, values, out)
         } else {
