@@ -71,7 +71,7 @@ pub use error::{CalError, EvalError};
 pub use eval::{MAX_DEPTH, MAX_STACK};
 pub use noise::{fnoise3, noise3};
 pub use program::{Evaluation, Program};
-pub use pure::Pure;
+pub use pure::{LaneInputs, Pure, LANES};
 
 /// Which host's rules a text follows (§1.1).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]

@@ -33,6 +33,9 @@ use super::eval::{better, noise_fn, select_index};
 use super::library::Lib;
 use std::collections::HashMap;
 
+mod lanes;
+pub use lanes::{LaneInputs, LANES};
+
 /// Most nodes of a pure expression (larger ones stay with the machine).
 pub const MAX_NODES: usize = 256;
 
@@ -581,7 +584,7 @@ impl Pure {
     }
 
     /// Node `node`'s value from the values `v` of its children; NaN where the machine
-    /// would refuse it (see [`Pure::run`]).
+    /// would refuse it (see [`Pure::run`]): the lanes' rule ([`Pure::value_lanes`]) at one.
     #[inline(always)]
     fn value<const N: usize>(
         &self,
@@ -591,95 +594,14 @@ impl Pure {
         args: &[f64],
         values: &[f64],
     ) -> f64 {
-        let g = |j: u32| v[j as usize & (N - 1)];
-        // Both operands usable, else NaN.
-        let two = |a: u32, b: u32, f: fn(f64, f64) -> f64| {
-            let (x, y) = (g(a), g(b));
-            if x.is_nan() || y.is_nan() {
-                f64::NAN
-            } else {
-                f(x, y)
-            }
-        };
-        let r = match node {
-            P::Num(x) => x,
-            P::Chan(c) => chan.get(c as usize).copied().unwrap_or(f64::NAN),
-            P::Param(p) => values.get(p as usize).copied().unwrap_or(f64::NAN),
-            P::Neg(a) => -g(a),
-            P::Add(a, b) => g(a) + g(b),
-            P::Sub(a, b) => g(a) - g(b),
-            P::Mul(a, b) => g(a) * g(b),
-            // A refused operand refuses the operation (`x^0` of a NaN is 1).
-            P::Div(a, b) => two(a, b, |x, y| if y == 0.0 { f64::NAN } else { x / y }),
-            P::Pow(a, b) => two(a, b, f64::powf),
-            P::If(c, a, b) => {
-                let c = g(c);
-                if c.is_nan() {
-                    f64::NAN
-                } else if c > 0.0 {
-                    g(a)
-                } else {
-                    g(b)
-                }
-            }
-            P::Unary(f, a) => {
-                let x = g(a);
-                if x.is_nan() {
-                    f64::NAN
-                } else {
-                    f(x)
-                }
-            }
-            P::Atan2(y, x) => two(y, x, f64::atan2),
-            P::MinMax(max, at, n) => {
-                // From the last argument backwards, as the machine; a refused
-                // argument refuses the whole call.
-                let run = &self.list[at as usize..at as usize + n as usize];
-                let mut best = g(run[run.len() - 1]);
-                for &j in run[..run.len() - 1].iter().rev() {
-                    let a = g(j);
-                    best = if a.is_nan() { a } else { better(max, best, a) };
-                }
-                best
-            }
-            P::Select(at, n) => {
-                // The chosen argument (0: their count); a refused index or one out of
-                // range is the machine's domain error. All were computed; the others
-                // are dropped, as the machine never evaluates them.
-                let run = &self.list[at as usize..at as usize + n as usize];
-                let count = run.len() - 1;
-                match select_index(g(run[0]) + 0.5, count) {
-                    Ok(0) => count as f64,
-                    Ok(k) => g(run[k]),
-                    Err(_) => f64::NAN,
-                }
-            }
-            P::Noise(l, x, y, z) => {
-                let (x, y, z) = (g(x), g(y), g(z));
-                if x.is_nan() || y.is_nan() || z.is_nan() {
-                    f64::NAN
-                } else {
-                    noise_fn(l, x, y, z)
-                }
-            }
-            P::Arg(a) => {
-                let x = g(a);
-                let n = (x + 0.5) as i64;
-                if x.is_nan() {
-                    f64::NAN
-                } else if n < 1 {
-                    args.len() as f64
-                } else {
-                    args.get(n as usize - 1).copied().unwrap_or(f64::NAN)
-                }
-            }
-        };
-        // Infinities (which the machine carries through sums) are refused too.
-        if r.is_finite() {
-            r
-        } else {
-            f64::NAN
-        }
+        let [r] = self.value_lanes::<1>(
+            node,
+            |j, _| v[j as usize & (N - 1)],
+            |c, _| chan.get(c as usize).copied().unwrap_or(f64::NAN),
+            |p, _| values.get(p as usize).copied().unwrap_or(f64::NAN),
+            args,
+        );
+        r
     }
 
     /// Number of steps an evaluation runs at most (for tests).

@@ -3,6 +3,56 @@
 
 use super::*;
 
+/// [`Pure::eval_lanes`] at lanes `0..n` against [`Pure::eval_into`] at each lane alone:
+/// the same values bit for bit, and a lane is refused exactly where the point alone is.
+/// False when the form does not run in lanes (jumps, or too many nodes).
+fn lanes_agree(
+    p: &Pure,
+    n: usize,
+    chans: &[[f64; 27]; LANES],
+    args: &[f64],
+    (values, nvalues): (&[[f64; 3]; LANES], usize),
+) -> bool {
+    let input = LaneInputs {
+        chans,
+        values,
+        nvalues,
+    };
+    let mut out = [[0.0; 3]; LANES];
+    let mut ok = [false; LANES];
+    if !p.eval_lanes(n, &input, args, 1, &mut out, &mut ok) {
+        return false;
+    }
+    for l in 0..n {
+        let mut alone = [0.0];
+        let one = p
+            .eval_into(&chans[l], args, &values[l][..nvalues], &mut alone)
+            .map(|()| alone[0]);
+        match one {
+            Some(v) => assert!(
+                ok[l] && out[l][0].to_bits() == v.to_bits(),
+                "lane {l} of {n}: {} against {v}",
+                out[l][0]
+            ),
+            None => assert!(!ok[l], "lane {l} of {n}: {} where alone refused", out[l][0]),
+        }
+    }
+    true
+}
+
+/// Eight points around `chan`: lane `l` moves the point, the direction's z and `Rdot`.
+fn around(chan: &[f64; 27], i: usize) -> [[f64; 27]; LANES] {
+    std::array::from_fn(|l| {
+        let mut c = *chan;
+        let x = ((i * LANES + l) as f64 * 0.618).sin();
+        c[2] = (c[2] + 0.3 * x).clamp(-1.2, 1.2);
+        c[6] += x;
+        c[7] -= 0.5 * x;
+        c[10] = if l == 3 { 0.0 } else { c[10] + 0.2 * x };
+        c
+    })
+}
+
 /// The run-time machine (`vm`) against the tree walker on random expressions over
 /// definitions that use every kind of node: lazy and function-name arguments, recursion,
 /// `if`/`select`/`min`/`max`, `arg`, BRDF-free channels, and errors of every kind (fatal
@@ -77,6 +127,7 @@ fn run_time_machine_matches_the_tree_walker() {
     let mut kinds = [0usize; 4];
     let mut pure = [0usize; 2];
     let mut jumps = 0;
+    let mut laned = 0;
     for (i, (text, e)) in exprs.iter().enumerate() {
         let mut chan = [0.0; 27];
         chan[6] = (i as f64 * 0.37).sin() * 2.0;
@@ -93,6 +144,15 @@ fn run_time_machine_matches_the_tree_walker() {
         if let Some(p) = prog.pure_expr(*e) {
             pure[0] += 1;
             jumps += usize::from(p.has_jumps());
+            let none = ([[0.0; 3]; LANES], 0);
+            let n = 1 + i % LANES;
+            laned += usize::from(lanes_agree(
+                &p,
+                n,
+                &around(&env.chan, i),
+                env.args,
+                (&none.0, none.1),
+            ));
             if let Some(v) = p.eval(&env.chan, env.args, &[]) {
                 pure[1] += 1;
                 assert!(
@@ -124,6 +184,8 @@ fn run_time_machine_matches_the_tree_walker() {
     // Branches skipped by jumps (an `if` or `select` with a library call in a branch)
     // are among them.
     assert!(jumps > 100, "{jumps} pure forms with jumps");
+    // Those without jumps ran in lanes too.
+    assert!(laned > 300, "{laned} pure forms in lanes");
 }
 
 /// Functions called with values (a pattern's function of its data values): the pure form
@@ -173,7 +235,7 @@ fn pure_functions_match_the_machine() {
     let theta = prog.pure_expr(exprs[0]).unwrap().steps();
     // Dz, the two differences and two `if`s of `bound`, `acos`, the quotient.
     assert_eq!(theta, 7, "theta takes {theta} steps");
-    let (mut same, mut left) = (0, 0);
+    let (mut same, mut left, mut laned) = (0, 0, 0);
     for i in 0..3000 {
         let x = |k: f64| ((i as f64 + 1.0) * k).sin();
         let mut chan = [0.0; 27];
@@ -193,9 +255,23 @@ fn pure_functions_match_the_machine() {
             brdf: None,
         };
         let vals = [x(0.05) * 4.0, x(0.013).abs() * 9.0];
+        let lane_vals: [[f64; 3]; LANES] = std::array::from_fn(|l| {
+            [
+                vals[0] + l as f64 * 0.25,
+                vals[1] * (1.0 - l as f64 * 0.3),
+                0.0,
+            ]
+        });
         let mut check = |p: Option<crate::cal::Pure>, vm: Result<f64, EvalError>, what: &str| {
             let Some(p) = p else { return };
             let nv = if what == "miss" { 1 } else { 2 };
+            laned += usize::from(lanes_agree(
+                &p,
+                1 + i % LANES,
+                &around(&chan, i),
+                args,
+                (&lane_vals, nv),
+            ));
             match p.eval(&chan, args, &vals[..nv]) {
                 Some(v) => {
                     assert!(
@@ -226,6 +302,7 @@ fn pure_functions_match_the_machine() {
         same > 60_000 && left > 200,
         "{same} pure, {left} left to the machine"
     );
+    assert!(laned > 60_000, "{laned} evaluated in lanes");
 }
 
 /// Small functions called with short call-free arguments are compiled inline (no call at

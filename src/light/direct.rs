@@ -97,12 +97,18 @@ fn direct_with(
     let contrib = &mut scratch.contrib;
     contrib.clear();
     contrib.resize(samples.len(), Color::ZERO);
-    for (k, s) in samples.iter_mut().enumerate() {
-        let w = coef(s.dir, s.omega);
+    // The coefficients first (held in `contrib` until the potentials replace them), then
+    // the patterns of the samples that have one, computed together
+    // ([`Tracer::sample_patterns`]).
+    for (w, s) in contrib.iter_mut().zip(samples.iter()) {
+        *w = coef(s.dir, s.omega);
+    }
+    tr.sample_patterns(p, samples, contrib);
+    for (k, s) in samples.iter().enumerate() {
+        let w = std::mem::replace(&mut contrib[k], Color::ZERO);
         if w == Color::ZERO {
             continue;
         }
-        s.radiance *= tr.sample_pattern(p, s);
         let c = w * s.radiance;
         let b = bright(c);
         if b > 0.0 && b.is_finite() {

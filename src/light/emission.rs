@@ -150,4 +150,91 @@ mod tests {
             [Some(false), Some(false), Some(false), Some(true), None]
         );
     }
+
+    /// The samples of a shading point's sources, their patterns computed together
+    /// ([`Tracer::sample_patterns`]), take the colours each gets alone, bit for bit: eleven
+    /// luminaires of one ies2rad-like distribution in their own frames (one with another
+    /// multiplier: another shape), a colour one, two whose function fails at some
+    /// directions (left to the machine, lane by lane), a texture's walk and plain sources
+    /// between them; samples without a coefficient keep their radiance.
+    #[test]
+    fn patterns_in_lanes_are_each_samples_own() {
+        let mut text = String::new();
+        for i in 0..16 {
+            let (x, y) = (0.7 * (i % 4) as f64, 0.9 * (i / 4) as f64);
+            let (kind, funcs, files) = match i {
+                8 => ("colordata", "flat flat flat", "dist.dat dist.dat dist.dat"),
+                9 | 10 => ("brightdata", "odd", "dist.dat"),
+                _ => ("brightdata", "flat", "dist.dat"),
+            };
+            let k = funcs.split(' ').count() * 2 + 6 + if i % 3 == 0 { 2 } else { 0 };
+            let rz = if i % 3 == 0 { " -rz 30" } else { "" };
+            let a1 = if i == 5 { 1.5 } else { 2.5 };
+            text += &format!(
+                "void {kind} d{i} {k} {funcs} {files} lum.cal theta{rz} -t {x} {y} 0 0 1 {a1}\n\
+                 d{i} light l{i} 0 0 3 10 10 10\n\
+                 l{i} polygon q{i} 0 0 12 {x} {y} 2.5 {x} {y1} 2.5 {x1} {y1} 2.5 {x1} {y} 2.5\n",
+                y1 = y + 0.3,
+                x1 = x + 0.3,
+            );
+            if i == 12 {
+                text += "void light plain 0 0 3 4 4 4\n\
+                    plain polygon pp 0 0 12 3 3 2.6 3 3.2 2.6 3.2 3.2 2.6 3.2 3 2.6\n";
+            }
+        }
+        text += &SCENE[SCENE.find("void texfunc").unwrap()..];
+        let cal = format!("{CAL}odd(v) = v * sqrt(Dx);\n");
+        let scene = Scene::from_text(
+            &text,
+            &[
+                ("lum.cal", cal.as_str()),
+                ("dist.dat", "1\n0 180 7\n8 7.6 6.4 4.6 2.6 .9 .3\n"),
+            ],
+        );
+        let params = RenderParams::default();
+        let lights = LightSet::collect(&scene, 0);
+        assert_eq!(lights.sources.len(), 18);
+        let tr = Tracer::new(&scene, &params, &lights);
+        let mut rng = Sampler::for_pixel(0, 1, 2, 3);
+        let (mut samples, mut compared, mut failed) = (Vec::new(), 0, 0);
+        for i in 0..500 {
+            let f = |k: u32| ((i * 7919 + k * 104_729) % 1000) as f64 / 1000.0;
+            let p = DVec3::new(-0.5 + 4.0 * f(1), -0.5 + 5.0 * f(2), 2.2 * f(3));
+            samples.clear();
+            let how = Partition {
+                weight: 1.0,
+                ds: if i % 2 == 0 { 0.0 } else { 0.3 },
+                dj: 0.7,
+            };
+            for si in 0..lights.sources.len() {
+                lights.sample(&scene, (si, p), how, &mut rng, &mut samples);
+            }
+            let wanted: Vec<Color> = (0..samples.len())
+                .map(|k| match (k * 7 + i as usize) % 5 {
+                    0 => Color::ZERO,
+                    _ => Color::ONE,
+                })
+                .collect();
+            let mut together = samples.clone();
+            tr.sample_patterns(p, &mut together, &wanted);
+            for (k, s) in samples.iter().enumerate() {
+                let alone = match wanted[k] == Color::ZERO {
+                    true => s.radiance,
+                    false => s.radiance * tr.sample_pattern(p, s),
+                };
+                failed += usize::from(alone == s.radiance && wanted[k] != Color::ZERO);
+                assert_eq!(
+                    together[k].radiance.to_array().map(f64::to_bits),
+                    alone.to_array().map(f64::to_bits),
+                    "sample {k} of source {} from {p}",
+                    s.src
+                );
+                compared += 1;
+            }
+        }
+        assert!(
+            compared > 4000 && failed > 100,
+            "{compared} compared, {failed} plain"
+        );
+    }
 }

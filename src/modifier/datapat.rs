@@ -19,12 +19,13 @@ use super::data::DataArray;
 use super::func::{compile, finite, function, load_context, FuncCall};
 use super::picdata::PictData;
 use super::{MixCoefficient, ModifierKind, ModifierLookup, Pattern, Texture};
-use crate::cal::{EvalError, Evaluation, ExprId, FuncRef, Program, Pure};
+use crate::cal::{EvalError, Evaluation, ExprId, FuncRef, LaneInputs, Program, Pure, LANES};
 use crate::color::Color;
 use crate::render::shading::ShadingPoint;
 use crate::scene::primitive::Primitive;
 use glam::DVec3;
-use std::sync::{Arc, OnceLock};
+use std::collections::HashMap;
+use std::sync::{Arc, Mutex, OnceLock};
 
 /// Where the values come from.
 #[derive(Debug)]
@@ -60,6 +61,20 @@ struct PureCall {
     own: Vec<bool>,
     /// The ray channels they read ([`crate::cal::Pure::channels_read`]).
     chans: u32,
+    /// The same number for calls whose forms, arguments and number of values are the same
+    /// ([`Pattern::shape`]): the luminaires of one ies2rad file placed many times.
+    shape: usize,
+}
+
+/// The shapes met so far in this process, by their description ([`PureCall::shape`]).
+static SHAPES: Mutex<Option<HashMap<String, usize>>> = Mutex::new(None);
+
+/// The number of the shape described by `key`.
+fn shape_number(key: String) -> usize {
+    let mut shapes = SHAPES.lock().unwrap_or_else(|e| e.into_inner());
+    let map = shapes.get_or_insert_with(HashMap::new);
+    let next = map.len();
+    *map.entry(key).or_insert(next)
 }
 
 impl PureCall {
@@ -76,11 +91,20 @@ impl PureCall {
         let chans = funcs
             .iter()
             .fold(coords.channels_read(), |m, f| m | f.channels_read());
+        // Everything an evaluation by these forms reads besides the lane's own frame and
+        // data: the forms (their functions by address), the arguments, the values' count.
+        let args: Vec<u64> = c.call.args().iter().map(|a| a.to_bits()).collect();
+        let key = format!(
+            "{coords:?} {funcs:?} {own:?} {chans} {args:?} {} {}",
+            c.width(),
+            matches!(c.source, Source::Picture(_))
+        );
         Some(PureCall {
             coords,
             funcs,
             own,
             chans,
+            shape: shape_number(key),
         })
     }
 }
@@ -227,11 +251,15 @@ impl DataCall {
     /// evaluation leaves its result to the machine.
     fn pure_results(&self, sp: &ShadingPoint) -> Option<[f64; 3]> {
         let pc = self.pure_call()?;
-        let chan = self.call.frame().channels_for(sp, pc.chans);
+        self.pure_results_from(pc, &self.call.frame().channels_for(sp, pc.chans))
+    }
+
+    /// [`DataCall::pure_results`] from the ray channels `chan` (those `pc` reads).
+    fn pure_results_from(&self, pc: &PureCall, chan: &[f64; 27]) -> Option<[f64; 3]> {
         let args = self.call.args();
         let mut x = [0.0; 6];
         let x = x.get_mut(..self.coords.len())?;
-        pc.coords.eval_into(&chan, args, &[], x)?;
+        pc.coords.eval_into(chan, args, &[], x)?;
         let v = self.lookup(x);
         let n = self.width();
         let mut out = [0.0; 3];
@@ -241,7 +269,7 @@ impl DataCall {
             } else {
                 &v[..n]
             };
-            *o = pc.funcs[i].eval(&chan, args, vals)?;
+            *o = pc.funcs[i].eval(chan, args, vals)?;
         }
         Some(out)
     }
@@ -264,21 +292,180 @@ impl DataCall {
     }
 }
 
+/// A `brightdata`, `colordata` or `colorpict` pattern.
 #[derive(Debug)]
-struct DataPattern(DataCall);
+pub struct DataPattern(DataCall);
+
+impl DataPattern {
+    fn colour_of(&self, r: [f64; 3]) -> Color {
+        if self.0.funcs.len() == 1 {
+            Color::splat(r[0])
+        } else {
+            Color::new(r[0], r[1], r[2])
+        }
+    }
+}
 
 impl Pattern for DataPattern {
     fn colour(&self, sp: &ShadingPoint) -> Option<Color> {
         let r = self.0.results(sp)?;
-        Some(if self.0.funcs.len() == 1 {
-            Color::splat(r[0])
-        } else {
-            Color::new(r[0], r[1], r[2])
-        })
+        Some(self.colour_of(r))
     }
 
     fn reads(&self) -> Option<u32> {
         self.0.pure_call().map(|pc| pc.chans)
+    }
+
+    fn as_data(&self) -> Option<&DataPattern> {
+        Some(self)
+    }
+}
+
+/// Data patterns of one shape ([`PureCall::shape`]: the luminaires of one ies2rad file
+/// placed many times) at up to [`LANES`] points, whose colours are computed together by
+/// their pure forms, evaluated for all lanes at once ([`Pure::eval_lanes`]): each lane's
+/// colour is the one [`Pattern::colour`] gives it, from its own frame and data files. The
+/// caller keeps the lanes' patterns (`pat(l)` of [`DataLanes::colours`]); a thread may keep
+/// one of these for all its points.
+pub struct DataLanes {
+    n: usize,
+    shape: usize,
+    chans: [[f64; 27]; LANES],
+}
+
+impl Default for DataLanes {
+    fn default() -> Self {
+        DataLanes {
+            n: 0,
+            shape: 0,
+            chans: [[0.0; 27]; LANES],
+        }
+    }
+}
+
+impl DataLanes {
+    /// The shape pattern `p` would take a lane of, when it computes by pure forms.
+    pub fn shape_of(p: &DataPattern) -> Option<usize> {
+        p.0.pure_call().map(|pc| pc.shape)
+    }
+
+    /// Lanes taken.
+    pub fn len(&self) -> usize {
+        self.n
+    }
+
+    /// Whether no lane is taken.
+    pub fn is_empty(&self) -> bool {
+        self.n == 0
+    }
+
+    /// The shape of the lanes taken (None when there are none).
+    pub fn shape(&self) -> Option<usize> {
+        (self.n > 0).then_some(self.shape)
+    }
+
+    /// Take the next lane for pattern `p` at `sp`; false (none taken) when the lanes are
+    /// full, of another shape, or `p` has no pure forms.
+    pub fn push(&mut self, p: &DataPattern, sp: &ShadingPoint) -> bool {
+        let Some(pc) = p.0.pure_call() else {
+            return false;
+        };
+        if self.n == LANES || (self.n > 0 && pc.shape != self.shape) {
+            return false;
+        }
+        self.shape = pc.shape;
+        p.0.call
+            .frame()
+            .channels_into(sp, pc.chans, &mut self.chans[self.n]);
+        self.n += 1;
+        true
+    }
+
+    /// Empty the lanes.
+    pub fn clear(&mut self) {
+        self.n = 0;
+    }
+
+    /// The lanes' colours: `out[l]` is Some(the colour, or None for a computation
+    /// error) where the pure forms give it; None where the lane's pattern must be computed
+    /// alone ([`Pattern::colour`]: the machine, which may report an error).
+    pub fn colours<'p>(
+        &self,
+        pat: impl Fn(usize) -> &'p DataPattern,
+        out: &mut [Option<Option<Color>>; LANES],
+    ) {
+        *out = [None; LANES];
+        let n = self.n;
+        if n == 0 {
+            return;
+        }
+        let first = pat(0);
+        let Some(pc) = first.0.pure_call() else {
+            return;
+        };
+        if n == 1 {
+            // One lane: as the pattern computes it alone, from the channels taken.
+            if let Some(r) = first.0.pure_results_from(pc, &self.chans[0]) {
+                out[0] = Some(Some(first.colour_of(r)));
+            }
+            return;
+        }
+        let call = &first.0;
+        let ncoords = call.coords.len();
+        let args = call.call.args();
+        let none = [[0.0; 3]; LANES];
+        let input = LaneInputs {
+            chans: &self.chans,
+            values: &none,
+            nvalues: 0,
+        };
+        let mut x = [[0.0; 3]; LANES];
+        let mut ok = [false; LANES];
+        if ncoords > 3
+            || !pc
+                .coords
+                .eval_lanes(n, &input, args, ncoords, &mut x, &mut ok)
+        {
+            return;
+        }
+        // Each lane's values from its own data.
+        let mut v = [[0.0; 3]; LANES];
+        for l in 0..n {
+            if ok[l] {
+                v[l] = pat(l).0.lookup(&x[l][..ncoords]);
+            }
+        }
+        let width = call.width();
+        let mut r = [[0.0; 3]; LANES];
+        let mut vals = [[0.0; 3]; LANES];
+        for (i, f) in pc.funcs.iter().enumerate() {
+            let single = width == 1 || pc.own[i];
+            for l in 0..n {
+                vals[l] = match single {
+                    true => [v[l][i.min(width - 1)], 0.0, 0.0],
+                    false => v[l],
+                };
+            }
+            let input = LaneInputs {
+                chans: &self.chans,
+                values: &vals,
+                nvalues: if single { 1 } else { width },
+            };
+            let mut y = [[0.0; 3]; LANES];
+            let mut fok = [false; LANES];
+            if !f.eval_lanes(n, &input, args, 1, &mut y, &mut fok) {
+                return;
+            }
+            for l in 0..n {
+                r[l][i] = y[l][0];
+                ok[l] &= fok[l];
+            }
+        }
+        for l in 0..n {
+            if ok[l] {
+                out[l] = Some(Some(pat(l).colour_of(r[l])));
+            }
+        }
     }
 }
 

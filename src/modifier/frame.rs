@@ -117,9 +117,16 @@ impl PatternFrame {
     /// `src_theta` and `flatcorr`: `Dz` and `Rdot`), and the transform of the point, the
     /// normal and the frame's axes are then not computed.
     pub fn channels_for(&self, sp: &ShadingPoint, mask: u32) -> [f64; CHANNELS] {
+        let mut c = [0.0; CHANNELS];
+        self.channels_into(sp, mask, &mut c);
+        c
+    }
+
+    /// [`PatternFrame::channels_for`] written into `c`, whose channels outside `mask` (and
+    /// those always computed) keep what they held.
+    pub fn channels_into(&self, sp: &ShadingPoint, mask: u32, c: &mut [f64; CHANNELS]) {
         // Direction, normal and point; axes. The lengths, Rdot, the scale and (u, v) cost
         // a product at most, and are always computed.
-        let mut c = [0.0; CHANNELS];
         // No transform at all: the hit as it is.
         let plain = self.forward.is_none() && sp.transform.is_none();
         // The frame's own matrix is borrowed, not copied, unless the hit object has a
@@ -168,7 +175,6 @@ impl PatternFrame {
         c[24] = sp.ray_len * s;
         c[25] = lu;
         c[26] = lv;
-        c
     }
 
     /// The ray channels `$1..$27` at `sp` (index 0 is `$1`).

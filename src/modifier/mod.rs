@@ -46,6 +46,12 @@ pub trait Pattern: Send + Sync + Debug {
     fn reads(&self) -> Option<u32> {
         None
     }
+
+    /// The pattern as a data pattern, which may compute its colour for several points at
+    /// once ([`datapat::DataLanes`]).
+    fn as_data(&self) -> Option<&datapat::DataPattern> {
+        None
+    }
 }
 
 /// A texture: a vector added to the shading point's normal perturbation.

@@ -8,18 +8,39 @@ use super::ray::{Hit, HitRef, Ray, NO_INST};
 use super::sampler::Sampler;
 use super::shading::ShadingPoint;
 use super::trace::Tracer;
+use crate::cal::LANES;
 use crate::color::{sanitize, Color};
 use crate::geometry::SurfaceRef;
 use crate::light::emission::EmissionPlan;
 use crate::light::SourceSample;
 use crate::material::MatId;
+use crate::modifier::datapat::{DataLanes, DataPattern};
 use crate::modifier::frame::ALONG_RAY;
 use crate::modifier::{MixCoefficient, ModRef, ModifierKind};
+use crate::scene::object::ModId;
 use crate::scene::sets::HitInfo;
 use crate::scene::transform::Transform;
 use crate::scene::world::DistantObject;
 use crate::{FHUGE, FTINY};
 use glam::DVec3;
+
+thread_local! {
+    /// Each render thread's lanes for [`Tracer::sample_patterns`] (no buffer made per
+    /// shading point).
+    static LANE_SCRATCH: std::cell::RefCell<DataLanes> = std::cell::RefCell::default();
+}
+
+/// Where a sample's source is met, for its pattern colour ([`Tracer::sample_pattern`]).
+enum SourceAt<'a> {
+    /// A source without patterns: colour 1.
+    Plain,
+    /// The source's patterns (its whole chain) at a shading point on it.
+    Patterns(ShadingPoint<'a>, &'a [ModId]),
+    /// A chain to walk at the hit on the source.
+    Walk(Ray, Hit, ModRef),
+    /// A distant source seen along the ray.
+    Distant(Ray, &'a DistantObject),
+}
 
 /// Where a walk over patterns and textures stopped.
 enum End<'s> {
@@ -129,19 +150,143 @@ impl Tracer<'_> {
     /// `brightdata` luminaire) really sends toward `p`; the shadow ray then brings only the
     /// transmission. One for sources without patterns.
     pub fn sample_pattern(&self, p: DVec3, s: &SourceSample) -> Color {
+        self.source_colour(self.source_at(p, s))
+    }
+
+    /// [`Tracer::sample_pattern`] of each sample `k` whose `wanted[k]` is not zero, times
+    /// its radiance: the same colours, but the samples of consecutive sources whose one
+    /// pattern is a data pattern of the same shape (the luminaires of one ies2rad file
+    /// placed many times) are computed together ([`DataLanes`]).
+    pub fn sample_patterns(&self, p: DVec3, samples: &mut [SourceSample], wanted: &[Color]) {
+        // The thread's lanes, borrowed for the call (a nested call, which patterns never
+        // make, would take lanes of its own).
+        LANE_SCRATCH.with(|l| match l.try_borrow_mut() {
+            Ok(mut lanes) => self.sample_patterns_in(p, samples, wanted, &mut lanes),
+            Err(_) => self.sample_patterns_in(p, samples, wanted, &mut DataLanes::default()),
+        })
+    }
+
+    fn sample_patterns_in(
+        &self,
+        p: DVec3,
+        samples: &mut [SourceSample],
+        wanted: &[Color],
+        lanes: &mut DataLanes,
+    ) {
+        lanes.clear();
+        let mut which = [0usize; LANES];
+        let mut pats: [Option<&DataPattern>; LANES] = [None; LANES];
+        let mut out = [None; LANES];
+        for k in 0..samples.len().min(wanted.len()) {
+            if wanted[k] == Color::ZERO {
+                continue;
+            }
+            let at = self.source_at(p, &samples[k]);
+            let (SourceAt::Patterns(sp, _), Some(d)) = (&at, self.one_data_pattern(&at)) else {
+                samples[k].radiance *= self.source_colour(at);
+                continue;
+            };
+            let shape = DataLanes::shape_of(d);
+            if shape.is_none() {
+                samples[k].radiance *= self.source_colour(at);
+                continue;
+            }
+            if lanes.shape() != shape || lanes.len() == LANES {
+                self.flush_lanes(p, lanes, (&which, &pats), &mut out, samples);
+            }
+            which[lanes.len()] = k;
+            pats[lanes.len()] = Some(d);
+            if !lanes.push(d, sp) {
+                samples[k].radiance *= self.source_colour(at);
+            }
+        }
+        self.flush_lanes(p, lanes, (&which, &pats), &mut out, samples);
+    }
+
+    /// The data pattern of a source met at `at` whose chain is that one pattern.
+    fn one_data_pattern(&self, at: &SourceAt) -> Option<&DataPattern> {
+        match at {
+            SourceAt::Patterns(_, &[id]) => match &*self.scene.modifiers[id].kind {
+                ModifierKind::Pattern(pat) => pat.as_data(),
+                _ => None,
+            },
+            _ => None,
+        }
+    }
+
+    /// The colours of the samples `which` in `lanes` (then emptied), times their radiance.
+    fn flush_lanes(
+        &self,
+        p: DVec3,
+        lanes: &mut DataLanes,
+        (which, pats): (&[usize; LANES], &[Option<&DataPattern>; LANES]),
+        out: &mut [Option<Option<Color>>; LANES],
+        samples: &mut [SourceSample],
+    ) {
+        if lanes.is_empty() {
+            return;
+        }
+        let n = lanes.len();
+        if pats[..n].iter().all(Option::is_some) {
+            lanes.colours(|l| pats[l].expect("every lane has its pattern"), out);
+        } else {
+            *out = [None; LANES];
+        }
+        for (&k, c) in which[..n].iter().zip(out.iter()) {
+            let pcol = match c {
+                Some(c) => {
+                    let mut pcol = Color::ONE;
+                    if let Some(c) = c {
+                        pcol *= sanitize(*c);
+                    }
+                    pcol
+                }
+                // Computed alone, by the machine.
+                None => self.sample_pattern(p, &samples[k]),
+            };
+            samples[k].radiance *= pcol;
+        }
+        lanes.clear();
+    }
+
+    /// The pattern colour of a source met at `at` ([`Tracer::sample_pattern`]).
+    fn source_colour(&self, at: SourceAt) -> Color {
+        match at {
+            SourceAt::Plain => Color::ONE,
+            SourceAt::Patterns(sp, mods) => self.patterns_colour(&sp, mods),
+            SourceAt::Walk(ray, hit, chain) => self.emission_pattern(&ray, &hit, chain),
+            SourceAt::Distant(ray, d) => self.distant_pattern(&ray, d),
+        }
+    }
+
+    /// The patterns `mods` at `sp`, in order, without the walk.
+    fn patterns_colour(&self, sp: &ShadingPoint, mods: &[ModId]) -> Color {
+        let mut pcol = Color::ONE;
+        for &id in mods {
+            if let ModifierKind::Pattern(p) = &*self.scene.modifiers[id].kind {
+                if let Some(c) = p.colour(sp) {
+                    pcol *= sanitize(c);
+                }
+            }
+        }
+        pcol
+    }
+
+    /// Where sample `s`'s source is met from the shading point `p`, for its pattern.
+    fn source_at<'a>(&'a self, p: DVec3, s: &SourceSample) -> SourceAt<'a> {
         let src = &self.lights.sources[s.src];
         let chain = match (src.obj, src.distant) {
             (Some(o), _) => self.scene.hit_info(HitRef::top(o)).chain,
             (None, Some(d)) => self.scene.distant[d].chain,
-            (None, None) => return Color::ONE,
+            (None, None) => return SourceAt::Plain,
         };
         if !self.patterned(chain) {
-            return Color::ONE;
+            return SourceAt::Plain;
         }
         // The leg of the path that reaches the source.
         let Some((org, dir, reach)) = self.lights.relay_path(self.scene, s.src, p, s.dir, s.dist)
         else {
-            return Color::ONE;
+            return SourceAt::Plain;
         };
         let ray = Ray::shadow(org, dir);
         match (src.obj, src.distant) {
@@ -183,23 +328,13 @@ impl Tracer<'_> {
                 };
                 match plan {
                     Some(EmissionPlan::Patterns { mods, .. }) => {
-                        // The walk's patterns in its order, without the walk.
-                        let sp = ShadingPoint::new(&ray, &hit, self.scene.origin);
-                        let mut pcol = Color::ONE;
-                        for &id in mods {
-                            if let ModifierKind::Pattern(p) = &*self.scene.modifiers[id].kind {
-                                if let Some(c) = p.colour(&sp) {
-                                    pcol *= sanitize(c);
-                                }
-                            }
-                        }
-                        pcol
+                        SourceAt::Patterns(ShadingPoint::new(&ray, &hit, self.scene.origin), mods)
                     }
-                    _ => self.emission_pattern(&ray, &hit, chain),
+                    _ => SourceAt::Walk(ray, hit, chain),
                 }
             }
-            (None, Some(d)) => self.distant_pattern(&ray, &self.scene.distant[d]),
-            (None, None) => Color::ONE,
+            (None, Some(d)) => SourceAt::Distant(ray, &self.scene.distant[d]),
+            (None, None) => SourceAt::Plain,
         }
     }
 
