@@ -79,14 +79,12 @@ fn direct_with(
     let params = tr.params;
     let samples = &mut scratch.samples;
     samples.clear();
-    for si in 0..lights.sources.len() {
-        let how = Partition {
-            weight,
-            ds: params.ds,
-            dj: params.dj,
-        };
-        lights.sample(tr.scene, (si, p), how, rng, samples);
-    }
+    let how = Partition {
+        weight,
+        ds: params.ds,
+        dj: params.dj,
+    };
+    lights.sample_all(tr.scene, p, how, rng, samples);
     // Potentials. They carry the light each sample's source sends toward p (its patterns:
     // an ies2rad luminaire's distribution), so the tests are ordered, stopped and the
     // untested samples estimated by it; the shadow rays give the transmission only. A

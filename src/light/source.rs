@@ -397,6 +397,28 @@ impl LightSet {
         self.sample_within(scene, (si, p), how, rng, out, true)
     }
 
+    /// [`LightSet::sample`] of every source in order: the same samples, with the real
+    /// polygon sources (the common luminaires) sampled inline, one after another.
+    pub fn sample_all(
+        &self,
+        scene: &Scene,
+        p: DVec3,
+        how: Partition,
+        rng: &mut Sampler,
+        out: &mut Vec<SourceSample>,
+    ) {
+        for (si, src) in self.sources.iter().enumerate() {
+            let plain = src.relay.is_none()
+                && !matches!(src.emitter.kind, EmitterKind::Glow { .. })
+                && matches!(src.shape, SourceShape::Polygon { .. });
+            if plain {
+                sample_polygon(scene, (si, src), (src.center, p), how, rng, out);
+            } else {
+                self.sample(scene, (si, p), how, rng, out);
+            }
+        }
+    }
+
     /// [`LightSet::sample`] of a glow from any distance (ray weight 1, full jitter): its
     /// radius of influence is ignored (each sample's `dist` tells the caller how far its
     /// point is).
@@ -443,60 +465,12 @@ impl LightSet {
             }
         }
         let start = out.len();
-        let focal = src.emitter.focal_distance();
-        let mut push = |dir: DVec3, dist: f64, mut omega: f64, _at: DVec3| {
-            if omega.is_nan() || omega <= 0.0 || !dir.is_finite() {
-                return;
-            }
-            let spot = src.emitter.spot_factor(real_center, q);
-            if focal > 0.0 && dist.is_finite() {
-                // A spotlight's area is seen as if from its focal point behind the source.
-                omega *= (dist / (dist + focal)).powi(2);
-            }
-            if spot <= 0.0 {
-                return;
-            }
-            out.push(SourceSample {
-                src: si,
-                dir,
-                dist,
-                omega,
-                radiance: src.emitter.radiance * spot,
-            });
+        let mut push = |dir: DVec3, dist: f64, omega: f64, _at: DVec3| {
+            push_sample((si, src), (real_center, q), (dir, dist, omega), out);
         };
         match &src.shape {
-            SourceShape::Polygon {
-                normal,
-                corner,
-                eu,
-                ev,
-                rect,
-            } => {
-                let d2 = (rect.mid - q).length_squared();
-                let (nu, nv) = flat_partitions((rect.lu, rect.lv), d2, scene.eps, (ds, weight));
-                let cell = rect.area / (nu * nv) as f64;
-                // A polygon that fills its rectangle needs no per-sample inside test.
-                let obj = match rect.fills {
-                    true => None,
-                    false => src.obj.map(|i| scene.objects.surface(i)),
-                };
-                for i in 0..nu {
-                    for j in 0..nv {
-                        let s = *corner + *eu * strat(i, nu, dj, rng) + *ev * strat(j, nv, dj, rng);
-                        let Some((dir, dist, cos_s)) = toward_front(q, s, *normal, scene.eps)
-                        else {
-                            continue;
-                        };
-                        // Keep only aim points that lie on the polygon.
-                        if let Some(surf) = obj {
-                            match surf.intersect(q, dir, dist * (1.0 + 1e-9) + scene.eps) {
-                                Some(t) if (t - dist).abs() <= 1e-7 * dist + scene.eps => {}
-                                _ => continue,
-                            }
-                        }
-                        push(dir, dist, cell * cos_s / (dist * dist), s);
-                    }
-                }
+            SourceShape::Polygon { .. } => {
+                sample_polygon(scene, (si, src), (real_center, q), how, rng, out);
             }
             SourceShape::Ring {
                 center,
@@ -622,6 +596,86 @@ impl LightSet {
                 }
             }
             out.truncate(kept);
+        }
+    }
+}
+
+/// Append a sample of source `si` toward `dir` (from `q`; `real_center` is the real
+/// source's centre) unless its solid angle or direction is unusable or a spotlight's cone
+/// leaves `q` out.
+#[inline(always)]
+fn push_sample(
+    (si, src): (usize, &Source),
+    (real_center, q): (DVec3, DVec3),
+    (dir, dist, mut omega): (DVec3, f64, f64),
+    out: &mut Vec<SourceSample>,
+) {
+    if omega.is_nan() || omega <= 0.0 || !dir.is_finite() {
+        return;
+    }
+    let spot = src.emitter.spot_factor(real_center, q);
+    let focal = src.emitter.focal_distance();
+    if focal > 0.0 && dist.is_finite() {
+        // A spotlight's area is seen as if from its focal point behind the source.
+        omega *= (dist / (dist + focal)).powi(2);
+    }
+    if spot <= 0.0 {
+        return;
+    }
+    out.push(SourceSample {
+        src: si,
+        dir,
+        dist,
+        omega,
+        radiance: src.emitter.radiance * spot,
+    });
+}
+
+/// The samples of polygon source `si` seen from `q` ([`LightSet::sample`]'s polygons; also
+/// taken inline for every real polygon source by [`LightSet::sample_all`]).
+#[inline(always)]
+fn sample_polygon(
+    scene: &Scene,
+    (si, src): (usize, &Source),
+    (real_center, q): (DVec3, DVec3),
+    how: Partition,
+    rng: &mut Sampler,
+    out: &mut Vec<SourceSample>,
+) {
+    let SourceShape::Polygon {
+        normal,
+        corner,
+        eu,
+        ev,
+        rect,
+    } = &src.shape
+    else {
+        return;
+    };
+    let Partition { weight, ds, dj } = how;
+    let d2 = (rect.mid - q).length_squared();
+    let (nu, nv) = flat_partitions((rect.lu, rect.lv), d2, scene.eps, (ds, weight));
+    let cell = rect.area / (nu * nv) as f64;
+    // A polygon that fills its rectangle needs no per-sample inside test.
+    let obj = match rect.fills {
+        true => None,
+        false => src.obj.map(|i| scene.objects.surface(i)),
+    };
+    for i in 0..nu {
+        for j in 0..nv {
+            let s = *corner + *eu * strat(i, nu, dj, rng) + *ev * strat(j, nv, dj, rng);
+            let Some((dir, dist, cos_s)) = toward_front(q, s, *normal, scene.eps) else {
+                continue;
+            };
+            // Keep only aim points that lie on the polygon.
+            if let Some(surf) = obj {
+                match surf.intersect(q, dir, dist * (1.0 + 1e-9) + scene.eps) {
+                    Some(t) if (t - dist).abs() <= 1e-7 * dist + scene.eps => {}
+                    _ => continue,
+                }
+            }
+            let omega = cell * cos_s / (dist * dist);
+            push_sample((si, src), (real_center, q), (dir, dist, omega), out);
         }
     }
 }
