@@ -156,7 +156,8 @@ mod tests {
     /// luminaires of one ies2rad-like distribution in their own frames (one with another
     /// multiplier: another shape), a colour one, two whose function fails at some
     /// directions (left to the machine, lane by lane), a texture's walk and plain sources
-    /// between them; samples without a coefficient keep their radiance.
+    /// between them; samples without a coefficient keep their radiance. The samples of all
+    /// sources at once ([`LightSet::sample_all`]) are those of each in turn.
     #[test]
     fn patterns_in_lanes_are_each_samples_own() {
         let mut text = String::new();
@@ -183,6 +184,15 @@ mod tests {
             }
         }
         text += &SCENE[SCENE.find("void texfunc").unwrap()..];
+        // Sources of the other shapes and kinds: a ring, a sphere, a glow of some reach
+        // (a triangle: samples off it are dropped), a spotlight.
+        text += "void light lr 0 0 3 5 5 5\n\
+            lr ring rr 0 0 8 3.5 1 2.5 0 0 -1 0 .15\n\
+            lr sphere ss 0 0 4 3.5 2 2.4 .08\n\
+            void glow gl 0 0 4 2 2 2 3\n\
+            gl polygon gp 0 0 9 3 4 2.5 3.3 4 2.5 3 4.3 2.5\n\
+            void spotlight spt 0 0 7 6 6 6 40 0 0 -1\n\
+            spt polygon sq 0 0 12 2 4 2.5 2 4.2 2.5 2.2 4.2 2.5 2.2 4 2.5\n";
         let cal = format!("{CAL}odd(v) = v * sqrt(Dx);\n");
         let scene = Scene::from_text(
             &text,
@@ -193,7 +203,7 @@ mod tests {
         );
         let params = RenderParams::default();
         let lights = LightSet::collect(&scene, 0);
-        assert_eq!(lights.sources.len(), 18);
+        assert_eq!(lights.sources.len(), 22);
         let tr = Tracer::new(&scene, &params, &lights);
         let mut rng = Sampler::for_pixel(0, 1, 2, 3);
         let (mut samples, mut compared, mut failed) = (Vec::new(), 0, 0);
@@ -206,9 +216,22 @@ mod tests {
                 ds: if i % 2 == 0 { 0.0 } else { 0.3 },
                 dj: 0.7,
             };
+            let mut rng_all = rng.clone();
             for si in 0..lights.sources.len() {
                 lights.sample(&scene, (si, p), how, &mut rng, &mut samples);
             }
+            // All sources at once: the same samples, the same draws.
+            let mut all = Vec::new();
+            lights.sample_all(&scene, p, how, &mut rng_all, &mut all);
+            let key = |s: &crate::light::SourceSample| {
+                let v = [s.dir.x, s.dir.y, s.dir.z, s.dist, s.omega, s.radiance.x];
+                (s.src, v.map(f64::to_bits))
+            };
+            assert_eq!(
+                all.iter().map(key).collect::<Vec<_>>(),
+                samples.iter().map(key).collect::<Vec<_>>()
+            );
+            assert_eq!(rng_all.uniform().to_bits(), rng.clone().uniform().to_bits());
             let wanted: Vec<Color> = (0..samples.len())
                 .map(|k| match (k * 7 + i as usize) % 5 {
                     0 => Color::ZERO,
