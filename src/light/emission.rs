@@ -20,6 +20,7 @@ use super::source::LightSet;
 #[cfg(test)]
 use crate::color::Color;
 use crate::scene::object::ModId;
+use glam::DVec3;
 
 /// A source's emission chain as [`LightSet::emission`] decided it.
 #[derive(Clone, Debug)]
@@ -27,8 +28,13 @@ pub enum EmissionPlan {
     /// Walk the chain at every sample (it holds a texture or a mixture).
     Walk,
     /// The chain's patterns, in order; `along`: some pattern may read a channel of
-    /// [`crate::modifier::frame::ALONG_RAY`], so the hit on the source is found exactly.
-    Patterns { mods: Vec<ModId>, along: bool },
+    /// [`crate::modifier::frame::ALONG_RAY`], so the hit on the source is found exactly;
+    /// `flat`: the source's normal, the same everywhere (a polygon or a ring).
+    Patterns {
+        mods: Vec<ModId>,
+        along: bool,
+        flat: Option<DVec3>,
+    },
 }
 
 impl LightSet {
@@ -139,7 +145,7 @@ mod tests {
         // and T finds the hit exactly (the sphere too, not being flat).
         let plan = |si: usize| planned.emission(si, || unreachable!()).unwrap().clone();
         let along = |si: usize| match plan(si) {
-            EmissionPlan::Patterns { along, mods } => {
+            EmissionPlan::Patterns { along, mods, .. } => {
                 assert_eq!(mods.len(), 1);
                 Some(along)
             }

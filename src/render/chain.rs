@@ -291,10 +291,35 @@ impl Tracer<'_> {
         let ray = Ray::shadow(org, dir);
         match (src.obj, src.distant) {
             (Some(o), _) => {
-                let plan = self.lights.emission(s.src, || self.emission_plan(chain));
-                let surface = self.scene.objects.surface(o);
+                let plan = self.lights.emission(s.src, || self.emission_plan(chain, o));
+                let r = HitRef::top(o);
                 // A flat source's normal is the same everywhere: patterns that read
-                // nothing along the ray need not the exact hit (`light::emission`).
+                // nothing along the ray need not the exact hit (`light::emission`), which
+                // lies at the sample's own distance with the surface's normal
+                // ([`SceneGeometry::hit_geom`]'s point, normal and flatness for it).
+                if let Some(EmissionPlan::Patterns {
+                    mods,
+                    along: false,
+                    flat: Some(normal),
+                }) = plan
+                {
+                    if reach.is_finite() {
+                        let hit = Hit {
+                            obj: o,
+                            inst: NO_INST,
+                            t: reach,
+                            point: org + dir * reach,
+                            normal: *normal,
+                            back: normal.dot(dir) > 0.0,
+                            flat: true,
+                            material: self.scene.ref_material(r),
+                            antimatter: ray.antimatter,
+                        };
+                        let sp = ShadingPoint::new(&ray, &hit, self.scene.origin);
+                        return SourceAt::Patterns(sp, mods);
+                    }
+                }
+                let surface = self.scene.objects.surface(o);
                 let exact = match plan {
                     Some(EmissionPlan::Patterns { along, .. }) => {
                         *along
@@ -313,7 +338,6 @@ impl Tracer<'_> {
                 } else {
                     reach
                 };
-                let r = HitRef::top(o);
                 let (point, normal, flat) = self.scene.hit_geom(r, org, dir, t);
                 let hit = Hit {
                     obj: o,
@@ -338,9 +362,11 @@ impl Tracer<'_> {
         }
     }
 
-    /// The emission plan of a source whose chain starts at `chain`: its patterns when the
-    /// chain (up to the material, then the material's own) holds nothing else.
-    fn emission_plan(&self, chain: ModRef) -> EmissionPlan {
+    /// The emission plan of source object `o`, whose chain starts at `chain`: its patterns
+    /// when the chain (up to the material, then the material's own) holds nothing else.
+    fn emission_plan(&self, chain: ModRef, o: usize) -> EmissionPlan {
+        let surface = self.scene.objects.surface(o);
+        let flat = surface.is_flat().then(|| surface.normal_at(DVec3::ZERO));
         let mut mods = Vec::new();
         let mut along = false;
         let mut r = chain;
@@ -348,10 +374,10 @@ impl Tracer<'_> {
         // Names resolve to earlier definitions, so a chain never loops; bound it anyway.
         for _ in 0..=2 * self.scene.modifiers.len() + 2 {
             match r {
-                ModRef::Void => return EmissionPlan::Patterns { mods, along },
+                ModRef::Void => return EmissionPlan::Patterns { mods, along, flat },
                 ModRef::Material(m) => {
                     if !own {
-                        return EmissionPlan::Patterns { mods, along };
+                        return EmissionPlan::Patterns { mods, along, flat };
                     }
                     own = false;
                     r = self.scene.materials[m].chain;
