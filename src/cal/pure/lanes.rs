@@ -44,16 +44,17 @@ impl Pure {
         }
         // The fewest lanes that hold n (each lane's values are its own: the spare ones,
         // computed from whatever their inputs hold, are not read).
+        let (at, to) = ((n, roots, args), (out, ok));
         match (self.count, n) {
-            (0..=8, 0..=2) => self.lanes::<8, 2>(n, input, args, roots, out, ok),
-            (0..=8, 3..=4) => self.lanes::<8, 4>(n, input, args, roots, out, ok),
-            (0..=8, _) => self.lanes::<8, 8>(n, input, args, roots, out, ok),
-            (9..=16, 0..=2) => self.lanes::<16, 2>(n, input, args, roots, out, ok),
-            (9..=16, 3..=4) => self.lanes::<16, 4>(n, input, args, roots, out, ok),
-            (9..=16, _) => self.lanes::<16, 8>(n, input, args, roots, out, ok),
-            (_, 0..=2) => self.lanes::<SMALL, 2>(n, input, args, roots, out, ok),
-            (_, 3..=4) => self.lanes::<SMALL, 4>(n, input, args, roots, out, ok),
-            _ => self.lanes::<SMALL, 8>(n, input, args, roots, out, ok),
+            (0..=8, 0..=2) => self.lanes::<8, 2>(at, input, to),
+            (0..=8, 3..=4) => self.lanes::<8, 4>(at, input, to),
+            (0..=8, _) => self.lanes::<8, 8>(at, input, to),
+            (9..=16, 0..=2) => self.lanes::<16, 2>(at, input, to),
+            (9..=16, 3..=4) => self.lanes::<16, 4>(at, input, to),
+            (9..=16, _) => self.lanes::<16, 8>(at, input, to),
+            (_, 0..=2) => self.lanes::<SMALL, 2>(at, input, to),
+            (_, 3..=4) => self.lanes::<SMALL, 4>(at, input, to),
+            _ => self.lanes::<SMALL, 8>(at, input, to),
         }
         true
     }
@@ -62,12 +63,9 @@ impl Pure {
     /// by `L` lanes (at least n, at most [`LANES`]).
     fn lanes<const N: usize, const L: usize>(
         &self,
-        n: usize,
+        (n, roots, args): (usize, usize, &[f64]),
         input: &LaneInputs,
-        args: &[f64],
-        roots: usize,
-        out: &mut [[f64; 3]; LANES],
-        ok: &mut [bool; LANES],
+        (out, ok): (&mut [[f64; 3]; LANES], &mut [bool; LANES]),
     ) {
         const { assert!(N.is_power_of_two() && L <= LANES) };
         // The numbers in every lane; the other nodes are written before they are read.
