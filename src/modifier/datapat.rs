@@ -66,15 +66,32 @@ struct PureCall {
     shape: usize,
 }
 
-/// The shapes met so far in this process, by their description ([`PureCall::shape`]).
-static SHAPES: Mutex<Option<HashMap<String, usize>>> = Mutex::new(None);
+/// The shapes met so far in this process, by their description ([`PureCall::shape`]),
+/// and how many numbers were given beyond them.
+static SHAPES: Mutex<Option<(HashMap<String, usize>, usize)>> = Mutex::new(None);
+
+/// Most shapes remembered by description (a few kilobytes each); a call of a shape met
+/// after them gets a number of its own, and is then computed alone.
+const MAX_SHAPES: usize = 4096;
 
 /// The number of the shape described by `key`.
 fn shape_number(key: String) -> usize {
     let mut shapes = SHAPES.lock().unwrap_or_else(|e| e.into_inner());
-    let map = shapes.get_or_insert_with(HashMap::new);
-    let next = map.len();
-    *map.entry(key).or_insert(next)
+    number_in(shapes.get_or_insert_with(|| (HashMap::new(), 0)), key)
+}
+
+/// The number of `key` in `(map, beyond)` ([`shape_number`]'s table).
+fn number_in((map, beyond): &mut (HashMap<String, usize>, usize), key: String) -> usize {
+    if let Some(&k) = map.get(&key) {
+        return k;
+    }
+    if map.len() < MAX_SHAPES {
+        let next = map.len();
+        map.insert(key, next);
+        return next;
+    }
+    *beyond += 1;
+    MAX_SHAPES + *beyond
 }
 
 impl PureCall {
@@ -537,4 +554,29 @@ pub fn parse_mixpict(p: &Primitive, l: &dyn ModifierLookup) -> Result<ModifierKi
         foreground: l.modref(&p.sargs[0])?,
         background: l.modref(&p.sargs[1])?,
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn shapes_are_numbered_once_and_bounded() {
+        let mut table = (HashMap::new(), 0);
+        let a = number_in(&mut table, "a".into());
+        let b = number_in(&mut table, "b".into());
+        assert_ne!(a, b);
+        assert_eq!(number_in(&mut table, "a".into()), a);
+        for k in 0..MAX_SHAPES {
+            number_in(&mut table, format!("k{k}"));
+        }
+        assert_eq!(table.0.len(), MAX_SHAPES);
+        // Beyond the bound each call gets a number of its own, never one in use.
+        let (x, y) = (
+            number_in(&mut table, "late".into()),
+            number_in(&mut table, "late".into()),
+        );
+        assert!(x != y && x >= MAX_SHAPES && y >= MAX_SHAPES);
+        assert_eq!(number_in(&mut table, "b".into()), b);
+    }
 }
