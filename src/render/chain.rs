@@ -176,7 +176,6 @@ impl Tracer<'_> {
         lanes.clear();
         let mut which = [0usize; LANES];
         let mut pats: [Option<&DataPattern>; LANES] = [None; LANES];
-        let mut out = [None; LANES];
         for k in 0..samples.len().min(wanted.len()) {
             if wanted[k] == Color::ZERO {
                 continue;
@@ -192,7 +191,7 @@ impl Tracer<'_> {
                 continue;
             }
             if lanes.shape() != shape || lanes.len() == LANES {
-                self.flush_lanes(p, lanes, (&which, &pats), &mut out, samples);
+                self.flush_lanes(p, lanes, (&which, &pats), samples);
             }
             which[lanes.len()] = k;
             pats[lanes.len()] = Some(d);
@@ -200,7 +199,7 @@ impl Tracer<'_> {
                 samples[k].radiance *= self.source_colour(at);
             }
         }
-        self.flush_lanes(p, lanes, (&which, &pats), &mut out, samples);
+        self.flush_lanes(p, lanes, (&which, &pats), samples);
     }
 
     /// The data pattern of a source met at `at` whose chain is that one pattern.
@@ -220,17 +219,15 @@ impl Tracer<'_> {
         p: DVec3,
         lanes: &mut DataLanes,
         (which, pats): (&[usize; LANES], &[Option<&DataPattern>; LANES]),
-        out: &mut [Option<Option<Color>>; LANES],
         samples: &mut [SourceSample],
     ) {
         if lanes.is_empty() {
             return;
         }
         let n = lanes.len();
+        let mut out = [None; LANES];
         if pats[..n].iter().all(Option::is_some) {
-            lanes.colours(|l| pats[l].expect("every lane has its pattern"), out);
-        } else {
-            *out = [None; LANES];
+            lanes.colours(|l| pats[l].expect("every lane has its pattern"), &mut out);
         }
         for (&k, c) in which[..n].iter().zip(out.iter()) {
             let pcol = match c {
